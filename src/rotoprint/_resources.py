@@ -1,0 +1,45 @@
+"""What this machine has: available memory, for refusing work that cannot fit."""
+
+from __future__ import annotations
+
+import os
+
+from .constants import MAX_RASTER_MEMORY_FRACTION
+from .errors import RasterTooLargeError
+
+
+def available_memory_bytes() -> int:
+    """Memory available to new allocations, from /proc/meminfo, else physical memory."""
+    try:
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    try:
+        return int(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - non-POSIX
+        return 8 << 30
+
+
+def format_bytes(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if abs(n) < 1024 or unit == "TiB":
+            return f"{n:.1f} {unit}" if unit != "B" else f"{int(n)} B"
+        n /= 1024
+    return f"{n:.1f} TiB"  # pragma: no cover
+
+
+def check_raster_fits(width: int, height: int, bytes_per_pixel: int, *, what: str = "raster") -> None:
+    """Raise :class:`RasterTooLargeError` before allocating a raster that cannot fit.
+
+    ``bytes_per_pixel`` counts every working array the caller keeps per pixel.
+    """
+    need = int(width) * int(height) * int(bytes_per_pixel)
+    limit = available_memory_bytes() * MAX_RASTER_MEMORY_FRACTION
+    if need > limit:
+        raise RasterTooLargeError(
+            f"{what} of {width} x {height} px would need {format_bytes(need)}, "
+            f"more than the {format_bytes(limit)} this machine can spare"
+        )

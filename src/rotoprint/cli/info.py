@@ -1,0 +1,49 @@
+"""`rotoprint info MESH`: what is in a mesh file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from ._common import JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, out_console, print_json
+
+
+def info(
+    mesh: Annotated[Path, typer.Argument(help="Mesh file: STL (binary or ASCII), OBJ, PLY, 3MF, OFF, GLB.")],
+    units: UnitsOpt = "mm",
+    scale: ScaleOpt = 1.0,
+    rotate: RotateOpt = None,
+    translate: TranslateOpt = None,
+    json_out: JsonOpt = False,
+) -> None:
+    """Triangles, bounds, shells, open edges, watertightness, volume, degenerate triangles."""
+    m = load_mesh_from_options(mesh, units, scale, rotate, translate)
+    data = m.info()
+    if json_out:
+        print_json(data)
+        return
+    t = Table(title=str(mesh), show_header=False)
+    t.add_column("quantity", style="bold")
+    t.add_column("value")
+    b = data["bounds_mm"]
+    rows = [
+        ("triangles", f"{data['triangles']:,}"),
+        ("vertices", f"{data['vertices']:,}"),
+        ("bounds min (mm)", ", ".join(f"{v:.4f}" for v in b["min"])),
+        ("bounds max (mm)", ", ".join(f"{v:.4f}" for v in b["max"])),
+        ("size (mm)", " x ".join(f"{v:.4f}" for v in data["size_mm"])),
+        ("shells", str(data["shells"])),
+        ("open edges", str(data["open_edges"])),
+        ("non-manifold edges", str(data["nonmanifold_edges"])),
+        ("watertight", "yes" if data["watertight"] else "no"),
+        ("volume (mm^3)", f"{data['volume_mm3']:.6g}" + ("" if data["volume_exact"] else "  (approximate: not watertight)")),
+        ("degenerate triangles", f"{data['degenerate_triangles']} ({data['collapsed_triangles_dropped']} collapsed, dropped)"),
+        ("faces re-wound", str(data["faces_reoriented"])),
+        ("shells turned outside-in", str(data["shells_flipped"])),
+    ]
+    for k, v in rows:
+        t.add_row(k, v)
+    out_console.print(t)

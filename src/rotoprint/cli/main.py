@@ -1,0 +1,57 @@
+"""The `rotoprint` command. Subcommands live one per module and are registered here."""
+
+from __future__ import annotations
+
+import sys
+
+import typer
+
+from ..errors import RotoprintError
+from ._common import EXIT_BAD_INPUT, console
+
+app = typer.Typer(
+    name="rotoprint",
+    help="Print data for rotary 3D printers and DLP projectors.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+
+def _register() -> None:
+    from . import info, slice as slice_cmd
+
+    app.command("info")(info.info)
+    app.command("slice")(slice_cmd.slice_command)
+    from . import demo
+
+    app.command("demo")(demo.demo)
+
+
+_register()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point: runs the app; a RotoprintError becomes one line on stderr and exit 2."""
+    try:
+        app(args=argv, prog_name="rotoprint", standalone_mode=False)
+    except RotoprintError as exc:
+        console.print(f"[red]rotoprint: error:[/red] {exc}", soft_wrap=True)
+        return EXIT_BAD_INPUT
+    except typer.Exit as exc:
+        return int(exc.exit_code or 0)
+    except typer.Abort:
+        console.print("rotoprint: aborted")
+        return 130
+    except Exception as exc:  # click usage errors carry their own exit code
+        import click
+
+        if isinstance(exc, click.ClickException):
+            exc.show()
+            return exc.exit_code
+        raise
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

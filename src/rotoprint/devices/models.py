@@ -1,0 +1,117 @@
+"""Device models: inkjet print heads and DLP projectors, validated by pydantic.
+
+Every device gives the slicer the same four things: the pixel pitch across columns and rows
+(``pitch_x_mm``, ``pitch_y_mm``), an optional fixed field (``field_px``), and the direction
+its fibres run (``fibre_axis``: ``"x"`` fibres are image rows, ``"y"`` image columns). For an
+inkjet head a fibre is a nozzle's track: image columns are nozzles, one nozzle pitch apart,
+and rows are firings, ``25.4 / dpi_y`` apart.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+__all__ = ["InkjetHead", "InkjetDevice", "Projector", "ProjectorDevice", "Device"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class InkjetHead(_Strict):
+    """A print head: ``nozzles`` spread evenly over ``swathe_mm`` in ``rows`` staggered rows."""
+
+    nozzles: int = Field(gt=0, le=100_000)
+    rows: int = Field(default=2, ge=1, le=16)
+    swathe_mm: float = Field(gt=0)
+    row_separation_mm: float = Field(ge=0)
+    dpi_y: float = Field(default=360.0, gt=0, le=100_000)
+    drop_volume_pl: float = Field(default=10.0, gt=0)
+    drop_diameter_um: float = Field(default=60.0, gt=0)
+    max_frequency_hz: float = Field(default=8000.0, gt=0)
+    grey_levels: int = Field(default=1, ge=1, le=255)
+    dead_nozzles: tuple[int, ...] = ()
+
+    @field_validator("dead_nozzles")
+    @classmethod
+    def _dead_in_range(cls, v: tuple[int, ...], info) -> tuple[int, ...]:
+        n = info.data.get("nozzles")
+        bad = [k for k in v if n is not None and not 0 <= k < n]
+        if bad:
+            raise ValueError(f"dead nozzle indices must be in 0..{n - 1}, got {bad}")
+        return tuple(sorted(set(v)))
+
+    @property
+    def pitch_mm(self) -> float:
+        """Nozzle pitch across the swathe, ``swathe_mm / nozzles``."""
+        return self.swathe_mm / self.nozzles
+
+    @property
+    def dpi_x(self) -> float:
+        return 25.4 / self.pitch_mm
+
+
+class InkjetDevice(_Strict):
+    kind: Literal["inkjet"]
+    name: str
+    description: str = ""
+    source: str = ""
+    nominal: tuple[str, ...] = ()
+    head: InkjetHead
+
+    @property
+    def pitch_x_mm(self) -> float:
+        return self.head.pitch_mm
+
+    @property
+    def pitch_y_mm(self) -> float:
+        return 25.4 / self.head.dpi_y
+
+    @property
+    def field_px(self) -> tuple[int, int] | None:
+        return None
+
+    @property
+    def fibre_axis(self) -> str:
+        return "y"
+
+
+class Projector(_Strict):
+    pixels_x: int = Field(gt=0, le=100_000)
+    pixels_y: int = Field(gt=0, le=100_000)
+    width_mm: float = Field(gt=0)
+    height_mm: float = Field(gt=0)
+    mirror_x: bool = False
+    mirror_y: bool = False
+    orientation: Literal["landscape", "portrait"] = "landscape"
+    cure_threshold: float = Field(default=0.5, ge=0, le=1)
+
+
+class ProjectorDevice(_Strict):
+    kind: Literal["projector"]
+    name: str
+    description: str = ""
+    source: str = ""
+    nominal: tuple[str, ...] = ()
+    projector: Projector
+
+    @property
+    def pitch_x_mm(self) -> float:
+        return self.projector.width_mm / self.projector.pixels_x
+
+    @property
+    def pitch_y_mm(self) -> float:
+        return self.projector.height_mm / self.projector.pixels_y
+
+    @property
+    def field_px(self) -> tuple[int, int] | None:
+        return (self.projector.pixels_x, self.projector.pixels_y)
+
+    @property
+    def fibre_axis(self) -> str:
+        return "x"
+
+
+Device = Annotated[InkjetDevice | ProjectorDevice, Field(discriminator="kind")]

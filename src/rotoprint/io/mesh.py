@@ -1,0 +1,139 @@
+"""Loading meshes from files: STL natively, OBJ / PLY / 3MF / OFF / GLB through trimesh."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import numpy as np
+
+from ..constants import UNITS_TO_MM
+from ..errors import ConfigError, InputFileError, MeshError
+from ..mesh import Mesh
+from .stl import read_stl_bytes
+
+__all__ = ["load_mesh", "load_triangles", "make_transform", "SUPPORTED_SUFFIXES"]
+
+log = logging.getLogger(__name__)
+
+SUPPORTED_SUFFIXES = (".stl", ".obj", ".ply", ".3mf", ".off", ".glb", ".gltf")
+
+
+def make_transform(
+    *,
+    translate_mm: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    rotate_deg: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    scale: float | tuple[float, float, float] = 1.0,
+) -> np.ndarray:
+    """A ``(4, 4) float64`` affine: scale, then rotate about X, Y, Z (degrees), then translate.
+
+    Examples
+    --------
+    >>> T = make_transform(translate_mm=(1, 2, 3), rotate_deg=(0, 0, 90))
+    >>> np.round(T @ [1, 0, 0, 1], 12).tolist()
+    [1.0, 3.0, 3.0, 1.0]
+    """
+    s = np.broadcast_to(np.asarray(scale, dtype=np.float64), (3,))
+    if not np.all(np.isfinite(s)) or np.any(s == 0):
+        raise ConfigError(f"scale must be finite and non-zero, got {tuple(s.tolist())}")
+    rx, ry, rz = np.deg2rad(np.asarray(rotate_deg, dtype=np.float64))
+    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
+    Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    Ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    Rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    T = np.eye(4)
+    T[:3, :3] = Rz @ Ry @ Rx @ np.diag(s)
+    T[:3, 3] = np.asarray(translate_mm, dtype=np.float64)
+    return T
+
+
+def _check_path(path: Path) -> None:
+    if not path.exists():
+        raise InputFileError("no such file", path=path)
+    if path.is_dir():
+        raise InputFileError("is a directory, expected a mesh file", path=path)
+
+
+def load_triangles(path: str | Path) -> np.ndarray:
+    """Read a mesh file into ``(N, 3, 3) float64`` triangles in the file's own units."""
+    path = Path(path)
+    _check_path(path)
+    suffix = path.suffix.lower()
+    if suffix not in SUPPORTED_SUFFIXES:
+        raise MeshError(
+            f"unsupported mesh format {suffix or '(no suffix)'!r}; expected one of {', '.join(SUPPORTED_SUFFIXES)}",
+            path=path,
+        )
+    try:
+        if suffix == ".stl":
+            data = path.read_bytes()
+            return read_stl_bytes(data, str(path))
+        if path.stat().st_size == 0:
+            raise MeshError("file is empty", path=path)
+        return _load_with_trimesh(path)
+    except PermissionError as exc:
+        raise InputFileError("permission denied", path=path) from exc
+    except IsADirectoryError as exc:  # pragma: no cover - raced
+        raise InputFileError("is a directory", path=path) from exc
+
+
+def _load_with_trimesh(path: Path) -> np.ndarray:
+    import trimesh
+
+    try:
+        loaded = trimesh.load(str(path), force="mesh", process=False)
+    except Exception as exc:  # trimesh raises many kinds for bad files
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise MeshError(f"could not read as {path.suffix.lower()[1:].upper()}: {first}", path=path) from exc
+    faces = getattr(loaded, "faces", None)
+    vertices = getattr(loaded, "vertices", None)
+    if faces is None or vertices is None or len(faces) == 0:
+        raise MeshError("file holds no triangles", path=path)
+    return np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
+
+
+def load_mesh(
+    path: str | Path,
+    *,
+    units: str = "mm",
+    transform: np.ndarray | None = None,
+) -> Mesh:
+    """Load a mesh file into a validated :class:`~rotoprint.mesh.Mesh` in millimetres.
+
+    Parameters
+    ----------
+    path : str or Path
+        STL (binary or ASCII, several ``solid`` blocks allowed), or OBJ, PLY, 3MF, OFF, GLB.
+    units : {'mm', 'cm', 'm', 'um', 'inch'}
+        Units of the file's coordinates; the mesh is converted to millimetres.
+    transform : (4, 4) float array, optional
+        Applied after the unit conversion (see :func:`make_transform`).
+
+    Raises
+    ------
+    InputFileError
+        Missing file, a directory, unreadable.
+    MeshError
+        Empty, truncated, lying header, garbage, broken facet, no triangles, NaN / inf.
+    """
+    if units not in UNITS_TO_MM:
+        raise ConfigError(f"units must be one of {', '.join(UNITS_TO_MM)}, got {units!r}")
+    tri = load_triangles(path)
+    if tri.shape[0] == 0:
+        raise MeshError("file holds no triangles", path=path)
+    bad = ~np.isfinite(tri).all(axis=(1, 2))
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise MeshError(
+            f"{int(bad.sum())} triangle(s) have NaN or infinite coordinates (first: triangle {first})",
+            path=path,
+        )
+    tri = tri * UNITS_TO_MM[units]
+    if transform is not None:
+        T = np.asarray(transform, dtype=np.float64)
+        if T.shape != (4, 4) or not np.isfinite(T).all():
+            raise ConfigError(f"transform must be a finite (4, 4) matrix, got shape {T.shape}")
+        tri = tri @ T[:3, :3].T + T[:3, 3]
+        if np.linalg.det(T[:3, :3]) < 0:  # a mirroring transform reverses every face
+            tri = tri[:, ::-1, :]
+    return Mesh.from_triangles(tri, source=str(path))
