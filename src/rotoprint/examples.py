@@ -33,10 +33,11 @@ def write_binary_stl(path, triangles: np.ndarray) -> None:
     from .io.stl import BINARY_RECORD
 
     tri = np.asarray(triangles, dtype=np.float64)
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    ln = np.linalg.norm(n, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore"):
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        ln = np.linalg.norm(n, axis=1, keepdims=True)
     rec = np.zeros(len(tri), dtype=BINARY_RECORD)
-    rec["normal"] = np.divide(n, ln, out=np.zeros_like(n), where=ln > 0)
+    rec["normal"] = np.divide(n, ln, out=np.zeros_like(n), where=np.isfinite(ln) & (ln > 0))
     rec["vertices"] = tri
     header = b"rotoprint binary STL".ljust(80, b" ")
     with open(path, "wb") as fh:

@@ -34,7 +34,9 @@ _register()
 def main(argv: list[str] | None = None) -> int:
     """Entry point: runs the app; a RotoprintError becomes one line on stderr and exit 2."""
     try:
-        app(args=argv, prog_name="rotoprint", standalone_mode=False)
+        rc = app(args=argv, prog_name="rotoprint", standalone_mode=False)
+        if isinstance(rc, int):  # a typer.Exit(code) comes back as its code
+            return rc
     except RotoprintError as exc:
         console.print(f"[red]rotoprint: error:[/red] {exc}", soft_wrap=True)
         return EXIT_BAD_INPUT
@@ -43,13 +45,13 @@ def main(argv: list[str] | None = None) -> int:
     except typer.Abort:
         console.print("rotoprint: aborted")
         return 130
-    except Exception as exc:  # click usage errors carry their own exit code
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            return exc.exit_code
-        raise
+    except typer.TyperException as exc:  # usage errors carry their own exit code (2)
+        show = getattr(exc, "show", None)
+        if show is not None:
+            show()
+        else:  # pragma: no cover
+            console.print(f"rotoprint: error: {exc}")
+        return int(getattr(exc, "exit_code", EXIT_BAD_INPUT))
     return 0
 
 

@@ -101,7 +101,11 @@ class SliceJob:
 
     def segments(self, index: int) -> tuple[Segments, GapReport]:
         """The closed cross-section of layer ``index`` in model XY (mm), and its gap report."""
-        z = float(self.plan.z_slice_mm[index])
+        return self.segments_at(float(self.plan.z_slice_mm[index]))
+
+    def segments_at(self, z_mm: float) -> tuple[Segments, GapReport]:
+        """The closed cross-section at any height ``z_mm`` (vertex rule: see ``_sections``)."""
+        z = float(z_mm)
         faces = self._sweep.faces_at(z)
         seg = section(self.mesh, faces, z)
         if len(seg) and self._suspect.any():
@@ -112,20 +116,29 @@ class SliceJob:
         """Layer ``index``'s segments as ``(S, 2)`` start and end in pixel ``(col, row)``."""
         seg, rep = self.segments(index)
         m = self.grid.model_to_pixel
-        return seg.start @ m[:, :2].T + m[:, 2], seg.end @ m[:, :2].T + m[:, 2], rep
+        return _affine(m, seg.start), _affine(m, seg.end), rep
+
+    def image_at(self, z_mm: float) -> tuple[np.ndarray, GapReport]:
+        """``(H, W) uint8`` image of the cross-section at any height, and its gap report."""
+        seg, rep = self.segments_at(z_mm)
+        return self._fill(seg), rep
+
+    def _fill(self, seg: Segments) -> np.ndarray:
+        t = self._to_uv
+        a = _affine(t, seg.start)
+        b = _affine(t, seg.end)
+        fill_fn = _fill_function(self.backend)
+        img = fill_fn(a[:, 0], a[:, 1], b[:, 0], b[:, 1], self._n_fib, self._n_samp, self.fill)
+        if self.grid.fibre_axis == "y":
+            img = np.ascontiguousarray(img.T)
+        return img
 
     def layer(self, index: int) -> Layer:
         """Slice one layer."""
         if not 0 <= index < len(self):
             raise IndexError(f"layer {index} out of range 0..{len(self) - 1}")
         seg, rep = self.segments(index)
-        t = self._to_uv
-        a = seg.start @ t[:, :2].T + t[:, 2]
-        b = seg.end @ t[:, :2].T + t[:, 2]
-        fill_fn = _fill_function(self.backend)
-        img = fill_fn(a[:, 0], a[:, 1], b[:, 0], b[:, 1], self._n_fib, self._n_samp, self.fill)
-        if self.grid.fibre_axis == "y":
-            img = np.ascontiguousarray(img.T)
+        img = self._fill(seg)
         return Layer(
             index=index,
             z_mm=float(self.plan.z_slice_mm[index]),
@@ -139,6 +152,20 @@ class SliceJob:
     def __iter__(self) -> Iterator[Layer]:
         for i in range(len(self)):
             yield self.layer(i)
+
+
+def _affine(m: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """Apply a ``(2, 3)`` affine to ``(N, 2)`` points with elementwise arithmetic only.
+
+    Not ``xy @ m.T``: a BLAS product may fuse multiply-adds in some lanes and not in others,
+    and then a point shared by two segments could map to two different values; the
+    half-open fibre rule needs bit-identical copies.
+    """
+    x, y = xy[:, 0], xy[:, 1]
+    out = np.empty_like(xy)
+    out[:, 0] = (m[0, 0] * x + m[0, 1] * y) + m[0, 2]
+    out[:, 1] = (m[1, 0] * x + m[1, 1] * y) + m[1, 2]
+    return out
 
 
 def _fill_function(backend: str):
