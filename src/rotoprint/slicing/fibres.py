@@ -88,13 +88,11 @@ class SliceJob:
             for a, b in pf:
                 suspect[np.intersect1d(fe[a], fe[b])] = True
         self._suspect = suspect
-        m = grid.model_to_pixel
-        if grid.fibre_axis == "x":  # rows are fibres: v = row, u = col
-            self._to_uv = np.array([m[0], m[1]])
-            self._n_fib, self._n_samp = grid.height, grid.width
-        else:  # columns are fibres: v = col, u = row
-            self._to_uv = np.array([m[1], m[0]])
-            self._n_fib, self._n_samp = grid.width, grid.height
+        # Pixel-centre sampling does not depend on the scan direction, so image rows are
+        # always scanned (contiguous writes); ``grid.fibre_axis`` records the device's own
+        # fibre direction (nozzle tracks) for the rotary stages and the manifest.
+        self._to_uv = grid.model_to_pixel  # u = col (along the scanned row), v = row
+        self._n_fib, self._n_samp = grid.height, grid.width
 
     def __len__(self) -> int:
         return len(self.plan)
@@ -127,11 +125,12 @@ class SliceJob:
         t = self._to_uv
         a = _affine(t, seg.start)
         b = _affine(t, seg.end)
-        fill_fn = _fill_function(self.backend)
-        img = fill_fn(a[:, 0], a[:, 1], b[:, 0], b[:, 1], self._n_fib, self._n_samp, self.fill)
-        if self.grid.fibre_axis == "y":
-            img = np.ascontiguousarray(img.T)
-        return img
+        args = (a[:, 0], a[:, 1], b[:, 0], b[:, 1], self._n_fib, self._n_samp, self.fill)
+        if self.backend == "numpy":
+            return fill_numpy(*args)
+        from ._kernels import fill_jit
+
+        return fill_jit(*args)
 
     def layer(self, index: int) -> Layer:
         """Slice one layer."""
@@ -166,14 +165,6 @@ def _affine(m: np.ndarray, xy: np.ndarray) -> np.ndarray:
     out[:, 0] = (m[0, 0] * x + m[0, 1] * y) + m[0, 2]
     out[:, 1] = (m[1, 0] * x + m[1, 1] * y) + m[1, 2]
     return out
-
-
-def _fill_function(backend: str):
-    if backend == "numpy":
-        return fill_numpy
-    from ._kernels import fill_jit
-
-    return fill_jit
 
 
 def slice_mesh(
