@@ -3,7 +3,8 @@
 Per-layer time includes finding the section and filling the image, for both; PNG encoding
 is excluded for both. Accuracy: pixels whose value differs from point-in-polygon of the
 exact cross-section (trimesh section + shapely) at the pixel centre, farther than 1e-6 mm
-from the boundary, summed over the measured layers.
+from the boundary, summed over every 10th measured layer whose section is closed (for an
+open mesh, layers where gaps had to be closed have no exact reference and are skipped).
 """
 
 from __future__ import annotations
@@ -57,11 +58,16 @@ def _case(name, mesh, device, layer_height, n_layers_measured, check_every):
     layers = np.unique(np.linspace(0, len(job) - 1, n_layers_measured).astype(int))
     job.layer(int(layers[0]))  # compile / warm
     t0 = time.perf_counter()
-    ours = [job.layer(int(i)).image for i in layers]
+    done = [job.layer(int(i)) for i in layers]
     t_ours = time.perf_counter() - t0
+    ours = [L.image for L in done]
     t_tm, theirs = _trimesh_layers(mesh, job, layers)
-    bad_ours = bad_tm = 0
+    bad_ours = bad_tm = checked = 0
     for k in range(0, len(layers), check_every):
+        g = done[k].gaps
+        if g.closed or g.left_open:
+            continue  # an open section has no exact reference: trimesh drops open chains
+        checked += 1
         z = float(job.plan.z_slice_mm[layers[k]])
         geom = exact_section(mesh.triangles, z, per_shell=False)
         bad_ours += len(mismatches_beyond(ours[k], job.grid, geom))
@@ -77,7 +83,7 @@ def _case(name, mesh, device, layer_height, n_layers_measured, check_every):
         "speed-up": t_tm / t_ours,
         "wrong px rotoprint": bad_ours,
         "wrong px trimesh": bad_tm,
-        "layers checked": len(range(0, n, check_every)),
+        "layers checked": checked,
     }
 
 
