@@ -108,3 +108,39 @@ def fill_jit(ua, va, ub, vb, n_fib: int, n_samp: int, rule: str) -> np.ndarray:
     out = np.zeros((n_fib, n_samp), np.uint8)
     as64 = [np.ascontiguousarray(x, dtype=np.float64) for x in (ua, va, ub, vb)]
     return _fill_spans(*as64, n_fib, n_samp, rule == "evenodd", out)
+
+
+@njit(cache=True, nogil=True)
+def _crossing(V, lo, hi, z, out, k):  # pragma: no cover - jit
+    # the same operations, in the same order, as _sections.section_numpy
+    zl = V[lo, 2]
+    t = (z - zl) / (V[hi, 2] - zl)
+    out[k, 0] = V[lo, 0] + t * (V[hi, 0] - V[lo, 0])
+    out[k, 1] = V[lo, 1] + t * (V[hi, 1] - V[lo, 1])
+
+
+@njit(cache=True, nogil=True)
+def section_kernel(V, F, FE, faces, z):  # pragma: no cover - jit
+    """Segments of ``faces`` (all crossing ``z``): ``(K, 2)`` start and end, ``(K,)`` edges."""
+    k_n = faces.shape[0]
+    start = np.empty((k_n, 2))
+    end = np.empty((k_n, 2))
+    se = np.empty(k_n, np.int64)
+    ee = np.empty(k_n, np.int64)
+    for k in range(k_n):
+        f = faces[k]
+        a0 = V[F[f, 0], 2] >= z
+        a1 = V[F[f, 1], 2] >= z
+        a2 = V[F[f, 2], 2] >= z
+        ab = (a0, a1, a2)
+        for side in range(3):
+            nxt = (side + 1) % 3
+            va = F[f, side]
+            vb = F[f, nxt]
+            if (not ab[side]) and ab[nxt]:  # from below to above: the segment ends here
+                _crossing(V, va, vb, z, end, k)
+                ee[k] = FE[f, side]
+            elif ab[side] and not ab[nxt]:  # from above to below: the segment starts here
+                _crossing(V, vb, va, z, start, k)
+                se[k] = FE[f, side]
+    return start, end, se, ee

@@ -62,6 +62,17 @@ class FaceSweep:
 
 
 def section(mesh: Mesh, faces_idx: np.ndarray, z: float) -> Segments:
+    """Oriented segments of the faces ``faces_idx`` (all crossing ``z``) at height ``z``
+    (the jit kernel; :func:`section_numpy` is the reference it is tested against)."""
+    from ._kernels import section_kernel
+
+    start, end, se, ee = section_kernel(
+        mesh.vertices, mesh.faces, mesh.topology.face_edges, np.ascontiguousarray(faces_idx, np.int64), float(z)
+    )
+    return Segments(start=start, end=end, start_edge=se, end_edge=ee)
+
+
+def section_numpy(mesh: Mesh, faces_idx: np.ndarray, z: float) -> Segments:
     """Oriented segments of the faces ``faces_idx`` (all crossing ``z``) at height ``z``."""
     V = mesh.vertices
     tri = mesh.faces[faces_idx]

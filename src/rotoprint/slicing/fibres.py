@@ -27,6 +27,7 @@ __all__ = ["Layer", "SliceJob", "slice_mesh", "FILL_RULES", "BACKENDS"]
 log = logging.getLogger(__name__)
 
 BACKENDS = ("jit", "numpy")
+_NO_GAPS = GapReport()
 
 
 @dataclass(frozen=True)
@@ -88,6 +89,7 @@ class SliceJob:
             for a, b in pf:
                 suspect[np.intersect1d(fe[a], fe[b])] = True
         self._suspect = suspect
+        self._any_suspect = bool(suspect.any())
         # Pixel-centre sampling does not depend on the scan direction, so image rows are
         # always scanned (contiguous writes); ``grid.fibre_axis`` records the device's own
         # fibre direction (nozzle tracks) for the rotary stages and the manifest.
@@ -106,9 +108,9 @@ class SliceJob:
         z = float(z_mm)
         faces = self._sweep.faces_at(z)
         seg = section(self.mesh, faces, z)
-        if len(seg) and self._suspect.any():
+        if self._any_suspect and len(seg) and (self._suspect[seg.start_edge].any() or self._suspect[seg.end_edge].any()):
             return close_gaps(seg, self._suspect, self.gap_radius_mm)
-        return seg, GapReport()
+        return seg, _NO_GAPS
 
     def pixel_segments(self, index: int) -> tuple[np.ndarray, np.ndarray, GapReport]:
         """Layer ``index``'s segments as ``(S, 2)`` start and end in pixel ``(col, row)``."""
