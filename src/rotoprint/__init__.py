@@ -18,6 +18,7 @@ from .errors import (  # noqa: E402
     InputFileError,
     MeshError,
     RasterTooLargeError,
+    ResourceError,
     RotoprintError,
 )
 from .io.mesh import load_mesh, make_transform  # noqa: E402
@@ -42,4 +43,5 @@ __all__ = [
     "ImageError",
     "GeometryError",
     "RasterTooLargeError",
+    "ResourceError",
 ]

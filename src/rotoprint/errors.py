@@ -18,6 +18,7 @@ __all__ = [
     "ImageError",
     "RasterTooLargeError",
     "GeometryError",
+    "ResourceError",
 ]
 
 
@@ -56,3 +57,7 @@ class GeometryError(RotoprintError, ValueError):
 
 class RasterTooLargeError(RotoprintError, MemoryError):
     """A raster would not fit in the memory this machine has."""
+
+
+class ResourceError(RotoprintError, OSError):
+    """A run would need more disk or memory than this machine has; refused before it starts."""

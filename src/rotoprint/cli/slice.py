@@ -19,6 +19,7 @@ from ._common import (
     load_mesh_from_options,
     parse_pair,
     progress,
+    setup_logging,
 )
 
 
@@ -36,13 +37,18 @@ def slice_command(
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
+    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified layers, make the rest.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log what happens (resume, workers) on stderr.")] = False,
 ) -> None:
     """Slice MESH into DIR/layer_00000.png ... (255 = material) and DIR/manifest.json."""
     from ..devices import load_device
     from ..io.layers import write_layer_folder
     from ..slicing import slice_mesh
 
+    setup_logging(verbose)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
     dev = load_device(device, **overrides)
     m = load_mesh_from_options(mesh, units, scale, rotate, translate)
@@ -74,6 +80,9 @@ def slice_command(
             device_name=dev.name,
             device=dev.model_dump(mode="json"),
             options=options,
+            workers=workers,
+            scheduler=scheduler,
+            resume=resume,
             on_layer=lambda i: bar.advance(task),
         )
     if not quiet:

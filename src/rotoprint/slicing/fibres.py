@@ -232,4 +232,15 @@ def slice_mesh(
         centre=centre,
     )
     check_raster_fits(grid.width, grid.height, 5, what="layer image")
-    return SliceJob(mesh, grid, plan, fill=fill, gap_radius_mm=float(gap_radius_mm), backend=backend)
+    job = SliceJob(mesh, grid, plan, fill=fill, gap_radius_mm=float(gap_radius_mm), backend=backend)
+    job.device = device
+    job.slice_options = {
+        "layer_height_mm": float(layer_height_mm),
+        "fibre_angle_deg": fibre_angle_deg,
+        "fill": fill,
+        "offset_mm": tuple(float(v) for v in offset_mm),
+        "centre": centre,
+        "gap_radius_mm": float(gap_radius_mm),
+        "backend": backend,
+    }
+    return job

@@ -1,0 +1,197 @@
+"""Producing layers: one process, a pool of worker processes, or a Dask cluster.
+
+A :class:`LayerTask` is a picklable description of a slicing run (the mesh arrays, the device,
+the options and what to make of each layer). Workers rebuild the slicing job once and then
+turn layer indices into encoded PNG bytes. Results come back *in layer order* through a
+bounded window of layers in flight, so memory does not grow with the layer count, and the
+bytes are the same whichever way they were made (same pixels, same encoder settings).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from collections import deque
+from collections.abc import Iterable, Iterator
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from multiprocessing import get_context
+
+import numpy as np
+
+from .errors import ConfigError
+
+__all__ = ["LayerTask", "LayerResult", "produce_layers", "task_fingerprint"]
+
+#: Seconds to wait for a Dask scheduler before giving up.
+DASK_CONNECT_TIMEOUT_S = 10.0
+
+
+@dataclass(frozen=True)
+class LayerResult:
+    index: int
+    png: bytes
+    sha256: str
+    pixels_on: int
+    gaps: dict
+
+
+@dataclass(frozen=True)
+class LayerTask:
+    """Everything a worker needs to make layers, and nothing that is not picklable.
+
+    ``vertices`` ``(V, 3) float64``, ``faces`` ``(F, 3) int64``: the repaired mesh (the
+    worker does not repair it again); ``device`` the device model's JSON; ``slice_options``
+    the keyword arguments of :func:`rotoprint.slice_mesh`.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    source: str | None
+    device: dict
+    slice_options: dict
+    compress_level: int = 3
+    _key: str = field(default="", compare=False)
+
+    def build_job(self):
+        from .devices import _validate
+        from .mesh import Mesh
+        from .slicing import slice_mesh
+
+        mesh = Mesh(vertices=self.vertices, faces=self.faces, source=self.source)  # already repaired
+        device = _validate(self.device, "task device")
+        return slice_mesh(mesh, device, **self.slice_options)
+
+
+def task_fingerprint(task: LayerTask, extra: dict | None = None) -> str:
+    """SHA-256 over the mesh, the device, the options and the rotoprint version."""
+    from . import __version__
+
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(task.vertices, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(task.faces, dtype="<i8").tobytes())
+    meta = {"device": task.device, "options": task.slice_options, "png": task.compress_level,
+            "version": __version__, "extra": extra or {}}
+    h.update(json.dumps(meta, sort_keys=True, default=str).encode())
+    return h.hexdigest()
+
+
+# ---------------------------------------------------------------------- worker side
+_WORKER_JOB: dict = {}
+
+
+def _job_for(task: LayerTask):
+    key = task._key or id(task)
+    job = _WORKER_JOB.get(key)
+    if job is None:
+        _WORKER_JOB.clear()
+        job = _WORKER_JOB[key] = task.build_job()
+    return job
+
+
+def render_layer(task: LayerTask, index: int) -> LayerResult:
+    """Make layer ``index`` of ``task`` as PNG bytes (runs in a worker or in-process)."""
+    from .io.images import png_bytes
+
+    layer = _job_for(task).layer(index)
+    data = png_bytes(layer.image, compress_level=task.compress_level)
+    return LayerResult(index, data, hashlib.sha256(data).hexdigest(), int(np.count_nonzero(layer.image)),
+                       layer.gaps.to_json())
+
+
+_POOL_TASK: LayerTask | None = None
+
+
+def _pool_init(task: LayerTask) -> None:
+    global _POOL_TASK
+    _POOL_TASK = task
+
+
+def _pool_render(index: int) -> LayerResult:
+    assert _POOL_TASK is not None  # noqa: S101 - set by the pool initializer
+    return render_layer(_POOL_TASK, index)
+
+
+# ---------------------------------------------------------------------- driver side
+def produce_layers(
+    task: LayerTask,
+    indices: Iterable[int],
+    *,
+    workers: int = 1,
+    scheduler: str | None = None,
+    window: int | None = None,
+) -> Iterator[LayerResult]:
+    """Yield :class:`LayerResult` for ``indices``, in that order.
+
+    Parameters
+    ----------
+    workers : int
+        1: in this process. N > 1: N worker processes on this machine.
+    scheduler : str, optional
+        Address of a running Dask distributed scheduler (``tcp://host:port``); the task (the
+        mesh) is sent to the workers once. Needs the ``rotoprint[dask]`` extra.
+    window : int, optional
+        Layers in flight at most (default ``4 * workers``, or 4 x the cluster's threads).
+    """
+    indices = list(indices)
+    if workers < 1:
+        raise ConfigError(f"workers must be at least 1, got {workers}")
+    task = _keyed(task)
+    if scheduler is not None:
+        yield from _produce_dask(task, indices, scheduler, window)
+        return
+    if workers == 1 or len(indices) <= 1:
+        for i in indices:
+            yield render_layer(task, i)
+        return
+    ctx = get_context("spawn")  # no fork: the parent may hold threads (progress bars, BLAS)
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_init, initargs=(task,)) as ex:
+        yield from _ordered(lambda i: ex.submit(_pool_render, i), indices, window or 4 * workers)
+
+
+def _keyed(task: LayerTask) -> LayerTask:
+    if task._key:
+        return task
+    import dataclasses
+
+    return dataclasses.replace(task, _key=task_fingerprint(task))
+
+
+def _ordered(submit, indices: list[int], window: int) -> Iterator[LayerResult]:
+    pending: deque = deque()
+    it = iter(indices)
+    for i in it:
+        pending.append(submit(i))
+        if len(pending) >= window:
+            break
+    while pending:
+        fut = pending.popleft()
+        yield fut.result()
+        nxt = next(it, None)
+        if nxt is not None:
+            pending.append(submit(nxt))
+
+
+def _produce_dask(task: LayerTask, indices: list[int], address: str, window: int | None) -> Iterator[LayerResult]:
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ConfigError("--scheduler needs Dask distributed: pip install 'rotoprint[dask]'") from None
+    try:
+        client = Client(address, timeout=f"{DASK_CONNECT_TIMEOUT_S}s", set_as_default=False)
+    except (OSError, TimeoutError) as exc:
+        raise ConfigError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    try:
+        threads = sum(client.nthreads().values()) or 1
+        remote = client.scatter(task, broadcast=True)  # the mesh goes to the workers once
+        yield from _ordered(lambda i: client.submit(render_layer, remote, i, pure=False), indices, window or 4 * threads)
+    finally:
+        client.close()
+
+
+def cpu_count() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - non-Linux
+        return os.cpu_count() or 1

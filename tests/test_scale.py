@@ -1,0 +1,134 @@
+"""Scale and faults: identical bytes with any number of workers or Dask, resume after a kill,
+refusal before a run that cannot fit."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from rotoprint.devices import load_device
+from rotoprint.examples import write_binary_stl
+from rotoprint.io.layers import partial_path, write_layer_folder
+from rotoprint.slicing import slice_mesh
+from rotoprint.testing import torus_mesh, uv_sphere_mesh
+
+
+def folder_bytes(path: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(path.iterdir())}
+
+
+def _write(job, out, **kw):
+    dev = job.device
+    return write_layer_folder(job, out, device_name=dev.name, device=dev.model_dump(mode="json"), options={}, **kw)
+
+
+@pytest.fixture(scope="module")
+def job():
+    mesh = torus_mesh(6.0, 2.0, 48, 24)
+    return slice_mesh(mesh, load_device("perfactory-sxga"), layer_height_mm=0.4)
+
+
+def test_identical_bytes_1_and_2_workers(job, tmp_path):
+    a, b = tmp_path / "one", tmp_path / "two"
+    _write(job, a, workers=1)
+    _write(job, b, workers=2)
+    fa, fb = folder_bytes(a), folder_bytes(b)
+    assert len(fa) == len(job) + 1 and fa == fb
+
+
+def test_identical_bytes_on_a_dask_local_cluster(job, tmp_path):
+    distributed = pytest.importorskip("distributed", reason="Dask distributed is a test dependency")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        d = tmp_path / "dask"
+        _write(job, d, scheduler=cluster.scheduler_address)
+    a = tmp_path / "one"
+    _write(job, a, workers=1)
+    assert folder_bytes(a) == folder_bytes(d)
+
+
+def test_unreachable_scheduler_is_a_clear_error(job, tmp_path, monkeypatch):
+    pytest.importorskip("distributed", reason="Dask distributed is a test dependency")
+    from rotoprint import ConfigError, runner
+
+    monkeypatch.setattr(runner, "DASK_CONNECT_TIMEOUT_S", 1.0)
+    with pytest.raises(ConfigError, match="cannot reach the Dask scheduler"):
+        _write(job, tmp_path / "x", scheduler="tcp://127.0.0.1:9")
+
+
+def test_resume_after_a_kill(tmp_path):
+    mesh_path = tmp_path / "sphere.stl"
+    write_binary_stl(mesh_path, uv_sphere_mesh(9.0, 48, 96).triangles)
+    out = tmp_path / "out"
+    cmd = [sys.executable, "-m", "rotoprint.cli.main", "slice", str(mesh_path), "-d", "perfactory-sxga",
+           "--layer-height", "0.03", "-o", str(out), "-q"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    journal = partial_path(out) / "journal.jsonl"
+    deadline = time.time() + 60
+    while time.time() < deadline:
+        if journal.exists() and len(journal.read_text().splitlines()) > 40:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    n_journal = len(journal.read_text().splitlines()) - 1
+    assert 40 <= n_journal < 600, "the run was not killed mid-way"
+    assert not out.exists()  # never half-written under its final name
+    # damage one finished layer: resume must notice it and make it again
+    victim = sorted(partial_path(out).glob("layer_*.png"))[3]
+    victim.write_bytes(b"garbage")
+    resumed = subprocess.run(cmd[:-1] + ["--resume", "-v"], capture_output=True, text=True, env=os.environ)
+    assert resumed.returncode == 0, resumed.stderr
+    assert "resuming:" in resumed.stderr
+    kept = int(resumed.stderr.split("resuming:")[1].split("of")[0])
+    assert kept == n_journal - 1
+    clean = tmp_path / "clean"
+    subprocess.run(cmd[:-2] + [str(clean), "-q"], check=True)
+    assert folder_bytes(out) == folder_bytes(clean)
+    assert not partial_path(out).exists()
+
+
+def test_refused_up_front_when_the_disk_is_too_small(job, tmp_path, monkeypatch, run_cli):
+    import shutil
+
+    from rotoprint.io import layers as layers_mod
+
+    real = shutil.disk_usage
+
+    def tiny(path):
+        u = real(path)
+        return type(u)(u.total, u.used, 1000)
+
+    monkeypatch.setattr(layers_mod.shutil, "disk_usage", tiny)
+    mesh_path = tmp_path / "t.stl"
+    write_binary_stl(mesh_path, torus_mesh(6.0, 2.0, 24, 12).triangles)
+    code, _, err = run_cli("slice", mesh_path, "-d", "perfactory-sxga", "--layer-height", "0.5", "-o", tmp_path / "o")
+    assert code == 2 and "only 1000 B is free" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists() and not partial_path(tmp_path / "o").exists()
+
+
+def test_refused_up_front_when_memory_is_too_small(job, tmp_path, monkeypatch):
+    from rotoprint import ResourceError
+    from rotoprint.io import layers as layers_mod
+
+    monkeypatch.setattr(layers_mod, "available_memory_bytes", lambda: 10 * 2**20)
+    with pytest.raises(ResourceError, match="use fewer --workers"):
+        _write(job, tmp_path / "m", workers=4)
+    assert not (tmp_path / "m").exists()
+
+
+def test_manifest_records_checksums(job, tmp_path):
+    import hashlib
+
+    out = tmp_path / "o"
+    man = _write(job, out)
+    for rec in man["layers"]:
+        assert hashlib.sha256((out / rec["file"]).read_bytes()).hexdigest() == rec["sha256"]
+    assert json.loads((out / "manifest.json").read_text())["layer_count"] == len(job)
