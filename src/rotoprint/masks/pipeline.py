@@ -50,13 +50,18 @@ class MaskOptions:
 
 @dataclass(frozen=True)
 class Mask:
-    """One projected mask: slice ``layer`` (its ``copy``-th exposure, 1 = the ERM copy)."""
+    """One projected mask: slice ``layer`` (its ``copy``-th exposure, 1 = the ERM copy).
+
+    ``image`` is what is projected; ``plain`` the same mask before mirroring and inversion
+    (white = expose, as the part is seen from above), for previews and statistics.
+    """
 
     number: int
     layer: int
     copy: int
     z_mm: float
     image: np.ndarray
+    plain: np.ndarray
 
 
 def render_layer(job, index: int, options: MaskOptions, *, backend: str = "jit") -> np.ndarray:
@@ -85,10 +90,10 @@ def iter_masks(job, options: MaskOptions, *, backend: str = "jit") -> Iterator[M
         base = render_layer(job, i, options, backend=backend)
         z = float(job.plan.z_slice_mm[i])
         for c in range(options.copies):
-            img = base if c == 0 else erm_shift(base)
+            img = plain = base if c == 0 else erm_shift(base)
             if options.mirror_x or options.mirror_y:
                 img = mirror_mask(img, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
             if options.invert:
                 img = invert_mask(img)
-            yield Mask(number=n, layer=i, copy=c, z_mm=z, image=img)
+            yield Mask(number=n, layer=i, copy=c, z_mm=z, image=img, plain=plain)
             n += 1
