@@ -92,14 +92,19 @@ def accumulate_jit(x0s, y0s, x1s, y1s, height, width, acc):  # pragma: no cover 
 
 
 @njit(cache=True, nogil=True)
-def resolve_jit(acc, width, out):  # pragma: no cover - jit
-    """Running sums along rows; ``out`` gets ``min(|sum|, 1)`` (nonzero rule, clamped)."""
+def resolve_jit(acc, width, snap, out):  # pragma: no cover - jit
+    """Running sums along rows; ``out`` gets ``min(|sum|, 1)`` (nonzero rule, clamped), with
+    values within ``snap`` of 0 or 1 set to 0 or 1 (rounding residue of the running sum)."""
     for r in range(acc.shape[0]):
         run = 0.0
         for k in range(width):
             run += acc[r, k]
             v = abs(run)
-            out[r, k] = 1.0 if v > 1.0 else v
+            if v < snap:
+                v = 0.0
+            elif v > 1.0 - snap:
+                v = 1.0
+            out[r, k] = v
     return out
 
 
