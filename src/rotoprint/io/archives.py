@@ -130,6 +130,16 @@ def job_dir_name(path: str | Path) -> str:
     return name
 
 
+def _umask_mode(path: Path, base: int) -> None:
+    """Give a finished output the permissions a plain ``open`` would (temporary files are
+    created private, 0600 / 0700)."""
+    import os
+
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, base & ~mask)
+
+
 def _ini(d: dict) -> bytes:
     return "".join(f"{k} = {v}\n" for k, v in d.items()).encode("utf-8")
 
@@ -278,6 +288,7 @@ def _write_sl1(path, masks, info: JobInfo, fmt, compress_level, on_mask) -> dict
         }
         zf.writestr("config.ini", _ini(config))
         zf.writestr("prusaslicer.ini", _ini(prusa))
+    _umask_mode(path, 0o666)
     return {"format": fmt, "path": str(path), "masks": n_out, "config": config, "prusaslicer": prusa, "volume_mm3": stats.volume_mm3}
 
 
@@ -366,6 +377,7 @@ def _write_folder(path, masks, info: JobInfo, fmt, compress_level, on_mask) -> d
                 encoding="utf-8",
             )
         (tmp / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    _umask_mode(path, 0o777)
     return manifest
 
 
