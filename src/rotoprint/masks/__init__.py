@@ -14,6 +14,7 @@ from .ops import (
     mirror_mask,
     smooth_mask,
 )
+from .exposure import FeatureExposure, exposure_table, feature_exposure, format_exposure_table, narrowest_kept_um
 from .pipeline import MODES, Mask, MaskOptions, iter_masks, render_layer
 
 __all__ = [
@@ -33,4 +34,9 @@ __all__ = [
     "Mask",
     "iter_masks",
     "render_layer",
+    "FeatureExposure",
+    "feature_exposure",
+    "exposure_table",
+    "format_exposure_table",
+    "narrowest_kept_um",
 ]
