@@ -168,3 +168,20 @@ def test_real_meshes_within_one_pixel_per_boundary_pixel(shared_meshes, name):
         assert err <= max(boundary, 1) * 1.0
         # overlaps are rare: in practice the error is far below the bound
         assert err <= 1e-6 * max(region.area, 1.0) or err <= 0.05 * boundary
+
+
+@pytest.mark.parametrize(
+    "dx,dy",
+    [(0, 0), (-9, 0), (9, 0), (0, -8), (0, 8), (-30, 0), (30, 0), (0, 30), (-9, -8)],
+)
+def test_windowed_mask_equals_full_reference(dx, dy):
+    """coverage_mask works in the segments' bounding window; it must equal the full-raster
+    reference wherever the shape sits, including partly or wholly outside the image."""
+    from rotoprint.masks import fraction_to_grey
+
+    xy = star(11, 10.0 + dx, 8.0 + dy, 2.0, 7.5, 3)
+    s, e = polygon_segments(xy)
+    got = coverage_mask(s, e, (16, 20))
+    want = fraction_to_grey(coverage_fraction(s, e, (16, 20), backend="numpy"))
+    assert np.abs(got.astype(int) - want.astype(int)).max(initial=0) <= 1
+    assert abs(int(got.sum()) - int(want.sum())) <= 2

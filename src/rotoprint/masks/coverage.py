@@ -200,12 +200,39 @@ def coverage_mask(start_px, end_px, shape, *, backend: str = "jit") -> np.ndarra
     check_raster_fits(w, h, 8 + 1, what="coverage raster")
     from ._coverage_kernels import accumulate_jit, resolve_grey_jit
 
-    acc = np.zeros((h, w + 1), np.float64)
+    out = np.zeros((h, w), np.uint8)
+    if s.shape[0] == 0:
+        return out
+    # Work in the segments' bounding window only: rows outside it have no crossings, and
+    # columns left of it are fully inside or outside per row, which the kernel handles by
+    # folding everything left of the window into its first column.
+    ys = np.concatenate([s[:, 1], e[:, 1]])
+    xs = np.concatenate([s[:, 0], e[:, 0]])
+    r0 = int(max(0, np.floor(ys.min() + 0.5)))
+    r1 = int(min(h, np.floor(ys.max() + 0.5) + 1))
+    c0 = int(max(0, np.floor(xs.min() + 0.5)))
+    c1 = int(min(w, np.floor(xs.max() + 0.5) + 1))
+    if r1 <= r0 or c1 <= c0:
+        # nothing crosses the image rows, or all of it lies left or right of the image
+        if r1 > r0 and c0 >= w:
+            return out
+        if r1 > r0:  # all left of the image: whole rows may be inside
+            c0, c1 = 0, w
+        else:
+            return out
+    hh, ww = r1 - r0, c1 - c0
+    acc = np.zeros((hh, ww + 1), np.float64)
     accumulate_jit(
-        np.ascontiguousarray(s[:, 0]), np.ascontiguousarray(s[:, 1]),
-        np.ascontiguousarray(e[:, 0]), np.ascontiguousarray(e[:, 1]), h, w, acc,
+        np.ascontiguousarray(s[:, 0] - c0), np.ascontiguousarray(s[:, 1] - r0),
+        np.ascontiguousarray(e[:, 0] - c0), np.ascontiguousarray(e[:, 1] - r0), hh, ww, acc,
     )
-    return resolve_grey_jit(acc, w, np.empty((h, w), np.uint8))
+    win = resolve_grey_jit(acc, ww, np.empty((hh, ww), np.uint8))
+    out[r0:r1, c0:c1] = win
+    if c1 < w:
+        # right of the window every row carries its total winding (0 for closed loops)
+        tail = resolve_grey_jit(np.ascontiguousarray(acc.sum(axis=1, keepdims=True)), 1, np.empty((hh, 1), np.uint8))
+        out[r0:r1, c1:] = tail
+    return out
 
 
 def segments_area_px(start_px, end_px) -> float:
