@@ -194,6 +194,41 @@ def _print_time_s(info: JobInfo, n_layers: int) -> float:
     return nf * info.first_exposure_s + (n_layers - nf) * info.exposure_s + n_layers * SL1_TILT_TIME_S
 
 
+def _encoded(masks: Iterable, info: JobInfo, compress_level: int, workers: int):
+    """Yield ``(mask, png bytes)`` in order; PNG encoding (zlib, which releases the GIL) runs
+    in ``workers`` threads while the next masks are computed. At most ``2 * workers + 1``
+    masks are held at once."""
+    from collections import deque
+    from concurrent.futures import ThreadPoolExecutor
+
+    if workers <= 0:
+        for m in masks:
+            _check_mask(m.image, info, m.number)
+            yield m, png_bytes(m.image, compress_level=compress_level)
+        return
+    pending: deque = deque()
+    with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rotoprint-png") as ex:
+        try:
+            for m in masks:
+                _check_mask(m.image, info, m.number)
+                pending.append((m, ex.submit(png_bytes, m.image, compress_level=compress_level)))
+                if len(pending) > 2 * workers:
+                    m0, fut = pending.popleft()
+                    yield m0, fut.result()
+            while pending:
+                m0, fut = pending.popleft()
+                yield m0, fut.result()
+        finally:
+            for _, fut in pending:
+                fut.cancel()
+
+
+def _default_workers() -> int:
+    import os
+
+    return 1 if (os.cpu_count() or 1) > 1 else 0
+
+
 def _check_mask(img: np.ndarray, info: JobInfo, number: int) -> None:
     if img.dtype != np.uint8 or img.shape != (info.height_px, info.width_px):
         raise ImageError(
@@ -209,6 +244,7 @@ def write_job(
     fmt: str | None = None,
     compress_level: int = 3,
     on_mask: Callable[[int], None] | None = None,
+    encode_workers: int | None = None,
 ) -> dict:
     """Write the masks of a job to ``path``; returns a summary (the manifest for folders).
 
@@ -221,24 +257,27 @@ def write_job(
     info : JobInfo
     fmt : {'auto', 'sl1', 'sl1s', 'png', 'perfactory'}, optional
         Default: from the suffix of ``path``.
+    encode_workers : int, optional
+        Threads encoding PNGs while the next masks are made (default: 1 on a multi-core
+        machine, else 0 = encode inline). The output is the same either way.
     """
     fmt = format_from_path(path, fmt)
+    workers = _default_workers() if encode_workers is None else int(encode_workers)
     if fmt in ("sl1", "sl1s"):
-        return _write_sl1(Path(path), masks, info, fmt, compress_level, on_mask)
-    return _write_folder(Path(path), masks, info, fmt, compress_level, on_mask)
+        return _write_sl1(Path(path), masks, info, fmt, compress_level, on_mask, workers)
+    return _write_folder(Path(path), masks, info, fmt, compress_level, on_mask, workers)
 
 
-def _write_sl1(path, masks, info: JobInfo, fmt, compress_level, on_mask) -> dict:
+def _write_sl1(path, masks, info: JobInfo, fmt, compress_level, on_mask, workers) -> dict:
     job_dir = job_dir_name(path)
     n_out = info.mask_count
     thickness = info.layer_height_mm / info.copies
     stats = _Stats(info, thickness)
     names: list[str] = []
     with atomic_file(path, "wb") as fh, zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for m in masks:
-            _check_mask(m.image, info, m.number)
+        for m, data in _encoded(masks, info, compress_level, workers):
             name = f"{job_dir}{m.number:05d}.png"
-            zf.writestr(zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0)), png_bytes(m.image, compress_level=compress_level), compress_type=zipfile.ZIP_STORED)
+            zf.writestr(zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0)), data, compress_type=zipfile.ZIP_STORED)
             names.append(name)
             stats.add(m.plain)
             if on_mask is not None:
@@ -296,14 +335,12 @@ def mask_filename(number: int, fmt: str) -> str:
     return f"{number:05d}.png" if fmt == "perfactory" else f"mask_{number:05d}.png"
 
 
-def _write_folder(path, masks, info: JobInfo, fmt, compress_level, on_mask) -> dict:
+def _write_folder(path, masks, info: JobInfo, fmt, compress_level, on_mask, workers) -> dict:
     stats = _Stats(info, info.layer_height_mm / info.copies)
     entries = []
     with atomic_dir(path) as tmp:
-        for m in masks:
-            _check_mask(m.image, info, m.number)
+        for m, data in _encoded(masks, info, compress_level, workers):
             name = mask_filename(m.number, fmt)
-            data = png_bytes(m.image, compress_level=compress_level)
             (tmp / name).write_bytes(data)
             area = stats.add(m.plain)
             entries.append(
