@@ -223,10 +223,11 @@ def narrowest_kept_um(rows: list[dict], mode: str, kind: str, *, cure_threshold:
 
 
 def format_exposure_table(rows: list[dict], modes=("binary", "coverage", "smooth")) -> str:
-    """A markdown table of :func:`exposure_table` rows: ``level / kept %`` per mode."""
+    """A markdown table of :func:`exposure_table` rows: ``level / kept %`` per mode (the
+    percentage is rounded down, so 100 % means all of it)."""
     head = "| feature | width (um) | " + " | ".join(modes) + " |"
     lines = [head, "|---|---:|" + "---:|" * len(modes)]
     for r in rows:
-        cells = [f"{r[f'{m}_level']:.2f} / {100 * r[f'{m}_kept']:.0f}%" for m in modes]
+        cells = [f"{r[f'{m}_level']:.2f} / {np.floor(1000 * r[f'{m}_kept']) / 10:g}%" for m in modes]
         lines.append(f"| {r['kind']} | {r['width_um']:g} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
