@@ -73,11 +73,13 @@ def render_layer(job, index: int, options: MaskOptions, *, backend: str = "jit")
         img = coverage_mask(s, e, job.grid.shape, backend=backend)
     else:
         img = job.layer(index).image
-    offsets = first_layer_offsets_um(
-        len(job), first_layers=options.first_layers, first_layer_offset_um=options.first_layer_offset_um
-    )
-    if offsets[index] > 0:
-        img = inset_mask(img, inset_mm=offsets[index] / 1000.0, pitch_x_mm=job.grid.pitch_x_mm, pitch_y_mm=job.grid.pitch_y_mm)
+    inset_um = 0.0
+    if index < options.first_layers:
+        inset_um = float(
+            first_layer_offsets_um(index + 1, first_layers=options.first_layers, first_layer_offset_um=options.first_layer_offset_um)[index]
+        )
+    if inset_um > 0:
+        img = inset_mask(img, inset_mm=inset_um / 1000.0, pitch_x_mm=job.grid.pitch_x_mm, pitch_y_mm=job.grid.pitch_y_mm)
     if options.mode == "smooth":
         img = smooth_mask(img)
     return img
