@@ -26,6 +26,9 @@ def _register() -> None:
     from . import demo
 
     app.command("demo")(demo.demo)
+    from . import dlp
+
+    app.command("dlp")(dlp.dlp_command)
 
 
 _register()

@@ -87,6 +87,10 @@ class Projector(_Strict):
     mirror_y: bool = False
     orientation: Literal["landscape", "portrait"] = "landscape"
     cure_threshold: float = Field(default=0.5, ge=0, le=1)
+    exposure_s: float = Field(default=8.0, gt=0, le=3600)
+    first_exposure_s: float = Field(default=35.0, gt=0, le=3600)
+    first_exposure_layers: int = Field(default=10, ge=0, le=10_000)
+    printer_model: str = "rotoprint"
 
 
 class ProjectorDevice(_Strict):

@@ -1,0 +1,103 @@
+"""`rotoprint dlp MESH`: DLP masks (binary, exact coverage, or the paper's smoothing) into an
+SL1 / SL1S archive, a PNG folder with manifest.json, or a Perfactory-style job folder."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ..errors import ConfigError
+from ._common import (
+    DeviceOpt,
+    LayerHeightOpt,
+    RotateOpt,
+    ScaleOpt,
+    TranslateOpt,
+    UnitsOpt,
+    console,
+    load_mesh_from_options,
+    parse_pair,
+    progress,
+)
+
+
+def dlp_command(
+    mesh: Annotated[Path, typer.Argument(help="Mesh file: STL, OBJ, PLY, 3MF, OFF, GLB.")],
+    device: DeviceOpt,
+    layer_height: LayerHeightOpt,
+    out: Annotated[Path, typer.Option("--out", "-o", help="JOB.sl1, JOB.sl1s, or a folder (PNG masks + manifest.json).")],
+    mode: Annotated[str, typer.Option("--mode", help="binary (pixel centres), coverage (exact area fraction), smooth (the paper's PIL SMOOTH on binary).")] = "coverage",
+    erm: Annotated[bool, typer.Option("--erm", help="Enhanced resolution mode: every layer twice, the second copy shifted one pixel in x and y.")] = False,
+    invert: Annotated[bool, typer.Option("--invert", help="Black = expose.")] = False,
+    mirror_x: Annotated[bool, typer.Option("--mirror-x", help="Flip masks left-right (besides the device's own setting).")] = False,
+    mirror_y: Annotated[bool, typer.Option("--mirror-y", help="Flip masks top-bottom (besides the device's own setting).")] = False,
+    first_layers: Annotated[int, typer.Option("--first-layers", help="Layers over which the first-layer offset fades to zero.")] = 0,
+    first_layer_offset: Annotated[float, typer.Option("--first-layer-offset", help="Elephant-foot inset of layer 0, micrometres.")] = 0.0,
+    fmt: Annotated[str, typer.Option("--format", help="auto (from --out), sl1, sl1s, png, perfactory.")] = "auto",
+    exposure: Annotated[float | None, typer.Option("--exposure", help="Exposure per layer, s (default: the device's).")] = None,
+    first_exposure: Annotated[float | None, typer.Option("--first-exposure", help="Exposure of the first layers, s (default: the device's).")] = None,
+    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Rotate the part so this model direction (deg from +X) runs along image rows.")] = None,
+    offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
+    units: UnitsOpt = "mm",
+    scale: ScaleOpt = 1.0,
+    rotate: RotateOpt = None,
+    translate: TranslateOpt = None,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
+) -> None:
+    """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
+    from ..devices import ProjectorDevice, load_device
+    from ..io.archives import JobInfo, format_from_path, job_dir_name, write_job
+    from ..masks import MaskOptions, iter_masks
+    from ..slicing import slice_mesh
+
+    kind = format_from_path(out, fmt)
+    overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
+    dev = load_device(device, **overrides)
+    if not isinstance(dev, ProjectorDevice):
+        raise ConfigError(f"dlp needs a projector device, got the {dev.kind} device {dev.name!r}")
+    options = MaskOptions(
+        mode=mode,
+        erm=erm,
+        invert=invert,
+        mirror_x=mirror_x or dev.projector.mirror_x,
+        mirror_y=mirror_y or dev.projector.mirror_y,
+        first_layers=first_layers,
+        first_layer_offset_um=first_layer_offset,
+    )
+    m = load_mesh_from_options(mesh, units, scale, rotate, translate)
+    job = slice_mesh(m, dev, layer_height_mm=layer_height, fibre_angle_deg=fibre_angle, offset_mm=parse_pair(offset, "--offset"))
+    p = dev.projector
+    info = JobInfo(
+        job_name=job_dir_name(out),
+        layer_height_mm=layer_height,
+        layer_count=len(job),
+        copies=options.copies,
+        width_px=job.grid.width,
+        height_px=job.grid.height,
+        pixel_x_mm=job.grid.pitch_x_mm,
+        pixel_y_mm=job.grid.pitch_y_mm,
+        mirror_x=options.mirror_x,
+        mirror_y=options.mirror_y,
+        orientation=p.orientation,
+        exposure_s=p.exposure_s,
+        first_exposure_s=p.first_exposure_s,
+        first_exposure_layers=p.first_exposure_layers,
+        printer_model=p.printer_model,
+        device_name=dev.name,
+        device=dev.model_dump(mode="json"),
+        mesh=m.info(),
+        source=str(mesh),
+        options={**options.to_json(), "layer_height_mm": layer_height, "fibre_angle_deg": fibre_angle, "offset_mm": list(parse_pair(offset, "--offset")), "units": units, "scale": scale},
+        grid=job.grid.to_json(),
+    )
+    with progress(quiet) as bar:
+        task = bar.add_task(f"{mode} masks", total=info.mask_count)
+        summary = write_job(out, iter_masks(job, options), info, fmt=kind, on_mask=lambda i: bar.advance(task))
+    if not quiet:
+        vol = summary.get("volume_mm3", 0.0)
+        console.print(
+            f"{info.mask_count} {mode} masks ({len(job)} layers{' x 2, ERM' if erm else ''}) of "
+            f"{info.width_px} x {info.height_px} px, {vol:.3f} mm^3 of resin -> {out} ({kind})"
+        )
