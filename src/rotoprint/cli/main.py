@@ -26,6 +26,11 @@ def _register() -> None:
     from . import demo
 
     app.command("demo")(demo.demo)
+    from . import head, simulate, transform
+
+    app.command("head")(head.head_command)
+    app.command("transform")(transform.transform_command)
+    app.command("simulate")(simulate.simulate_command)
 
 
 _register()

@@ -145,10 +145,12 @@ def check_tilt(head: InkjetHead, tilt_deg: float) -> None:
     if not math.isfinite(tilt_deg):
         raise ConfigError(f"tilt must be a finite number of degrees, got {tilt_deg!r}")
     tmax = max_tilt_deg(head)
-    if abs(tilt_deg) >= tmax:
+    ps_p = paper_figures(head, abs(tilt_deg), check=False)["ps_p_mm"] if abs(tilt_deg) < 90 else -1.0
+    # "at the maximum": less than one nozzle pitch of projected swathe is left
+    if abs(tilt_deg) >= tmax or ps_p < head.pitch_mm:
         raise GeometryError(
             f"tilt {tilt_deg:g} deg is at or beyond the maximum tilt {tmax:.2f} deg of this head "
-            f"(the projected swathe ps*cos(tilt) - d_nzr*sin(tilt) is {paper_figures(head, abs(tilt_deg), check=False)['ps_p_mm']:.3f} mm)"
+            f"(the projected swathe ps*cos(tilt) - d_nzr*sin(tilt) is {ps_p:.4f} mm, less than one nozzle pitch)"
         )
 
 
@@ -195,7 +197,7 @@ def paper_figures(head: InkjetHead, tilt_deg: float, *, pivot_radius_mm: float =
     >>> from rotoprint import load_device
     >>> f = paper_figures(load_device("omnidot760").head, 60.0, pivot_radius_mm=50.0)
     >>> round(f["dpi_xp"], 2), round(f["ps_p_mm"], 3), round(f["cx_T_mm"], 4)
-    (720.71, 23.234, 51.8332)
+    (721.4, 23.234, 51.8331)
     """
     if check:
         check_tilt(head, tilt_deg)

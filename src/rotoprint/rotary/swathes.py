@@ -125,7 +125,7 @@ def plan_swathes(
     >>> head = load_device("omnidot760").head
     >>> plan = plan_swathes(head, tilt_deg=0.0, inner_radius_mm=60.0, outer_radius_mm=100.0)
     >>> len(plan), int(plan.swathes[0].enabled.sum())
-    (1, 566)
+    (1, 568)
     """
     check_tilt(head, tilt_deg)
     if not (math.isfinite(inner_radius_mm) and math.isfinite(outer_radius_mm) and 0 < inner_radius_mm < outer_radius_mm):
@@ -183,7 +183,7 @@ def plan_swathes(
         r, lo, hi, inb, T = band_tracks(R)
         pitch = float((T[-1] - T[-3]) / 2)
         last = hi + pitch / 2 >= outer_radius_mm
-        b_hi = min(hi, outer_radius_mm) + pitch / 2
+        b_hi = outer_radius_mm if last else hi + pitch / 2
         enabled = inb & (r >= b_lo - _EPS_MM) & (r < b_hi)
         nz = np.flatnonzero(enabled)
         # the layout check also rejects mounts that put nozzles over the axis
