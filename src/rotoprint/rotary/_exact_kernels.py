@@ -148,3 +148,61 @@ KERNELS = {
     "numba": (coords_numba, bilinear_numba),
     "numpy": (coords_numpy, bilinear_numpy),
 }
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _index_nb(A, B, C, D, E, F, ks, cos_i, sin_i, width, height, idx_out, hit_out):  # pragma: no cover - jit
+    n_f = cos_i.shape[0]
+    n_k = idx_out.shape[1]
+    sentinel = width * height
+    for i in prange(n_f):
+        for k in range(n_k):
+            idx_out[i, k] = sentinel
+        c = cos_i[i]
+        s = sin_i[i]
+        hit = False
+        for q in range(ks.shape[0]):
+            k = ks[q]
+            u = A[k] * c + B[k] * s + C
+            v = D[k] * c + E[k] * s + F
+            if u >= 0.0 and v >= 0.0 and u < width and v < height:
+                idx_out[i, k] = int(v) * width + int(u)
+                hit = True
+        hit_out[i] = hit
+
+
+def index_numba(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height):
+    """Nearest-pixel index map ``(F, N) int32`` and per-firing hit flags ``(F,) bool``."""
+    n_f, n_k = cos_i.shape[0], A.shape[0]
+    idx = np.empty((n_f, n_k), np.int32)
+    hit = np.empty(n_f, np.bool_)
+    _index_nb(A, B, C, D, E, F, np.flatnonzero(enabled).astype(np.int64), cos_i, sin_i, width, height, idx, hit)
+    return idx, hit
+
+
+def index_numpy(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height):
+    _, _, idx = coords_numpy(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height)
+    return idx, (idx != width * height).any(axis=1)
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _gather_nb(flat, lut, idx, out):  # pragma: no cover - jit
+    n_f, n_k = idx.shape
+    for i in prange(n_f):
+        for k in range(n_k):
+            out[i, k] = lut[flat[idx[i, k]]]
+
+
+def gather_numba(flat, lut, idx):
+    """``out[i, k] = lut[flat[idx[i, k]]]``, ``(F, N) uint8``; ``flat`` ends with a 0 sentinel."""
+    out = np.empty(idx.shape, np.uint8)
+    _gather_nb(flat, lut, idx, out)
+    return out
+
+
+def gather_numpy(flat, lut, idx):
+    return lut[flat[idx]]
+
+
+INDEX = {"numba": index_numba, "numpy": index_numpy}
+GATHER = {"numba": gather_numba, "numpy": gather_numpy}

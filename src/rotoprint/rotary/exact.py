@@ -58,8 +58,6 @@ class SwatheMap:
 
     Attributes
     ----------
-    col, row : (F, N) float32
-        Continuous design coordinates of every drop's landing point.
     index : (F, N) int32
         Flat index of the design pixel it lands in; ``width * height`` (one past the end)
         when it lands outside the design or the nozzle is disabled in this swathe.
@@ -72,9 +70,15 @@ class SwatheMap:
     ref_radius_mm: float
     first_firing: int
     band_mm: tuple[float, float]
-    col: np.ndarray
-    row: np.ndarray
+    coefficients: tuple
     index: np.ndarray
+
+    def coords(self, placement: Placement) -> tuple[np.ndarray, np.ndarray]:
+        """Continuous design coordinates ``(col, row)``, each ``(F, N) float32`` (for grey sampling)."""
+        ii = np.arange(self.first_firing, self.first_firing + self.index.shape[0], dtype=np.float64) * self.dphi_rad
+        col, row, _ = _k.coords_numba(*self.coefficients, np.ascontiguousarray(self.enabled), np.cos(ii), np.sin(ii),
+                                      placement.width_px, placement.height_px)
+        return col, row
 
 
 @dataclass(frozen=True, eq=False)
@@ -100,13 +104,15 @@ class ExactMaps:
         dead = np.array(self.head.dead_nozzles, dtype=np.int64)
         flat = np.concatenate([design.ravel(), np.zeros(1, np.uint8)])
         _, bilinear = _k.KERNELS[self.kernel]
+        lut = design_levels(np.arange(256, dtype=np.uint8), self.head.grey_levels, kind=kind)
+        lut[0] = 0
         out = []
         for j, sm in enumerate(self.swathes):
             if kind == "binary":
-                samples = flat[sm.index]
+                lev = _k.GATHER[self.kernel](flat, lut, sm.index)
             else:
-                samples = bilinear(design, sm.col, sm.row, sm.index)
-            lev = design_levels(samples, self.head.grey_levels, kind=kind)
+                col, row = sm.coords(self.placement)
+                lev = design_levels(bilinear(design, col, row, sm.index), self.head.grey_levels, kind=kind)
             if dead.size:
                 lev[:, dead] = 0
             out.append(
@@ -209,7 +215,6 @@ def exact_maps(
         max_swathes=max_swathes,
     )
     a_lo, a_hi = placement.angular_range_rad()
-    coords, _ = _k.KERNELS[kernel]
     maps = []
     for j, sw in enumerate(plan.swathes):
         mount = plan.mount(j)
@@ -224,13 +229,13 @@ def exact_maps(
             lay.r_mm, lay.phi_rad, direction, math.radians(placement.angle_deg),
             placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm, placement.height_px,
         )
-        col, row, idx = coords(A, B, C, D, E, F, np.ascontiguousarray(en), np.cos(ii), np.sin(ii), placement.width_px, placement.height_px)
-        hit = (idx != placement.width_px * placement.height_px).any(axis=1)
+        idx, hit = _k.INDEX[kernel](A, B, C, D, E, F, np.ascontiguousarray(en), np.cos(ii), np.sin(ii), placement.width_px, placement.height_px)
         if hit.any():
             b0 = int(np.argmax(hit))
             b1 = int(n_f - np.argmax(hit[::-1]))
         else:  # this swathe sees nothing of the design: keep one empty firing
             b0, b1 = 0, 1
+        coef = (A, B, C, D, E, F)
         maps.append(
             SwatheMap(
                 mount=mount,
@@ -240,8 +245,7 @@ def exact_maps(
                 ref_radius_mm=r_ref,
                 first_firing=i0 + b0,
                 band_mm=sw.band_mm,
-                col=col[b0:b1],
-                row=row[b0:b1],
+                coefficients=coef,
                 index=idx[b0:b1],
             )
         )

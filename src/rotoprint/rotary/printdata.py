@@ -53,9 +53,9 @@ def png_to_levels(png: np.ndarray, grey_levels: int) -> np.ndarray:
 
 def design_kind(design: np.ndarray) -> str:
     """``"binary"`` when the design holds at most one non-zero value, else ``"grey"``."""
-    vals = np.unique(design)
-    nz = vals[vals != 0]
-    return "binary" if nz.size <= 1 else "grey"
+    d = np.asarray(design)
+    m = d.max() if d.size else 0
+    return "grey" if m and bool(np.any((d != 0) & (d != m))) else "binary"
 
 
 def design_levels(samples: np.ndarray, grey_levels: int, *, kind: str) -> np.ndarray:

@@ -138,20 +138,41 @@ def plan_swathes(
     Y = s * math.sin(th) + t * math.cos(th)
     R_axis = float(-X.min())  # below this pivot radius some nozzle is at or behind the axis
 
-    def lo_of(R: float) -> float:
-        return _band(_radii(R, X, Y), row, head.rows)[0]
+    rows_idx = [np.flatnonzero(row == q) for q in range(head.rows)]
+
+    def lo_and_binding(R: float) -> tuple[float, int]:
+        r = _radii(R, X, Y)
+        best, kb = -np.inf, -1
+        for ix in rows_idx:
+            k = int(ix[np.argmin(r[ix])])
+            if r[k] > best:
+                best, kb = float(r[k]), k
+        return best, kb
 
     def solve(target: float) -> float:
         a = R_axis + 1e-6
-        if lo_of(a) > target:
+        if lo_and_binding(a)[0] > target:
             raise GeometryError(
                 f"a first track at radius {target:.3f} mm needs the head's pivot so close to the axis "
                 f"that nozzles would be over it (tilt {tilt_deg:g} deg); place the design further out"
             )
+        # fixed point on the binding nozzle (the one that sets the band's inner edge): exact in a
+        # few steps; bisection if it does not settle
+        R = target - float(X[0])
+        for _ in range(20):
+            _, k = lo_and_binding(R)
+            if target <= abs(Y[k]):
+                break
+            R_new = -float(X[k]) + math.sqrt(target * target - float(Y[k]) ** 2)
+            if R_new == R or abs(R_new - R) < 1e-12:
+                if abs(lo_and_binding(R_new)[0] - target) < 1e-9:
+                    return R_new
+                break
+            R = R_new
         b = target - float(X.min()) + 1.0
         for _ in range(_BISECT_STEPS):
             m = 0.5 * (a + b)
-            if lo_of(m) < target:
+            if lo_and_binding(m)[0] < target:
                 a = m
             else:
                 b = m
