@@ -44,7 +44,7 @@ def paper_shifts(head: InkjetHead, *, tilt_deg: float, cx_T_mm: float, pitch_y_m
     >>> head = load_device("omnidot760").head
     >>> c = paper_shifts(head, tilt_deg=0.0, cx_T_mm=60.0, pitch_y_mm=25.4 / 360)
     >>> round(float(c[0]), 3), round(float(c[1]), 3)   # -/+ nzt_off / 2 = d_nzr / (2 p_y)
-    (-29.998, 29.998)
+    (-30.0, 30.0)
     """
     th = math.radians(tilt_deg)
     s, t, row = nozzle_offsets(head)
