@@ -26,9 +26,12 @@ def _register() -> None:
     from . import demo
 
     app.command("demo")(demo.demo)
-    from . import dlp
+    from . import dlp, head, simulate, transform
 
     app.command("dlp")(dlp.dlp_command)
+    app.command("head")(head.head_command)
+    app.command("transform")(transform.transform_command)
+    app.command("simulate")(simulate.simulate_command)
 
 
 _register()

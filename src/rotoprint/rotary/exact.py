@@ -1,0 +1,309 @@
+"""The exact transform (``rotary-geometry.md`` section 5): every drop samples where it lands.
+
+For every swathe, nozzle ``k`` and firing ``i`` the landing point in the platform frame is
+converted into design coordinates and the design is sampled there (nearest for binary
+designs, bilinear coverage for grey ones). Any tilt, row count, parallax and dead nozzle is
+handled by the one formula. The maps depend only on the head, the setting, the placement and
+the design size; :func:`exact_maps` builds them once and caches them, so every layer of a job
+costs one gather.
+"""
+
+from __future__ import annotations
+
+import functools
+import logging
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._resources import check_raster_fits
+from ..devices.models import InkjetHead
+from ..errors import ConfigError, ImageError
+from . import _exact_kernels as _k
+from .head import Mount, NozzleLayout, nozzle_layout
+from .placement import Placement
+from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_kind, design_levels
+from .swathes import SwathePlan, plan_swathes
+
+__all__ = ["SwatheMap", "ExactMaps", "exact_maps", "transform_exact", "firing_range", "KERNEL_NAMES"]
+
+log = logging.getLogger(__name__)
+
+KERNEL_NAMES = tuple(_k.KERNELS)
+
+
+def firing_range(phi_rad: np.ndarray, angle_lo_rad: float, angle_hi_rad: float, dphi_rad: float, direction: int) -> tuple[int, int]:
+    """Smallest and largest firing index at which some nozzle can land in ``[lo, hi]`` (radians).
+
+    Nozzle ``k`` lands at ``phi_k - direction * i * dphi``.
+
+    Examples
+    --------
+    >>> firing_range(np.array([0.0]), -0.01, 0.01, 0.001, 1)
+    (-10, 10)
+    """
+    if direction == 1:
+        a = (phi_rad - angle_hi_rad) / dphi_rad
+        b = (phi_rad - angle_lo_rad) / dphi_rad
+    else:
+        a = (angle_lo_rad - phi_rad) / dphi_rad
+        b = (angle_hi_rad - phi_rad) / dphi_rad
+    return int(math.floor(float(a.min()) + 1e-9)), int(math.ceil(float(b.max()) - 1e-9))
+
+
+@dataclass(frozen=True, eq=False)
+class SwatheMap:
+    """Sampling maps of one swathe.
+
+    Attributes
+    ----------
+    index : (F, N) int32
+        Flat index of the design pixel it lands in; ``width * height`` (one past the end)
+        when it lands outside the design or the nozzle is disabled in this swathe.
+    """
+
+    mount: Mount
+    layout: NozzleLayout
+    enabled: np.ndarray
+    dphi_rad: float
+    ref_radius_mm: float
+    first_firing: int
+    band_mm: tuple[float, float]
+    coefficients: tuple
+    index: np.ndarray
+
+    def coords(self, placement: Placement) -> tuple[np.ndarray, np.ndarray]:
+        """Continuous design coordinates ``(col, row)``, each ``(F, N) float32`` (for grey sampling)."""
+        ii = np.arange(self.first_firing, self.first_firing + self.index.shape[0], dtype=np.float64) * self.dphi_rad
+        col, row, _ = _k.coords_numba(*self.coefficients, np.ascontiguousarray(self.enabled), np.cos(ii), np.sin(ii),
+                                      placement.width_px, placement.height_px)
+        return col, row
+
+
+@dataclass(frozen=True, eq=False)
+class ExactMaps:
+    """Maps for a head, a setting, a placement and a design size; apply with :meth:`apply`."""
+
+    head: InkjetHead
+    placement: Placement
+    tilt_deg: float
+    mount_angle_deg: float
+    direction: int
+    dpi_y: float
+    plan: SwathePlan
+    swathes: tuple[SwatheMap, ...]
+    kernel: str
+
+    def apply(self, design: np.ndarray, *, kind: str | None = None) -> RotaryPrint:
+        """Sample ``design`` ``(H, W) uint8`` through the maps; returns a :class:`RotaryPrint`."""
+        design = _check_design(design, self.placement)
+        kind = kind or design_kind(design)
+        if kind not in ("binary", "grey"):
+            raise ConfigError(f"kind must be one of binary, grey; got {kind!r}")
+        dead = np.array(self.head.dead_nozzles, dtype=np.int64)
+        flat = np.concatenate([design.ravel(), np.zeros(1, np.uint8)])
+        _, bilinear = _k.KERNELS[self.kernel]
+        lut = design_levels(np.arange(256, dtype=np.uint8), self.head.grey_levels, kind=kind)
+        lut[0] = 0
+        out = []
+        for j, sm in enumerate(self.swathes):
+            if kind == "binary":
+                lev = _k.GATHER[self.kernel](flat, lut, sm.index)
+            else:
+                col, row = sm.coords(self.placement)
+                lev = design_levels(bilinear(design, col, row, sm.index), self.head.grey_levels, kind=kind)
+            if dead.size:
+                lev[:, dead] = 0
+            out.append(
+                SwatheImage(
+                    index=j,
+                    levels=lev,
+                    pivot_radius_mm=sm.mount.pivot_radius_mm,
+                    first_firing=sm.first_firing,
+                    dphi_rad=sm.dphi_rad,
+                    ref_radius_mm=sm.ref_radius_mm,
+                    band_mm=sm.band_mm,
+                    enabled_nozzles=int(sm.enabled.sum()),
+                    enabled=sm.enabled,
+                )
+            )
+        return RotaryPrint(
+            method="exact",
+            head=self.head,
+            tilt_deg=self.tilt_deg,
+            mount_angle_deg=self.mount_angle_deg,
+            direction=self.direction,
+            dpi_y=self.dpi_y,
+            placement=self.placement,
+            swathes=tuple(out),
+            design_kind=kind,
+        )
+
+
+def _check_design(design: np.ndarray, placement: Placement) -> np.ndarray:
+    a = np.asarray(design)
+    if a.ndim != 2:
+        raise ImageError(f"design must be a 2-D (H, W) greyscale array, got {a.ndim}-D with shape {a.shape}")
+    if a.dtype != np.uint8:
+        raise ImageError(f"design must be uint8 (8-bit greyscale), got {a.dtype}")
+    if a.shape != (placement.height_px, placement.width_px):
+        raise ImageError(f"design is {a.shape[1]} x {a.shape[0]} px but the placement is for {placement.width_px} x {placement.height_px} px")
+    return np.ascontiguousarray(a)
+
+
+def swathe_clock(plan: SwathePlan, j: int, *, dpi_y: float, ref_radius_mm: float | None) -> tuple[float, float]:
+    """``(dphi_rad, ref_radius_mm)`` of swathe ``j``.
+
+    Default reference radius: the swathe's outermost track, so that drops along every track
+    are at most ``25.4 / dpi_y`` apart (inner tracks get more drops per mm; see s. 7).
+    """
+    r_ref = plan.swathes[j].last_track_mm if ref_radius_mm is None else float(ref_radius_mm)
+    return clock_dphi(dpi_y, r_ref), r_ref
+
+
+@functools.lru_cache(maxsize=8)
+def exact_maps(
+    head: InkjetHead,
+    placement: Placement,
+    *,
+    tilt_deg: float,
+    dpi_y: float | None = None,
+    ref_radius_mm: float | None = None,
+    mount_angle_deg: float = 0.0,
+    direction: int = 1,
+    max_swathes: int | None = None,
+    kernel: str = "numba",
+) -> ExactMaps:
+    """Build (or fetch from the cache) the sampling maps of the exact transform.
+
+    Parameters
+    ----------
+    head : InkjetHead
+    placement : Placement
+        Where the design lies; its radial range decides the swathes (:func:`plan_swathes`).
+    tilt_deg : float
+        Head tilt, |tilt| below the head's maximum.
+    dpi_y : float, optional
+        Circumferential density at the reference radius; default the head's ``dpi_y``.
+    ref_radius_mm : float, optional
+        One reference radius for every swathe; default each swathe's outermost track.
+    mount_angle_deg, direction : see :class:`Mount`.
+    max_swathes : int, optional
+        Refuse designs that need more radial swathes.
+    kernel : {"numba", "numpy"}
+
+    Examples
+    --------
+    >>> from rotoprint import load_device
+    >>> head = load_device("omnidot760").head
+    >>> m = exact_maps(head, Placement(40, 30, 0.0705, 0.0705, inner_radius_mm=60.0), tilt_deg=20.0)
+    >>> len(m.swathes), m.swathes[0].index.shape[1]
+    (1, 764)
+    """
+    if kernel not in _k.KERNELS:
+        raise ConfigError(f"kernel must be one of {', '.join(_k.KERNELS)}; got {kernel!r}")
+    dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
+    r_in, r_out = placement.radial_range_mm()
+    plan = plan_swathes(
+        head,
+        tilt_deg=tilt_deg,
+        inner_radius_mm=r_in,
+        outer_radius_mm=r_out,
+        mount_angle_deg=mount_angle_deg,
+        direction=direction,
+        max_swathes=max_swathes,
+    )
+    a_lo, a_hi = placement.angular_range_rad()
+    maps = []
+    for j, sw in enumerate(plan.swathes):
+        mount = plan.mount(j)
+        lay = nozzle_layout(head, mount)
+        dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
+        en = sw.enabled
+        i0, i1 = firing_range(lay.phi_rad[en], a_lo, a_hi, dphi, direction)
+        n_f = i1 - i0 + 1
+        check_raster_fits(head.nozzles, n_f, 12, what=f"exact map of swathe {j}")
+        ii = np.arange(i0, i1 + 1, dtype=np.float64) * dphi
+        A, B, C, D, E, F = _k.coefficients(
+            lay.r_mm, lay.phi_rad, direction, math.radians(placement.angle_deg),
+            placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm, placement.height_px,
+        )
+        idx, hit = _k.INDEX[kernel](A, B, C, D, E, F, np.ascontiguousarray(en), np.cos(ii), np.sin(ii), placement.width_px, placement.height_px)
+        if hit.any():
+            b0 = int(np.argmax(hit))
+            b1 = int(n_f - np.argmax(hit[::-1]))
+        else:  # this swathe sees nothing of the design: keep one empty firing
+            b0, b1 = 0, 1
+        coef = (A, B, C, D, E, F)
+        maps.append(
+            SwatheMap(
+                mount=mount,
+                layout=lay,
+                enabled=en,
+                dphi_rad=dphi,
+                ref_radius_mm=r_ref,
+                first_firing=i0 + b0,
+                band_mm=sw.band_mm,
+                coefficients=coef,
+                index=idx[b0:b1],
+            )
+        )
+    log.debug("exact maps: %d swathe(s) for %s", len(maps), placement)
+    return ExactMaps(
+        head=head,
+        placement=placement,
+        tilt_deg=float(tilt_deg),
+        mount_angle_deg=float(mount_angle_deg),
+        direction=int(direction),
+        dpi_y=dpi_y,
+        plan=plan,
+        swathes=tuple(maps),
+        kernel=kernel,
+    )
+
+
+def transform_exact(
+    design: np.ndarray,
+    head: InkjetHead,
+    placement: Placement,
+    *,
+    tilt_deg: float,
+    dpi_y: float | None = None,
+    ref_radius_mm: float | None = None,
+    mount_angle_deg: float = 0.0,
+    direction: int = 1,
+    max_swathes: int | None = None,
+    kind: str | None = None,
+    kernel: str = "numba",
+) -> RotaryPrint:
+    """Make ``design`` print-ready for a (tilted) head over a rotating platform.
+
+    Parameters
+    ----------
+    design : (H, W) uint8
+        Non-zero = ink. Binary designs are sampled nearest, grey ones bilinear.
+    head, placement, tilt_deg, ... : see :func:`exact_maps` (the maps are cached).
+    kind : {"binary", "grey"}, optional
+        Default: ``"binary"`` when the design holds one non-zero value.
+
+    Returns
+    -------
+    RotaryPrint
+        One ``(F_j, N) uint8`` level image per swathe with its first firing index and clock.
+
+    Examples
+    --------
+    >>> from rotoprint import load_device
+    >>> head = load_device("omnidot760").head
+    >>> design = np.full((30, 40), 255, np.uint8)
+    >>> pr = transform_exact(design, head, Placement(40, 30, 0.0705, 0.0705, inner_radius_mm=60.0), tilt_deg=20.0)
+    >>> pr.swathes[0].levels.dtype, pr.swathes[0].levels.shape[1], int(pr.swathes[0].levels.max())
+    (dtype('uint8'), 764, 1)
+    """
+    design = _check_design(design, placement)
+    maps = exact_maps(
+        head, placement, tilt_deg=float(tilt_deg), dpi_y=dpi_y, ref_radius_mm=ref_radius_mm,
+        mount_angle_deg=float(mount_angle_deg), direction=int(direction), max_swathes=max_swathes, kernel=kernel,
+    )
+    return maps.apply(design, kind=kind)

@@ -1,0 +1,133 @@
+"""Writing a :class:`RotaryPrint` as PNG images plus a JSON sidecar, and reading it back.
+
+``PRINT.png`` for one swathe; ``PRINT-s1.png``, ``PRINT-s2.png``, ... for several; always the
+sidecar ``PRINT.json`` listing them. Every file is written atomically, and only after all
+images have been encoded, so an error leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from ..devices.models import InkjetHead
+from ..errors import ImageError, InputFileError, RotoprintError
+from ..io.atomic import atomic_file
+from ..io.images import png_bytes
+from .placement import Placement
+from .printdata import SIDECAR_FORMAT, RotaryPrint, SwatheImage, levels_to_png, png_to_levels, runs_to_mask
+
+__all__ = ["write_print", "read_print", "swathe_filenames", "sidecar_path"]
+
+
+def swathe_filenames(out_png: Path, n: int) -> list[Path]:
+    out_png = Path(out_png)
+    if n == 1:
+        return [out_png]
+    return [out_png.with_name(f"{out_png.stem}-s{j + 1}{out_png.suffix}") for j in range(n)]
+
+
+def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", design: dict | None = None) -> dict:
+    """Write the swathe images and the sidecar; returns the sidecar dict."""
+    out_png = Path(out_png)
+    if out_png.suffix.lower() != ".png":
+        raise InputFileError("output must be a .png file", path=out_png)
+    files = swathe_filenames(out_png, len(pr.swathes))
+    blobs = [png_bytes(levels_to_png(s.levels, pr.head.grey_levels)) for s in pr.swathes]
+    side = pr.to_json(files=[f.name for f in files], device_name=device_name, design=design)
+    for d, b in zip(side["swathes"], blobs):
+        d["sha256"] = hashlib.sha256(b).hexdigest()
+    text = json.dumps(side, indent=2) + "\n"
+    with contextlib.ExitStack() as stack:
+        handles = [stack.enter_context(atomic_file(f)) for f in files]
+        side_fh = stack.enter_context(atomic_file(out_png.with_suffix(".json"), "w"))
+        for fh, b in zip(handles, blobs):
+            fh.write(b)
+        side_fh.write(text)
+    return side
+
+
+def sidecar_path(path: str | Path) -> Path:
+    """The sidecar of a print: ``X.json`` itself, ``X.png`` -> ``X.json``, ``X-s2.png`` -> ``X.json``."""
+    p = Path(path)
+    if p.suffix.lower() == ".json":
+        return p
+    cand = p.with_suffix(".json")
+    if cand.exists():
+        return cand
+    m = re.fullmatch(r"(.*)-s\d+", p.stem)
+    if m:
+        return p.with_name(m.group(1) + ".json")
+    return cand
+
+
+def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
+    """Read a print written by :func:`write_print` from its PNG or its sidecar."""
+    p = Path(path)
+    if not p.exists():
+        raise InputFileError("no such file", path=p)
+    sp = sidecar_path(p)
+    if not sp.exists():
+        raise InputFileError(f"no sidecar {sp.name} beside it (written by 'rotoprint transform')", path=p)
+    try:
+        side = json.loads(sp.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputFileError(f"sidecar is not valid JSON: {exc}", path=sp) from None
+    if not isinstance(side, dict) or side.get("format") != SIDECAR_FORMAT:
+        raise InputFileError(f"not a rotoprint rotary-print sidecar (format {SIDECAR_FORMAT!r} expected)", path=sp)
+    try:
+        head = InkjetHead(**side["head"])
+        placement = Placement.from_json(side["placement"])
+        swathes = []
+        for d in side["swathes"]:
+            f = sp.parent / d["file"]
+            if not f.exists():
+                raise InputFileError(f"swathe image {d['file']} listed in the sidecar is missing", path=sp)
+            try:
+                with Image.open(f) as im:
+                    im.load()
+                    if im.mode != "L":
+                        raise ImageError(f"print image must be 8-bit greyscale, got mode {im.mode!r}", path=f)
+                    png = np.asarray(im)
+            except OSError as exc:
+                raise ImageError(f"not a readable image: {exc}", path=f) from None
+            if png.shape != (d["firings"], d["nozzles"]):
+                raise ImageError(
+                    f"image is {png.shape[1]} x {png.shape[0]} px, the sidecar says {d['nozzles']} x {d['firings']}", path=f
+                )
+            runs = d.get("enabled_nozzle_runs")
+            swathes.append(
+                SwatheImage(
+                    index=int(d["index"]),
+                    levels=png_to_levels(png, head.grey_levels),
+                    pivot_radius_mm=float(d["pivot_radius_mm"]),
+                    first_firing=int(d["first_firing_index"]),
+                    dphi_rad=float(d["dphi_rad"]),
+                    ref_radius_mm=float(d["ref_radius_mm"]),
+                    band_mm=(float(d["band_mm"][0]), float(d["band_mm"][1])),
+                    enabled_nozzles=int(d["enabled_nozzles"]),
+                    enabled=None if runs is None else runs_to_mask(runs, head.nozzles),
+                )
+            )
+        pr = RotaryPrint(
+            method=str(side["method"]),
+            head=head,
+            tilt_deg=float(side["tilt_deg"]),
+            mount_angle_deg=float(side["mount_angle_deg"]),
+            direction=int(side["direction"]),
+            dpi_y=float(side["dpi_y"]),
+            placement=placement,
+            swathes=tuple(swathes),
+            design_kind=str(side.get("design", {}).get("kind", "binary")),
+        )
+    except (KeyError, TypeError, ValueError) as exc:
+        if isinstance(exc, RotoprintError):
+            raise
+        raise InputFileError(f"sidecar is incomplete or invalid: {type(exc).__name__}: {exc}", path=sp) from None
+    return pr, side, sp
