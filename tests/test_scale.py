@@ -98,7 +98,7 @@ def test_resume_after_a_kill(tmp_path):
 def test_refused_up_front_when_the_disk_is_too_small(job, tmp_path, monkeypatch, run_cli):
     import shutil
 
-    from rotoprint.io import layers as layers_mod
+    from rotoprint.io import resumable as layers_mod
 
     real = shutil.disk_usage
 
@@ -116,7 +116,7 @@ def test_refused_up_front_when_the_disk_is_too_small(job, tmp_path, monkeypatch,
 
 def test_refused_up_front_when_memory_is_too_small(job, tmp_path, monkeypatch):
     from rotoprint import ResourceError
-    from rotoprint.io import layers as layers_mod
+    from rotoprint.io import resumable as layers_mod
 
     monkeypatch.setattr(layers_mod, "available_memory_bytes", lambda: 10 * 2**20)
     with pytest.raises(ResourceError, match="use fewer --workers"):
@@ -132,3 +132,65 @@ def test_manifest_records_checksums(job, tmp_path):
     for rec in man["layers"]:
         assert hashlib.sha256((out / rec["file"]).read_bytes()).hexdigest() == rec["sha256"]
     assert json.loads((out / "manifest.json").read_text())["layer_count"] == len(job)
+
+
+# ---------------------------------------------------------------- DLP archives
+@pytest.fixture
+def torus_stl(tmp_path):
+    p = tmp_path / "torus.stl"
+    write_binary_stl(p, torus_mesh(6.0, 2.0, 48, 24).triangles)
+    return p
+
+
+@pytest.mark.parametrize("mode,erm", [("coverage", False), ("smooth", True)])
+def test_sl1_identical_bytes_1_2_workers_and_dask(run_cli, torus_stl, tmp_path, monkeypatch, mode, erm):
+    distributed = pytest.importorskip("distributed", reason="Dask distributed is a test dependency")
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    base = ["dlp", torus_stl, "-d", "perfactory-sxga", "--layer-height", "0.5", "--mode", mode, "-q"] + (["--erm"] if erm else [])
+    outs = {}
+    for name, extra in (("w1", []), ("w2", ["--workers", "2"])):
+        (tmp_path / name).mkdir()
+        outs[name] = tmp_path / name / "job.sl1"  # same name: jobDir comes from it
+        code, _, err = run_cli(*base, "-o", outs[name], *extra)
+        assert code == 0, err
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
+        (tmp_path / "dask").mkdir()
+        outs["dask"] = tmp_path / "dask" / "job.sl1"
+        code, _, err = run_cli(*base, "-o", outs["dask"], "--scheduler", cluster.scheduler_address)
+        assert code == 0, err
+    data = {k: v.read_bytes() for k, v in outs.items()}
+    assert data["w1"] == data["w2"] == data["dask"]
+    from rotoprint.io.archives import read_job
+
+    job = read_job(outs["w1"])
+    assert len(job) == 8 * (2 if erm else 1)
+
+
+def test_sl1_resume_after_a_kill(tmp_path):
+    mesh_path = tmp_path / "sphere.stl"
+    write_binary_stl(mesh_path, uv_sphere_mesh(9.0, 48, 96).triangles)
+    out = tmp_path / "job.sl1"
+    cmd = [sys.executable, "-m", "rotoprint.cli.main", "dlp", str(mesh_path), "-d", "perfactory-sxga",
+           "--layer-height", "0.05", "--mode", "coverage", "-o", str(out), "-q"]
+    env = {**os.environ, "SOURCE_DATE_EPOCH": "1700000000"}
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    journal = partial_path(out) / "journal.jsonl"
+    deadline = time.time() + 60
+    while time.time() < deadline:
+        if journal.exists() and len(journal.read_text().splitlines()) > 30:
+            break
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    n_journal = len(journal.read_text().splitlines()) - 1
+    assert 30 <= n_journal < 360, "the run was not killed mid-way"
+    assert not out.exists()
+    resumed = subprocess.run(cmd[:-1] + ["--resume", "-v"], capture_output=True, text=True, env=env)
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"resuming: {n_journal} of 360" in resumed.stderr
+    (tmp_path / "clean").mkdir()
+    clean = tmp_path / "clean" / "job.sl1"
+    subprocess.run(cmd[:-2] + [str(clean), "-q"], check=True, env=env)
+    assert out.read_bytes() == clean.read_bytes()
+    assert not partial_path(out).exists()

@@ -12,9 +12,10 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import threading
 from collections import deque
 from collections.abc import Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from multiprocessing import get_context
 
@@ -22,7 +23,7 @@ import numpy as np
 
 from .errors import ConfigError
 
-__all__ = ["LayerTask", "LayerResult", "produce_layers", "task_fingerprint"]
+__all__ = ["LayerTask", "LayerResult", "MaskLayerResult", "produce_layers", "task_fingerprint"]
 
 #: Seconds to wait for a Dask scheduler before giving up.
 DASK_CONNECT_TIMEOUT_S = 10.0
@@ -35,6 +36,19 @@ class LayerResult:
     sha256: str
     pixels_on: int
     gaps: dict
+
+
+@dataclass(frozen=True)
+class MaskLayerResult:
+    """The DLP masks of one layer: one PNG per copy (ERM makes two), the sum of each copy's
+    plain mask (for the resin volume), and the layer's footprint (max over its copies),
+    cropped to its bounding box as ``(row0, col0, (h, w) uint8)`` or None when empty."""
+
+    index: int
+    pngs: tuple[bytes, ...]
+    sha256s: tuple[str, ...]
+    plain_sums: tuple[int, ...]
+    footprint: tuple[int, int, np.ndarray] | None
 
 
 @dataclass(frozen=True)
@@ -52,6 +66,7 @@ class LayerTask:
     device: dict
     slice_options: dict
     compress_level: int = 3
+    mask_options: dict | None = None  # set: DLP masks (MaskOptions fields) instead of plain layers
     _key: str = field(default="", compare=False)
 
     def build_job(self):
@@ -72,32 +87,60 @@ def task_fingerprint(task: LayerTask, extra: dict | None = None) -> str:
     h.update(np.ascontiguousarray(task.vertices, dtype="<f8").tobytes())
     h.update(np.ascontiguousarray(task.faces, dtype="<i8").tobytes())
     meta = {"device": task.device, "options": task.slice_options, "png": task.compress_level,
-            "version": __version__, "extra": extra or {}}
+            "masks": task.mask_options, "version": __version__, "extra": extra or {}}
     h.update(json.dumps(meta, sort_keys=True, default=str).encode())
     return h.hexdigest()
 
 
 # ---------------------------------------------------------------------- worker side
-_WORKER_JOB: dict = {}
+_LOCAL = threading.local()  # one job per thread: a job's face sweep has state
 
 
 def _job_for(task: LayerTask):
     key = task._key or id(task)
-    job = _WORKER_JOB.get(key)
+    cache = getattr(_LOCAL, "jobs", None)
+    if cache is None:
+        cache = _LOCAL.jobs = {}
+    job = cache.get(key)
     if job is None:
-        _WORKER_JOB.clear()
-        job = _WORKER_JOB[key] = task.build_job()
+        cache.clear()
+        job = cache[key] = task.build_job()
     return job
 
 
-def render_layer(task: LayerTask, index: int) -> LayerResult:
+def render_layer(task: LayerTask, index: int) -> LayerResult | MaskLayerResult:
     """Make layer ``index`` of ``task`` as PNG bytes (runs in a worker or in-process)."""
     from .io.images import png_bytes
 
+    if task.mask_options is not None:
+        return _render_masks(task, index)
     layer = _job_for(task).layer(index)
     data = png_bytes(layer.image, compress_level=task.compress_level)
     return LayerResult(index, data, hashlib.sha256(data).hexdigest(), int(np.count_nonzero(layer.image)),
                        layer.gaps.to_json())
+
+
+def _render_masks(task: LayerTask, index: int) -> MaskLayerResult:
+    from .io.images import png_bytes
+    from .masks.pipeline import MaskOptions, layer_masks
+
+    masks = layer_masks(_job_for(task), index, MaskOptions(**task.mask_options))
+    pngs = tuple(png_bytes(m.image, compress_level=task.compress_level) for m in masks)
+    fp = masks[0].plain
+    for m in masks[1:]:
+        fp = np.maximum(fp, m.plain)
+    rows = np.flatnonzero(fp.any(axis=1))
+    crop = None
+    if rows.size:
+        cols = np.flatnonzero(fp.any(axis=0))
+        crop = (int(rows[0]), int(cols[0]), np.ascontiguousarray(fp[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]))
+    return MaskLayerResult(
+        index=index,
+        pngs=pngs,
+        sha256s=tuple(hashlib.sha256(p).hexdigest() for p in pngs),
+        plain_sums=tuple(int(m.plain.sum(dtype=np.uint64)) for m in masks),
+        footprint=crop,
+    )
 
 
 _POOL_TASK: LayerTask | None = None
@@ -127,7 +170,8 @@ def produce_layers(
     Parameters
     ----------
     workers : int
-        1: in this process. N > 1: N worker processes on this machine.
+        1: in this process (two threads overlap, since the kernels and zlib release the
+        GIL). N > 1: N worker processes on this machine.
     scheduler : str, optional
         Address of a running Dask distributed scheduler (``tcp://host:port``); the task (the
         mesh) is sent to the workers once. Needs the ``rotoprint[dask]`` extra.
@@ -142,8 +186,13 @@ def produce_layers(
         yield from _produce_dask(task, indices, scheduler, window)
         return
     if workers == 1 or len(indices) <= 1:
-        for i in indices:
-            yield render_layer(task, i)
+        threads = min(2, cpu_count())
+        if threads == 1 or len(indices) <= 1:
+            for i in indices:
+                yield render_layer(task, i)
+            return
+        with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rotoprint-layer") as ex:
+            yield from _ordered(lambda i: ex.submit(render_layer, task, i), indices, window or 2 * threads)
         return
     ctx = get_context("spawn")  # no fork: the parent may hold threads (progress bars, BLAS)
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_init, initargs=(task,)) as ex:

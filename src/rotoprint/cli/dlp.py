@@ -20,6 +20,7 @@ from ._common import (
     load_mesh_from_options,
     parse_pair,
     progress,
+    setup_logging,
 )
 
 
@@ -44,14 +45,20 @@ def dlp_command(
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
+    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
+    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified masks, make the rest.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log what happens (resume, estimates) on stderr.")] = False,
 ) -> None:
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
-    from ..io.archives import JobInfo, format_from_path, job_dir_name, write_job
-    from ..masks import MaskOptions, iter_masks
+    from ..io.archives import JobInfo, format_from_path, job_dir_name
+    from ..io.dlpjob import write_dlp_job
+    from ..masks import MaskOptions
     from ..slicing import slice_mesh
 
+    setup_logging(verbose)
     kind = format_from_path(out, fmt)
     overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
     dev = load_device(device, **overrides)
@@ -94,7 +101,8 @@ def dlp_command(
     )
     with progress(quiet) as bar:
         task = bar.add_task(f"{mode} masks", total=info.mask_count)
-        summary = write_job(out, iter_masks(job, options), info, fmt=kind, on_mask=lambda i: bar.advance(task))
+        summary = write_dlp_job(job, out, info, options, fmt=kind, workers=workers, scheduler=scheduler, resume=resume,
+                                on_mask=lambda i: bar.advance(task))
     if not quiet:
         vol = summary.get("volume_mm3", 0.0)
         console.print(

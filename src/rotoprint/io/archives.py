@@ -155,16 +155,33 @@ class _Stats:
         self.px_area = info.pixel_x_mm * info.pixel_y_mm
         self.thickness = thickness_mm
         self.volume_mm3 = 0.0
-        self.footprint: np.ndarray | None = None
+        self.footprint = np.zeros((info.height_px, info.width_px), np.uint8)
 
-    def add(self, plain: np.ndarray) -> float:
-        area = float(plain.sum(dtype=np.uint64)) / 255.0 * self.px_area
+    def add_sum(self, plain_sum: int) -> float:
+        """Count one mask whose plain grey levels add up to ``plain_sum``; returns its area."""
+        area = float(plain_sum) / 255.0 * self.px_area
         self.volume_mm3 += area * self.thickness
-        if self.footprint is None:
-            self.footprint = plain.copy()
-        else:
-            np.maximum(self.footprint, plain, out=self.footprint)
         return area
+
+    def add_footprint(self, crop: tuple[int, int, np.ndarray] | None) -> None:
+        if crop is not None:
+            r0, c0, a = crop
+            view = self.footprint[r0 : r0 + a.shape[0], c0 : c0 + a.shape[1]]
+            np.maximum(view, a, out=view)
+
+
+@dataclass(frozen=True)
+class _Encoded:
+    """One mask ready to store: its PNG bytes, the sum of its plain (unmirrored, uninverted)
+    grey levels, and a footprint crop ``(row0, col0, array)`` to merge (or None)."""
+
+    number: int
+    layer: int
+    copy: int
+    z_mm: float
+    png: bytes
+    plain_sum: int
+    footprint: tuple[int, int, np.ndarray] | None
 
 
 def thumbnail_png(footprint: np.ndarray | None, size: tuple[int, int]) -> bytes:
@@ -195,16 +212,19 @@ def _print_time_s(info: JobInfo, n_layers: int) -> float:
 
 
 def _encoded(masks: Iterable, info: JobInfo, compress_level: int, workers: int):
-    """Yield ``(mask, png bytes)`` in order; PNG encoding (zlib, which releases the GIL) runs
-    in ``workers`` threads while the next masks are computed. At most ``2 * workers + 1``
-    masks are held at once."""
+    """Yield :class:`_Encoded` masks in order; PNG encoding (zlib, which releases the GIL)
+    runs in ``workers`` threads while the next masks are computed. At most
+    ``2 * workers + 1`` masks are held at once."""
     from collections import deque
     from concurrent.futures import ThreadPoolExecutor
+
+    def done(m, data: bytes) -> _Encoded:
+        return _Encoded(m.number, m.layer, m.copy, m.z_mm, data, int(m.plain.sum(dtype=np.uint64)), (0, 0, m.plain))
 
     if workers <= 0:
         for m in masks:
             _check_mask(m.image, info, m.number)
-            yield m, png_bytes(m.image, compress_level=compress_level)
+            yield done(m, png_bytes(m.image, compress_level=compress_level))
         return
     pending: deque = deque()
     with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rotoprint-png") as ex:
@@ -214,10 +234,10 @@ def _encoded(masks: Iterable, info: JobInfo, compress_level: int, workers: int):
                 pending.append((m, ex.submit(png_bytes, m.image, compress_level=compress_level)))
                 if len(pending) > 2 * workers:
                     m0, fut = pending.popleft()
-                    yield m0, fut.result()
+                    yield done(m0, fut.result())
             while pending:
                 m0, fut = pending.popleft()
-                yield m0, fut.result()
+                yield done(m0, fut.result())
         finally:
             for _, fut in pending:
                 fut.cancel()
@@ -263,29 +283,56 @@ def write_job(
     """
     fmt = format_from_path(path, fmt)
     workers = _default_workers() if encode_workers is None else int(encode_workers)
+    items = _encoded(masks, info, compress_level, workers)
+    return write_encoded(path, items, info, fmt=fmt, on_mask=on_mask)
+
+
+def write_encoded(path: str | Path, items: Iterable[_Encoded], info: JobInfo, *, fmt: str,
+                  on_mask: Callable[[int], None] | None = None) -> dict:
+    """Write already-encoded masks (in projection order) as ``fmt``; see :func:`write_job`."""
     if fmt in ("sl1", "sl1s"):
-        return _write_sl1(Path(path), masks, info, fmt, compress_level, on_mask, workers)
-    return _write_folder(Path(path), masks, info, fmt, compress_level, on_mask, workers)
+        return _write_sl1(Path(path), items, info, fmt, on_mask)
+    return _write_folder(Path(path), items, info, fmt, on_mask)
 
 
-def _write_sl1(path, masks, info: JobInfo, fmt, compress_level, on_mask, workers) -> dict:
+def _zinfo(name: str) -> zipfile.ZipInfo:
+    """A zip entry with a fixed date, so that archives of the same job are the same bytes."""
+    return zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
+
+
+def creation_time() -> datetime.datetime:
+    """Now, or ``SOURCE_DATE_EPOCH`` when set (reproducible outputs)."""
+    import os
+
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    if epoch is not None:
+        try:
+            return datetime.datetime.fromtimestamp(int(epoch), datetime.timezone.utc)
+        except ValueError:
+            raise ConfigError(f"SOURCE_DATE_EPOCH must be whole seconds, got {epoch!r}") from None
+    return datetime.datetime.now(datetime.timezone.utc)
+
+
+def _write_sl1(path, items, info: JobInfo, fmt, on_mask) -> dict:
     job_dir = job_dir_name(path)
     n_out = info.mask_count
     thickness = info.layer_height_mm / info.copies
     stats = _Stats(info, thickness)
     names: list[str] = []
     with atomic_file(path, "wb") as fh, zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for m, data in _encoded(masks, info, compress_level, workers):
+        for m in items:
             name = f"{job_dir}{m.number:05d}.png"
-            zf.writestr(zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0)), data, compress_type=zipfile.ZIP_STORED)
+            zf.writestr(_zinfo(name), m.png, compress_type=zipfile.ZIP_STORED)
             names.append(name)
-            stats.add(m.plain)
+            stats.add_sum(m.plain_sum)
+            stats.add_footprint(m.footprint)
             if on_mask is not None:
                 on_mask(m.number)
         if len(names) != n_out:
             raise ConfigError(f"expected {n_out} masks, got {len(names)}")
         for size in THUMBNAIL_SIZES:
-            zf.writestr(f"thumbnail/thumbnail{size[0]}x{size[1]}.png", thumbnail_png(stats.footprint, size), compress_type=zipfile.ZIP_STORED)
+            zf.writestr(_zinfo(f"thumbnail/thumbnail{size[0]}x{size[1]}.png"), thumbnail_png(stats.footprint, size),
+                        compress_type=zipfile.ZIP_STORED)
         model = info.printer_model if info.printer_model != "rotoprint" else ("SL1S" if fmt == "sl1s" else "SL1")
         nfade = min(info.first_exposure_layers, n_out)
         config = {
@@ -295,7 +342,7 @@ def _write_sl1(path, masks, info: JobInfo, fmt, compress_level, on_mask, workers
             "expTime": _fmt(info.exposure_s),
             "expTimeFirst": _fmt(info.first_exposure_s),
             "expUserProfile": 0,
-            "fileCreationTimestamp": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d at %H:%M:%S UTC"),
+            "fileCreationTimestamp": creation_time().strftime("%Y-%m-%d at %H:%M:%S UTC"),
             "hollow": 0,
             "materialName": info.material_name,
             "numFade": nfade,
@@ -325,8 +372,8 @@ def _write_sl1(path, masks, info: JobInfo, fmt, compress_level, on_mask, workers
             "printer_technology": "SLA",
             "faded_layers": nfade,
         }
-        zf.writestr("config.ini", _ini(config))
-        zf.writestr("prusaslicer.ini", _ini(prusa))
+        zf.writestr(_zinfo("config.ini"), _ini(config), compress_type=zipfile.ZIP_DEFLATED)
+        zf.writestr(_zinfo("prusaslicer.ini"), _ini(prusa), compress_type=zipfile.ZIP_DEFLATED)
     _umask_mode(path, 0o666)
     return {"format": fmt, "path": str(path), "masks": n_out, "config": config, "prusaslicer": prusa, "volume_mm3": stats.volume_mm3}
 
@@ -335,14 +382,16 @@ def mask_filename(number: int, fmt: str) -> str:
     return f"{number:05d}.png" if fmt == "perfactory" else f"mask_{number:05d}.png"
 
 
-def _write_folder(path, masks, info: JobInfo, fmt, compress_level, on_mask, workers) -> dict:
+def _write_folder(path, items, info: JobInfo, fmt, on_mask) -> dict:
     stats = _Stats(info, info.layer_height_mm / info.copies)
     entries = []
     with atomic_dir(path) as tmp:
-        for m, data in _encoded(masks, info, compress_level, workers):
+        for m in items:
             name = mask_filename(m.number, fmt)
+            data = m.png
             (tmp / name).write_bytes(data)
-            area = stats.add(m.plain)
+            area = stats.add_sum(m.plain_sum)
+            stats.add_footprint(m.footprint)
             entries.append(
                 {
                     "index": m.number,

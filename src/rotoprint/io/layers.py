@@ -1,116 +1,68 @@
 """Writing a slicing run as a folder of PNG layers with a manifest: streamed, parallel,
 resumable, and never half-written under its final name.
 
-The folder is built in ``<out>.partial`` beside the target. After every layer a line is
-appended to ``<out>.partial/journal.jsonl`` (index, file, SHA-256); with ``resume=True`` a
-later run of the *same* job (same mesh, device, options and version: the journal's first line
-holds their fingerprint) keeps every journalled layer whose file still has its checksum and
-makes only the rest. When all layers are there, ``manifest.json`` is written and the folder
-is renamed onto ``<out>``.
+The folder is built in ``<out>.partial`` beside the target, journalled layer by layer (see
+:mod:`rotoprint.io.resumable`); when all layers are there, ``manifest.json`` is written and
+the folder is renamed onto ``<out>``.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import logging
-import os
-import shutil
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from .. import __version__
-from .._resources import available_memory_bytes, format_bytes
-from ..errors import InputFileError, ResourceError
-from ..runner import LayerResult, LayerTask, produce_layers, render_layer, task_fingerprint
+from ..runner import LayerTask, produce_layers, render_layer, task_fingerprint
 from ..slicing.fibres import SliceJob
 from .atomic import MANIFEST_NAME
+from .resumable import PartialOutput, check_resources, check_target, partial_path
 
-__all__ = ["write_layer_folder", "layer_filename", "task_from_job", "partial_path"]
+__all__ = ["write_layer_folder", "layer_filename", "task_from_job", "partial_path", "run_layers"]
 
 log = logging.getLogger(__name__)
-JOURNAL = "journal.jsonl"
 
 
 def layer_filename(index: int) -> str:
     return f"layer_{index:05d}.png"
 
 
-def partial_path(out_dir: str | Path) -> Path:
-    out = Path(out_dir)
-    return out.parent / f"{out.name}.partial"
-
-
-def task_from_job(job: SliceJob) -> LayerTask:
+def task_from_job(job: SliceJob, *, mask_options: dict | None = None) -> LayerTask:
     return LayerTask(
         vertices=job.mesh.vertices,
         faces=job.mesh.faces,
         source=job.mesh.source,
         device=job.device.model_dump(mode="json"),
         slice_options=dict(job.slice_options),
+        mask_options=mask_options,
     )
 
 
-def _check_target(out: Path) -> None:
-    if out.exists():
-        if not out.is_dir():
-            raise InputFileError("output exists and is not a folder", path=out)
-        if any(out.iterdir()) and not (out / MANIFEST_NAME).exists():
-            raise InputFileError(
-                f"output folder is not empty and holds no {MANIFEST_NAME}; refusing to replace it", path=out
-            )
-    if not out.parent.exists():
-        raise InputFileError("parent folder of the output does not exist", path=out.parent)
-
-
-def _read_journal(partial: Path, fingerprint: str) -> dict[int, dict]:
-    """Journalled layers whose files are intact; {} if the journal is of another job."""
-    jpath = partial / JOURNAL
-    if not jpath.exists():
-        return {}
-    done: dict[int, dict] = {}
-    with open(jpath, encoding="utf-8") as fh:
-        head = fh.readline()
-        try:
-            if json.loads(head).get("fingerprint") != fingerprint:
-                return {}
-        except json.JSONDecodeError:
-            return {}
-        for line in fh:
-            try:
-                rec = json.loads(line)
-            except json.JSONDecodeError:
-                break  # a line cut by the crash: everything after it is redone
-            f = partial / rec["file"]
-            if f.exists() and hashlib.sha256(f.read_bytes()).hexdigest() == rec["sha256"]:
-                done[int(rec["index"])] = rec
-    return done
-
-
-def _estimate_and_check(job: SliceJob, task: LayerTask, samples: dict[int, LayerResult], workers: int,
-                        out_parent: Path) -> dict:
-    n = len(job)
-    mean_png = sum(len(r.png) for r in samples.values()) / max(1, len(samples))
-    est_disk = int(mean_png * n * 1.25) + 64 * 1024 + 2048 * n
-    free = shutil.disk_usage(out_parent).free
-    if est_disk > free:
-        raise ResourceError(
-            f"the output would take about {format_bytes(est_disk)} ({n} layers of ~{format_bytes(mean_png)}), "
-            f"but only {format_bytes(free)} is free",
-            path=out_parent,
-        )
+def run_layers(job: SliceJob, task: LayerTask, partial: PartialOutput, *, workers: int, scheduler: str | None,
+               copies_on_disk: int = 1) -> Iterator:
+    """Size the run (three sample layers made first), then yield the results of every layer
+    not already done, in order. Nothing is written before the size check passes."""
+    todo = [i for i in range(len(job)) if i not in partial.done]
+    sample_idx = sorted({todo[0], todo[len(todo) // 2], todo[-1]}) if todo else []
+    samples = {i: render_layer(task, i) for i in sample_idx}
+    sizes = [sum(len(p) for p in getattr(r, "pngs", (getattr(r, "png", b""),))) for r in samples.values()]
     px = job.grid.width * job.grid.height
-    mesh_bytes = task.vertices.nbytes + task.faces.nbytes * 6
-    per_process = mesh_bytes + 6 * px + 150 * 2**20  # arrays, rasters, interpreter and libraries
-    est_mem = (workers + (1 if workers > 1 else 0)) * per_process + 4 * workers * (px + int(mean_png))
-    avail = available_memory_bytes()
-    if est_mem > avail:
-        raise ResourceError(
-            f"{workers} worker(s) would need about {format_bytes(est_mem)} of memory, "
-            f"{format_bytes(avail)} is available; use fewer --workers"
-        )
-    log.info("estimated output %s, memory %s", format_bytes(est_disk), format_bytes(est_mem))
-    return {"estimated_output_bytes": est_disk, "estimated_memory_bytes": est_mem}
+    procs = 1 if (scheduler is not None or workers == 1) else workers + 1
+    check_resources(
+        n_layers=len(job),
+        bytes_per_layer=sum(sizes) / max(1, len(sizes)),
+        copies_on_disk=copies_on_disk,
+        per_process_bytes=task.vertices.nbytes + task.faces.nbytes * 6 + 8 * px + 150 * 2**20,
+        processes=procs,
+        in_flight_bytes=4 * max(workers, 2) * 2 * px,
+        where=partial.dir.parent,
+    )
+    partial.open()
+    rest = [i for i in todo if i not in samples]
+    it = iter(produce_layers(task, rest, workers=workers, scheduler=scheduler))
+    for i in todo:
+        yield samples[i] if i in samples else next(it)
 
 
 def write_layer_folder(
@@ -130,68 +82,27 @@ def write_layer_folder(
     ``out_dir/layer_00000.png`` ... are 8-bit, 255 = material; ``manifest.json`` gives the
     device, the layer heights and, for every image, the affine maps from pixel indices
     ``(col, row)`` (centre of pixel (0, 0) at (0, 0)) to platform and model mm. The bytes
-    are identical for any ``workers`` or ``scheduler``.
+    are identical for any ``workers`` or ``scheduler``; ``resume`` continues a killed run
+    (see :mod:`rotoprint.io.resumable`).
     """
     out = Path(out_dir)
-    _check_target(out)
+    check_target(out, is_dir=True)
     task = task_from_job(job)
-    fingerprint = task_fingerprint(task)
-    partial = partial_path(out)
-    done: dict[int, dict] = {}
-    if partial.exists():
-        if resume:
-            done = _read_journal(partial, fingerprint)
-            log.info("resuming: %d of %d layers verified in %s", len(done), len(job), partial)
-        if not done:
-            shutil.rmtree(partial)
-    todo = [i for i in range(len(job)) if i not in done]
-    # a few layers made here first: they size the run before anything is written
-    sample_idx = sorted({todo[0], todo[len(todo) // 2], todo[-1]}) if todo else []
-    samples = {i: render_layer(task, i) for i in sample_idx}
-    _estimate_and_check(job, task, samples, workers if scheduler is None else 1, out.parent)
-    partial.mkdir(exist_ok=True)
-    jmode = "a" if done else "w"
-    with open(partial / JOURNAL, jmode, encoding="utf-8") as journal:
-        if not done:
-            journal.write(json.dumps({"fingerprint": fingerprint, "layers": len(job)}) + "\n")
-        for i in done:
+    partial = PartialOutput(out, task_fingerprint(task), len(job), resume=resume)
+    try:
+        for i in partial.done:
             if on_layer is not None:
                 on_layer(i)
-        rest = [i for i in todo if i not in samples]
-        stream = _merge(samples, produce_layers(task, rest, workers=workers, scheduler=scheduler), todo)
-        for res in stream:
-            name = layer_filename(res.index)
-            (partial / name).write_bytes(res.png)
-            rec = {"index": res.index, "file": name, "sha256": res.sha256, "pixels_on": res.pixels_on, "gaps": res.gaps}
-            journal.write(json.dumps(rec) + "\n")
-            journal.flush()
-            done[res.index] = rec
+        for res in run_layers(job, task, partial, workers=workers, scheduler=scheduler):
+            partial.record(res.index, {layer_filename(res.index): res.png}, pixels_on=res.pixels_on, gaps=res.gaps)
             if on_layer is not None:
                 on_layer(res.index)
-    manifest = _manifest(job, done, device_name, device, options)
-    (partial / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-    (partial / JOURNAL).unlink()
-    _replace(partial, out)
+        manifest = _manifest(job, partial.done, device_name, device, options)
+        (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    finally:
+        partial.close()
+    partial.finish_as_folder()
     return manifest
-
-
-def _merge(samples: dict[int, LayerResult], rest, order: list[int]):
-    """Results in ``order``: the samples made up front, the rest from the stream."""
-    it = iter(rest)
-    for i in order:
-        yield samples[i] if i in samples else next(it)
-
-
-def _replace(partial: Path, out: Path) -> None:
-    if out.exists():
-        old = out.parent / f".{out.name}.old"
-        if old.exists():
-            shutil.rmtree(old)
-        os.replace(out, old)
-        os.replace(partial, out)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(partial, out)
 
 
 def _manifest(job: SliceJob, done: dict[int, dict], device_name: str, device: dict, options: dict) -> dict:
@@ -204,7 +115,7 @@ def _manifest(job: SliceJob, done: dict[int, dict], device_name: str, device: di
         layers.append(
             {
                 "index": i,
-                "file": rec["file"],
+                "file": rec["files"][0],
                 "z_mm": float(job.plan.z_slice_mm[i]),
                 "z_bottom_mm": float(job.plan.z_bottom_mm[i]),
                 "z_top_mm": float(job.plan.z_top_mm[i]),
@@ -213,7 +124,7 @@ def _manifest(job: SliceJob, done: dict[int, dict], device_name: str, device: di
                 "pixel_to_platform": g["pixel_to_platform"],
                 "pixel_to_model": g["pixel_to_model"],
                 "gaps": rec["gaps"],
-                "sha256": rec["sha256"],
+                "sha256": rec["sha256s"][0],
             }
         )
     return {
@@ -232,3 +143,4 @@ def _manifest(job: SliceJob, done: dict[int, dict], device_name: str, device: di
         "layer_count": len(layers),
         "layers": layers,
     }
+

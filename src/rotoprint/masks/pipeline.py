@@ -16,7 +16,7 @@ from ..errors import ConfigError
 from .coverage import coverage_mask
 from .ops import erm_shift, first_layer_offsets_um, inset_mask, invert_mask, mirror_mask, smooth_mask
 
-__all__ = ["MODES", "MaskOptions", "Mask", "iter_masks", "render_layer"]
+__all__ = ["MODES", "MaskOptions", "Mask", "iter_masks", "layer_masks", "plain_from_image", "render_layer"]
 
 MODES = ("binary", "coverage", "smooth")
 
@@ -85,17 +85,30 @@ def render_layer(job, index: int, options: MaskOptions, *, backend: str = "jit")
     return img
 
 
+def layer_masks(job, index: int, options: MaskOptions, *, backend: str = "jit") -> list[Mask]:
+    """The ``options.copies`` masks of layer ``index``, numbered in projection order."""
+    base = render_layer(job, index, options, backend=backend)
+    z = float(job.plan.z_slice_mm[index])
+    out = []
+    for c in range(options.copies):
+        img = plain = base if c == 0 else erm_shift(base)
+        if options.mirror_x or options.mirror_y:
+            img = mirror_mask(img, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
+        if options.invert:
+            img = invert_mask(img)
+        out.append(Mask(number=index * options.copies + c, layer=index, copy=c, z_mm=z, image=img, plain=plain))
+    return out
+
+
+def plain_from_image(image: np.ndarray, options: MaskOptions) -> np.ndarray:
+    """Undo inversion and mirroring: the mask as seen from above, white = expose."""
+    img = invert_mask(image) if options.invert else image
+    if options.mirror_x or options.mirror_y:
+        img = mirror_mask(img, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
+    return img
+
+
 def iter_masks(job, options: MaskOptions, *, backend: str = "jit") -> Iterator[Mask]:
     """Yield every mask of ``job`` in projection order (``len(job) * options.copies`` masks)."""
-    n = 0
     for i in range(len(job)):
-        base = render_layer(job, i, options, backend=backend)
-        z = float(job.plan.z_slice_mm[i])
-        for c in range(options.copies):
-            img = plain = base if c == 0 else erm_shift(base)
-            if options.mirror_x or options.mirror_y:
-                img = mirror_mask(img, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
-            if options.invert:
-                img = invert_mask(img)
-            yield Mask(number=n, layer=i, copy=c, z_mm=z, image=img, plain=plain)
-            n += 1
+        yield from layer_masks(job, i, options, backend=backend)

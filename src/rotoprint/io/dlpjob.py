@@ -1,0 +1,82 @@
+"""DLP jobs made in parallel and resumably: masks journalled in ``<out>.partial``, then
+assembled into the SL1 / SL1S archive or the folder named by ``out`` only when complete."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from ..runner import MaskLayerResult, task_fingerprint
+from ..slicing.fibres import SliceJob
+from .archives import JobInfo, _Encoded, format_from_path, write_encoded
+from .layers import run_layers, task_from_job
+from .resumable import PartialOutput, check_target
+
+__all__ = ["write_dlp_job"]
+
+
+def _mask_name(number: int) -> str:
+    return f"mask_{number:05d}.png"
+
+
+def write_dlp_job(
+    job: SliceJob,
+    out: str | Path,
+    info: JobInfo,
+    options,
+    *,
+    fmt: str | None = None,
+    workers: int = 1,
+    scheduler: str | None = None,
+    resume: bool = False,
+    on_mask: Callable[[int], None] | None = None,
+) -> dict:
+    """Make every mask of ``job`` with ``options`` (a :class:`rotoprint.masks.MaskOptions`)
+    and write the job to ``out`` as ``fmt`` (default: from the suffix). The bytes are the same
+    for any ``workers`` or ``scheduler`` (set ``SOURCE_DATE_EPOCH`` to fix the archive's
+    creation time too); ``resume`` continues a killed run."""
+    from ..masks.pipeline import plain_from_image
+
+    fmt = format_from_path(out, fmt)
+    out = Path(out)
+    check_target(out, is_dir=fmt not in ("sl1", "sl1s"))
+    task = task_from_job(job, mask_options=options.to_json())
+    partial = PartialOutput(out, task_fingerprint(task), len(job), resume=resume)
+    copies = options.copies
+    footprint = np.zeros((job.grid.height, job.grid.width), np.uint8)
+    try:
+        for i, rec in partial.done.items():  # resumed layers: footprints from their files
+            for name in rec["files"]:
+                with Image.open(partial.dir / name) as im:
+                    np.maximum(footprint, plain_from_image(np.asarray(im.convert("L")), options), out=footprint)
+            if on_mask is not None:
+                for c in range(copies):
+                    on_mask(i * copies + c)
+        for res in run_layers(job, task, partial, workers=workers, scheduler=scheduler, copies_on_disk=2):
+            assert isinstance(res, MaskLayerResult)  # noqa: S101 - the task asks for masks
+            names = [_mask_name(res.index * copies + c) for c in range(copies)]
+            partial.record(res.index, dict(zip(names, res.pngs, strict=True)), plain_sums=list(res.plain_sums))
+            if res.footprint is not None:
+                r0, c0, a = res.footprint
+                view = footprint[r0 : r0 + a.shape[0], c0 : c0 + a.shape[1]]
+                np.maximum(view, a, out=view)
+            if on_mask is not None:
+                for c in range(copies):
+                    on_mask(res.index * copies + c)
+    finally:
+        partial.close()
+
+    def items() -> Iterator[_Encoded]:
+        for i in range(len(job)):
+            rec = partial.done[i]
+            z = float(job.plan.z_slice_mm[i])
+            for c, (name, s) in enumerate(zip(rec["files"], rec["plain_sums"], strict=True)):
+                fp = (0, 0, footprint) if (i == 0 and c == 0) else None
+                yield _Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp)
+
+    summary = write_encoded(out, items(), info, fmt=fmt)
+    partial.discard()
+    return summary

@@ -1,0 +1,160 @@
+"""Resumable outputs: work happens in ``<out>.partial`` beside the target, with a journal.
+
+After every layer a JSON line is appended to ``<out>.partial/journal.jsonl`` naming its files
+and their SHA-256. A later run of the *same* job (the journal's first line holds the job's
+fingerprint) with ``resume=True`` keeps every journalled layer whose files still have their
+checksums and makes only the rest; a run without ``resume`` starts afresh. The finished
+output is put in place under its final name only when complete, so a killed run never leaves
+a half-written output there.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import os
+import shutil
+from pathlib import Path
+
+from .._resources import available_memory_bytes, format_bytes
+from ..errors import InputFileError, ResourceError
+from .atomic import MANIFEST_NAME
+
+__all__ = ["PartialOutput", "check_target", "check_resources", "partial_path"]
+
+log = logging.getLogger(__name__)
+JOURNAL = "journal.jsonl"
+
+
+def partial_path(out: str | Path) -> Path:
+    out = Path(out)
+    return out.parent / f"{out.name}.partial"
+
+
+def check_target(out: Path, *, is_dir: bool) -> None:
+    """Refuse targets we must not replace: a file where a folder goes (or the reverse), or a
+    folder of someone else's (non-empty, without our manifest)."""
+    if not out.parent.exists():
+        raise InputFileError("parent folder of the output does not exist", path=out.parent)
+    if not out.exists():
+        return
+    if is_dir:
+        if not out.is_dir():
+            raise InputFileError("output exists and is not a folder", path=out)
+        if any(out.iterdir()) and not (out / MANIFEST_NAME).exists():
+            raise InputFileError(f"output folder is not empty and holds no {MANIFEST_NAME}; refusing to replace it", path=out)
+    elif out.is_dir():
+        raise InputFileError("output is a folder, expected a file name", path=out)
+
+
+def check_resources(*, n_layers: int, bytes_per_layer: float, copies_on_disk: int, per_process_bytes: int,
+                    processes: int, in_flight_bytes: int, where: Path) -> dict:
+    """Refuse a run, before it starts, that needs more disk or memory than the machine has."""
+    est_disk = int(bytes_per_layer * n_layers * 1.25 * copies_on_disk) + 64 * 1024 + 2048 * n_layers
+    free = shutil.disk_usage(where).free
+    if est_disk > free:
+        raise ResourceError(
+            f"the output would take about {format_bytes(est_disk)} ({n_layers} layers of "
+            f"~{format_bytes(bytes_per_layer)}), but only {format_bytes(free)} is free",
+            path=where,
+        )
+    est_mem = processes * per_process_bytes + in_flight_bytes
+    avail = available_memory_bytes()
+    if est_mem > avail:
+        raise ResourceError(
+            f"{processes} process(es) would need about {format_bytes(est_mem)} of memory, "
+            f"{format_bytes(avail)} is available; use fewer --workers"
+        )
+    log.info("estimated output %s, memory %s", format_bytes(est_disk), format_bytes(est_mem))
+    return {"estimated_output_bytes": est_disk, "estimated_memory_bytes": est_mem}
+
+
+class PartialOutput:
+    """The ``<out>.partial`` folder of a run and its journal (see module doc)."""
+
+    def __init__(self, out: str | Path, fingerprint: str, n_layers: int, *, resume: bool) -> None:
+        self.out = Path(out)
+        self.dir = partial_path(self.out)
+        self.fingerprint = fingerprint
+        self.n_layers = n_layers
+        self.done: dict[int, dict] = {}
+        if self.dir.exists():
+            if resume:
+                self.done = self._verified()
+                log.info("resuming: %d of %d layers verified in %s", len(self.done), n_layers, self.dir)
+            if not self.done:
+                shutil.rmtree(self.dir)
+        self._journal = None
+
+    def _verified(self) -> dict[int, dict]:
+        jpath = self.dir / JOURNAL
+        if not jpath.exists():
+            return {}
+        done: dict[int, dict] = {}
+        with open(jpath, encoding="utf-8") as fh:
+            try:
+                if json.loads(fh.readline()).get("fingerprint") != self.fingerprint:
+                    return {}
+            except json.JSONDecodeError:
+                return {}
+            for line in fh:
+                try:
+                    rec = json.loads(line)
+                except json.JSONDecodeError:
+                    break  # a line cut by the crash: everything after it is made again
+                ok = all(
+                    (self.dir / f).exists() and hashlib.sha256((self.dir / f).read_bytes()).hexdigest() == h
+                    for f, h in zip(rec["files"], rec["sha256s"], strict=True)
+                )
+                if ok:
+                    done[int(rec["index"])] = rec
+        return done
+
+    def open(self) -> None:
+        """Create the folder and the journal (appending when resuming)."""
+        self.dir.mkdir(exist_ok=True)
+        fresh = not self.done
+        self._journal = open(self.dir / JOURNAL, "w" if fresh else "a", encoding="utf-8")  # noqa: SIM115
+        if fresh:
+            self._journal.write(json.dumps({"fingerprint": self.fingerprint, "layers": self.n_layers}) + "\n")
+            self._journal.flush()
+
+    def record(self, index: int, files: dict[str, bytes], **payload) -> dict:
+        """Write a layer's files, then journal them; returns the journal record."""
+        for name, data in files.items():
+            (self.dir / name).write_bytes(data)
+        rec = {"index": index, "files": list(files), "sha256s": [hashlib.sha256(d).hexdigest() for d in files.values()], **payload}
+        self._journal.write(json.dumps(rec) + "\n")
+        self._journal.flush()
+        self.done[index] = rec
+        return rec
+
+    def close(self) -> None:
+        if self._journal is not None:
+            self._journal.close()
+            self._journal = None
+
+    def finish_as_folder(self) -> None:
+        """Drop the journal and rename the partial folder onto the output (replacing an
+        earlier output of ours)."""
+        self.close()
+        (self.dir / JOURNAL).unlink()
+        replace_path(self.dir, self.out)
+
+    def discard(self) -> None:
+        self.close()
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
+def replace_path(src: Path, dst: Path) -> None:
+    """Rename ``src`` onto ``dst``; an existing ``dst`` is moved aside first, then removed."""
+    if dst.exists():
+        old = dst.parent / f".{dst.name}.old"
+        if old.exists():
+            shutil.rmtree(old) if old.is_dir() else old.unlink()
+        os.replace(dst, old)
+        os.replace(src, dst)
+        shutil.rmtree(old, ignore_errors=True) if old.is_dir() else old.unlink(missing_ok=True)
+    else:
+        os.replace(src, dst)
