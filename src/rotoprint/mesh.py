@@ -88,8 +88,8 @@ class Mesh:
             raise MeshError(f"orient must be 'auto' or 'keep', got {orient!r}")
         n_in = tri.shape[0]
         flat = tri.reshape(-1, 3) + 0.0  # folds -0.0 into 0.0 so the two merge
-        vertices, inverse = np.unique(flat, axis=0, return_inverse=True)
-        faces = inverse.reshape(-1, 3).astype(np.int64)
+        vertices, inverse = _unique_rows(flat)
+        faces = inverse.reshape(-1, 3)
         collapsed = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
         faces = faces[~collapsed]
         if faces.shape[0] == 0:
@@ -99,10 +99,14 @@ class Mesh:
         degenerate = int(collapsed.sum() + np.count_nonzero(area2 <= 2 * DEGENERATE_AREA_REL * diag2))
 
         n_reoriented = n_shells_flipped = 0
-        if orient == "auto":
-            faces, n_reoriented = _make_winding_consistent(faces, vertices.shape[0])
-            faces, n_shells_flipped = _orient_shells(vertices, faces)
         topo = _Topology(faces, vertices.shape[0])
+        if orient == "auto":
+            faces, n_reoriented = _make_winding_consistent(faces, topo)
+            if n_reoriented:
+                topo = _Topology(faces, vertices.shape[0])
+            faces, n_shells_flipped = _orient_shells(vertices, faces, topo)
+            if n_shells_flipped:
+                topo = _Topology(faces, vertices.shape[0])
         report = MeshReport(
             triangles_in=n_in,
             collapsed_dropped=int(collapsed.sum()),
@@ -192,15 +196,15 @@ class _Topology:
         lo = np.minimum(a, b)
         hi = np.maximum(a, b)
         key = lo * np.int64(n_vertices) + hi
-        uniq, inverse, counts = np.unique(key.ravel(), return_inverse=True, return_counts=True)
+        uniq, inverse, counts = _unique_inverse(key.ravel())
         self.edges = np.stack([uniq // n_vertices, uniq % n_vertices], axis=1)
-        self.face_edges = inverse.reshape(-1, 3).astype(np.int64)
-        self.edge_face_count = counts.astype(np.int64)
+        self.face_edges = inverse.reshape(-1, 3)
+        self.edge_face_count = counts
         self.forward = (a < b)  # (F, 3): side k runs from the lower to the higher vertex index
         self.boundary_edge = self.edge_face_count == 1
         n_f = faces.shape[0]
         # Manifold pairs: sides of two faces on one edge used exactly twice.
-        order = np.argsort(self.face_edges.ravel(), kind="stable")
+        order = np.argsort(self.face_edges.ravel())
         e_sorted = self.face_edges.ravel()[order]
         first = np.flatnonzero((e_sorted[:-1] == e_sorted[1:]) & (self.edge_face_count[e_sorted[:-1]] == 2))
         s1, s2 = order[first], order[first + 1]
@@ -223,9 +227,36 @@ def _double_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
 
 
-def _make_winding_consistent(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, int]:
+def _unique_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``np.unique(keys, return_inverse=True, return_counts=True)`` for 1-D int64, one sort."""
+    order = np.argsort(keys)
+    sk = keys[order]
+    new = np.empty(len(sk), bool)
+    new[:1] = True
+    np.not_equal(sk[1:], sk[:-1], out=new[1:])
+    ids = np.cumsum(new) - 1
+    inverse = np.empty(len(keys), np.int64)
+    inverse[order] = ids
+    starts = np.flatnonzero(new)
+    counts = np.diff(np.append(starts, len(sk)))
+    return sk[starts], inverse, counts
+
+
+def _unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unique ``(N, 3) float64`` rows (sorted) and the inverse: bit-identical rows merge."""
+    order = np.lexsort(rows.T[::-1])
+    sr = rows[order]
+    new = np.empty(len(sr), bool)
+    new[:1] = True
+    np.any(sr[1:] != sr[:-1], axis=1, out=new[1:])
+    ids = np.cumsum(new) - 1
+    inverse = np.empty(len(rows), np.int64)
+    inverse[order] = ids
+    return sr[new], inverse
+
+
+def _make_winding_consistent(faces: np.ndarray, topo: _Topology) -> tuple[np.ndarray, int]:
     """Flip faces so that neighbours across manifold edges traverse the edge oppositely."""
-    topo = _Topology(faces, n_vertices)
     if topo.orientation_conflicts == 0:
         return faces, 0
     n_f = faces.shape[0]
@@ -298,9 +329,8 @@ def winding_number(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return out
 
 
-def _orient_shells(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, int]:
+def _orient_shells(vertices: np.ndarray, faces: np.ndarray, topo: _Topology) -> tuple[np.ndarray, int]:
     """Apply the nesting rule of the module doc; returns the faces and shells flipped."""
-    topo = _Topology(faces, vertices.shape[0])
     n = topo.n_shells
     vol = _signed_volumes(vertices, faces, topo.shell, n)
     # Only shells that mostly enclose something have a meaningful volume sign.

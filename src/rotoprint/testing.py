@@ -29,16 +29,14 @@ def box_mesh(size=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0)) -> Mesh:
 def _grid_surface(P: np.ndarray, wrap_u: bool, wrap_v: bool) -> np.ndarray:
     """Triangles of a (nu, nv, 3) point grid; quads split along one diagonal."""
     nu, nv, _ = P.shape
-    us = range(nu if wrap_u else nu - 1)
-    vs = range(nv if wrap_v else nv - 1)
-    tris = []
-    for i in us:
-        for j in vs:
-            a, b = P[i, j], P[(i + 1) % nu, j]
-            c, d = P[(i + 1) % nu, (j + 1) % nv], P[i, (j + 1) % nv]
-            tris.append([a, b, c])
-            tris.append([a, c, d])
-    return np.asarray(tris)
+    i = np.arange(nu if wrap_u else nu - 1)
+    j = np.arange(nv if wrap_v else nv - 1)
+    I, J = np.meshgrid(i, j, indexing="ij")
+    I1, J1 = (I + 1) % nu, (J + 1) % nv
+    a, b, c, d = P[I, J], P[I1, J], P[I1, J1], P[I, J1]
+    t1 = np.stack([a, b, c], axis=-2)
+    t2 = np.stack([a, c, d], axis=-2)
+    return np.stack([t1, t2], axis=2).reshape(-1, 3, 3)
 
 
 def torus_mesh(R: float = 3.0, r: float = 1.0, nu: int = 64, nv: int = 32) -> Mesh:
