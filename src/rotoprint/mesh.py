@@ -75,8 +75,11 @@ class Mesh:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_triangles(cls, triangles: np.ndarray, *, source: str | None = None, orient: str = "auto") -> Mesh:
-        """Build a mesh from ``(N, 3, 3)`` float triangles (see the module doc for the steps)."""
+    def from_triangles(cls, triangles: np.ndarray, *, source: str | None = None, orient: str = "auto",
+                       _owned: bool = False) -> Mesh:
+        """Build a mesh from ``(N, 3, 3)`` float triangles (see the module doc for the steps).
+
+        ``_owned``: the caller hands the array over, so it may be modified in place."""
         tri = np.asarray(triangles, dtype=np.float64)
         if tri.ndim != 3 or tri.shape[1:] != (3, 3):
             raise MeshError(f"triangles must have shape (N, 3, 3), got {tri.shape}", path=source)
@@ -87,8 +90,14 @@ class Mesh:
         if orient not in ("auto", "keep"):
             raise MeshError(f"orient must be 'auto' or 'keep', got {orient!r}")
         n_in = tri.shape[0]
-        flat = tri.reshape(-1, 3) + 0.0  # folds -0.0 into 0.0 so the two merge
+        flat = tri.reshape(-1, 3)
+        if _owned and flat.base is not None and flat.flags.c_contiguous:
+            flat += 0.0  # folds -0.0 into 0.0 so the two merge (in place: the array is ours)
+        else:
+            flat = flat + 0.0
+        del tri, triangles
         vertices, inverse = _unique_rows(flat)
+        del flat
         faces = inverse.reshape(-1, 3)
         collapsed = (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
         faces = faces[~collapsed]
@@ -212,6 +221,13 @@ class _Topology:
         self.pair_faces = np.stack([s1 // 3, s2 // 3], axis=1)
         self.pair_same_direction = fwd[s1] == fwd[s2]
         self.orientation_conflicts = int(np.count_nonzero(self.pair_same_direction))
+        # Edges where a cross-section chain may end: not used by exactly two faces, or by two
+        # faces wound the same way (their chains do not link).
+        suspect = self.edge_face_count != 2
+        if self.orientation_conflicts:
+            bad = first[self.pair_same_direction]
+            suspect[e_sorted[bad]] = True
+        self.suspect_edges = suspect
         # Shells: faces connected through any shared edge (manifold or not).
         n_e = self.edges.shape[0]
         rows = np.repeat(np.arange(n_f), 3)
@@ -220,6 +236,15 @@ class _Topology:
         face_labels = labels[:n_f]
         _, self.shell = np.unique(face_labels, return_inverse=True)
         self.n_shells = int(self.shell.max()) + 1
+
+
+class PrebuiltTopology:
+    """The part of a topology the slicer needs, shipped to worker processes so that they do
+    not rebuild it: ``face_edges`` (F, 3) int64 and ``suspect_edges`` (E,) bool."""
+
+    def __init__(self, face_edges: np.ndarray, suspect_edges: np.ndarray) -> None:
+        self.face_edges = face_edges
+        self.suspect_edges = suspect_edges
 
 
 def _double_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

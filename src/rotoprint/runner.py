@@ -67,6 +67,8 @@ class LayerTask:
     slice_options: dict
     compress_level: int = 3
     mask_options: dict | None = None  # set: DLP masks (MaskOptions fields) instead of plain layers
+    face_edges: np.ndarray | None = field(default=None, compare=False)
+    suspect_edges: np.ndarray | None = field(default=None, compare=False)
     _key: str = field(default="", compare=False)
 
     def build_job(self):
@@ -75,6 +77,10 @@ class LayerTask:
         from .slicing import slice_mesh
 
         mesh = Mesh(vertices=self.vertices, faces=self.faces, source=self.source)  # already repaired
+        if self.face_edges is not None and self.suspect_edges is not None:
+            from .mesh import PrebuiltTopology
+
+            object.__setattr__(mesh, "_topology", PrebuiltTopology(self.face_edges, self.suspect_edges))
         device = _validate(self.device, "task device")
         return slice_mesh(mesh, device, **self.slice_options)
 

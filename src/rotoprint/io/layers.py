@@ -36,6 +36,8 @@ def task_from_job(job: SliceJob, *, mask_options: dict | None = None) -> LayerTa
         device=job.device.model_dump(mode="json"),
         slice_options=dict(job.slice_options),
         mask_options=mask_options,
+        face_edges=job.mesh.topology.face_edges,
+        suspect_edges=job.mesh.topology.suspect_edges,
     )
 
 

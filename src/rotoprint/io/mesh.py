@@ -128,12 +128,14 @@ def load_mesh(
             f"{int(bad.sum())} triangle(s) have NaN or infinite coordinates (first: triangle {first})",
             path=path,
         )
-    tri = tri * UNITS_TO_MM[units]
+    if UNITS_TO_MM[units] != 1.0:
+        tri *= UNITS_TO_MM[units]  # tri is our own array: scaled in place
     if transform is not None:
         T = np.asarray(transform, dtype=np.float64)
         if T.shape != (4, 4) or not np.isfinite(T).all():
             raise ConfigError(f"transform must be a finite (4, 4) matrix, got shape {T.shape}")
-        tri = tri @ T[:3, :3].T + T[:3, 3]
-        if np.linalg.det(T[:3, :3]) < 0:  # a mirroring transform reverses every face
-            tri = tri[:, ::-1, :]
-    return Mesh.from_triangles(tri, source=str(path))
+        if not np.array_equal(T, np.eye(4)):
+            tri = tri @ T[:3, :3].T + T[:3, 3]
+            if np.linalg.det(T[:3, :3]) < 0:  # a mirroring transform reverses every face
+                tri = tri[:, ::-1, :]
+    return Mesh.from_triangles(tri, source=str(path), _owned=True)

@@ -79,15 +79,7 @@ class SliceJob:
         self.gap_radius_mm = gap_radius_mm
         self.backend = backend
         self._sweep = FaceSweep(mesh)
-        topo = mesh.topology
-        suspect = topo.edge_face_count != 2
-        if topo.orientation_conflicts:
-            conflict_pairs = topo.pair_same_direction
-            fe = topo.face_edges
-            # Edges shared by two faces wound the same way: their chains do not link.
-            pf = topo.pair_faces[conflict_pairs]
-            for a, b in pf:
-                suspect[np.intersect1d(fe[a], fe[b])] = True
+        suspect = mesh.topology.suspect_edges
         self._suspect = suspect
         self._any_suspect = bool(suspect.any())
         # Pixel-centre sampling does not depend on the scan direction, so image rows are
