@@ -237,6 +237,116 @@ def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy):  # pragma: no cover - jit
     return px0, py0, px1, py1, par, count, idx
 
 
+@njit(cache=True, nogil=True)
+def split_at_crossings(sx, sy, ex, ey, cell_mm):  # pragma: no cover - jit
+    """Cut every segment where another one crosses or touches its interior, so that each piece
+    is wholly on the boundary of the filled region or wholly inside it (overlapping shells).
+
+    Returns the pieces ``(Q,)`` start x, y, end x, y and the ``(Q,) int64`` segment each comes
+    from, in segment order.
+    """
+    n = sx.shape[0]
+    keep = np.ones(n, np.bool_)
+    if n == 0:
+        return sx.copy(), sy.copy(), ex.copy(), ey.copy(), np.arange(0, dtype=np.int64)
+    h = max(cell_mm, 1e-9)
+    xmin = min(sx.min(), ex.min()) - h
+    ymin = min(sy.min(), ey.min()) - h
+    xmax = max(sx.max(), ex.max()) + h
+    ymax = max(sy.max(), ey.max()) + h
+    while ((xmax - xmin) / h + 1) * ((ymax - ymin) / h + 1) > 4e6:
+        h *= 2.0
+    ncx = int((xmax - xmin) / h) + 1
+    ncy = int((ymax - ymin) / h) + 1
+    px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+    cap = 64
+    rec_s = np.empty(cap, np.int64)
+    rec_t = np.empty(cap)
+    m = 0
+    for c in range(ncx * ncy):
+        for a in range(start[c], start[c + 1]):
+            pa = idx[a]
+            A = par[pa]
+            for b in range(a + 1, start[c + 1]):
+                pb = idx[b]
+                B = par[pb]
+                if A == B:
+                    continue
+                # parents' own parametrisation: exact same numbers for every cell
+                d0x = ex[A] - sx[A]
+                d0y = ey[A] - sy[A]
+                d1x = ex[B] - sx[B]
+                d1y = ey[B] - sy[B]
+                den = d0x * d1y - d0y * d1x
+                if den == 0.0:
+                    continue
+                wx = sx[B] - sx[A]
+                wy = sy[B] - sy[A]
+                ta = (wx * d1y - wy * d1x) / den
+                tb = (wx * d0y - wy * d0x) / den
+                if ta < 0.0 or ta > 1.0 or tb < 0.0 or tb > 1.0:
+                    continue
+                for q in range(2):
+                    seg_id = A if q == 0 else B
+                    t = ta if q == 0 else tb
+                    if t <= 1e-12 or t >= 1.0 - 1e-12:
+                        continue
+                    if m == cap:
+                        cap *= 2
+                        ns = np.empty(cap, np.int64)
+                        nt = np.empty(cap)
+                        ns[:m] = rec_s[:m]
+                        nt[:m] = rec_t[:m]
+                        rec_s = ns
+                        rec_t = nt
+                    rec_s[m] = seg_id
+                    rec_t[m] = t
+                    m += 1
+    # pieces: every segment from 0 to 1 through its sorted cut parameters
+    cuts_n = np.zeros(n + 1, np.int64)
+    for i in range(m):
+        cuts_n[rec_s[i] + 1] += 1
+    for i in range(n):
+        cuts_n[i + 1] += cuts_n[i]
+    ts = np.empty(m)
+    fill = cuts_n[:-1].copy()
+    for i in range(m):
+        ts[fill[rec_s[i]]] = rec_t[i]
+        fill[rec_s[i]] += 1
+    total = n + m
+    ox0 = np.empty(total)
+    oy0 = np.empty(total)
+    ox1 = np.empty(total)
+    oy1 = np.empty(total)
+    opar = np.empty(total, np.int64)
+    q = 0
+    for k in range(n):
+        cs = np.sort(ts[cuts_n[k] : cuts_n[k + 1]])
+        prev = 0.0
+        px = sx[k]
+        py = sy[k]
+        for j in range(cs.shape[0] + 1):
+            t = cs[j] if j < cs.shape[0] else 1.0
+            if j < cs.shape[0] and t - prev <= 1e-12:
+                continue  # the same cut found twice (several cells, several crossers)
+            if j == cs.shape[0]:
+                qx = ex[k]
+                qy = ey[k]
+            else:
+                qx = sx[k] + t * (ex[k] - sx[k])
+                qy = sy[k] + t * (ey[k] - sy[k])
+            ox0[q] = px
+            oy0[q] = py
+            ox1[q] = qx
+            oy1[q] = qy
+            opar[q] = k
+            q += 1
+            px = qx
+            py = qy
+            prev = t
+    return ox0[:q], oy0[:q], ox1[:q], oy1[:q], opar[:q]
+
+
 @njit(cache=True, nogil=True, parallel=True)
 def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):  # pragma: no cover - jit
     """Distance from every sample along ``+u`` (into the material: wall width) and ``-u``

@@ -48,7 +48,7 @@ _RAY_TMIN_MM = 1e-9
 #: Side of the cells (in pixels) in which rays look for the other side of a wall or gap.
 _CELL_PX = 2.0
 #: Chords of one kind closer than this many pixels are reported as one finding.
-_GROUP_PX = 2
+_GROUP_PX = 1
 #: Walls and gaps narrower than this many pixels are tested against the raster.
 _RASTER_TEST_PX = 2.0
 #: Walls and gaps narrower than this many pixels are tested against the exposure.
@@ -208,6 +208,7 @@ class _LayerChecker:
         chords: dict[str, np.ndarray] = {}
         thin_w = narrow_g = None
         if sx.size:
+            sx, sy, ex, ey, _ = K.split_at_crossings(sx, sy, ex, ey, _CELL_PX * self.pmax)
             keep, nx, ny = K.classify_segments(sx, sy, ex, ey, self.evenodd, _SIDE_EPS_MM)
             bx, by, ux, uy, sid, ln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, self.spacing)
             wall, gap = K.cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * self.pmax)
