@@ -26,6 +26,9 @@ def _register() -> None:
     from . import demo
 
     app.command("demo")(demo.demo)
+    from . import check as check_cmd
+
+    app.command("check")(check_cmd.check_command)
 
 
 _register()
@@ -34,7 +37,9 @@ _register()
 def main(argv: list[str] | None = None) -> int:
     """Entry point: runs the app; a RotoprintError becomes one line on stderr and exit 2."""
     try:
-        app(args=argv, prog_name="rotoprint", standalone_mode=False)
+        result = app(args=argv, prog_name="rotoprint", standalone_mode=False)
+        if isinstance(result, int) and not isinstance(result, bool):  # typer.Exit(code) lands here
+            return result
     except RotoprintError as exc:
         console.print(f"[red]rotoprint: error:[/red] {exc}", soft_wrap=True)
         return EXIT_BAD_INPUT
