@@ -76,26 +76,13 @@ def _winding(qx, qy, sx, sy, ex, ey, start, idx, y0, hb, nb):  # pragma: no cove
     return w
 
 
-@njit(cache=True, nogil=True)
-def _crossing(qx, qy, ax, ay, bx, by):  # pragma: no cover - jit
-    """The winding contribution of one segment about ``(qx, qy)`` (the rule of :func:`_winding`)."""
-    if ay <= qy < by:
-        if ax + (qy - ay) * (bx - ax) / (by - ay) > qx:
-            return 1
-    elif by <= qy < ay:
-        if ax + (qy - ay) * (bx - ax) / (by - ay) > qx:
-            return -1
-    return 0
-
-
 @njit(cache=True, nogil=True, parallel=True)
 def classify_segments(sx, sy, ex, ey, evenodd, eps):  # pragma: no cover - jit
     """Boundary flag ``(S,) bool`` and inward unit normal ``(S,)``, ``(S,)`` of each segment.
 
     A segment is on the boundary when the fill rule puts material on exactly one side of its
-    midpoint. The winding number is evaluated ``eps`` mm to its left; to its right it differs
-    only by the segment's own crossing, unless another segment passes within ``eps`` of the
-    midpoint, and not at the same height (not the case for a valid section).
+    midpoint (the winding number is evaluated ``eps`` mm to its left and to its right; a
+    coincident segment of a touching shell makes both sides material).
     Zero-length segments are never boundary.
     """
     n = sx.shape[0]
@@ -124,12 +111,7 @@ def classify_segments(sx, sy, ex, ey, evenodd, eps):  # pragma: no cover - jit
         rx = mx - eps * lx
         ry = my - eps * ly
         wl = _winding(qx, qy, sx, sy, ex, ey, start, idx, ymin, hb, nb)
-        if abs(dy) <= 4.0 * eps:  # (nearly) horizontal: the two points straddle its ends' height
-            wr = _winding(rx, ry, sx, sy, ex, ey, start, idx, ymin, hb, nb)
-        else:
-            wr = wl - _crossing(qx, qy, sx[k], sy[k], ex[k], ey[k]) + _crossing(rx, ry, sx[k], sy[k], ex[k], ey[k])
-        # otherwise the point eps to the right sees the same other segments (none passes
-        # between the two points but this one): only this segment's own crossing differs
+        wr = _winding(rx, ry, sx, sy, ex, ey, start, idx, ymin, hb, nb)
         if evenodd:
             inl = (wl & 1) != 0
             inr = (wr & 1) != 0
