@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 from PIL import Image, ImageFilter
 
-from ..errors import ConfigError, ImageError
+from ..errors import ConfigError
 
-__all__ = ["MASK_MODELS", "mask_model", "binary_mask", "smooth_mask", "peak_exposure"]
+__all__ = ["MASK_MODELS", "mask_model", "binary_mask", "smooth_mask"]
 
 
 def binary_mask(image: np.ndarray) -> np.ndarray:
@@ -42,13 +42,3 @@ def mask_model(name: str):
         return MASK_MODELS[name]
     except KeyError:
         raise ConfigError(f"mask model must be one of {', '.join(MASK_MODELS)}, got {name!r}") from None
-
-
-def peak_exposure(grey: np.ndarray, labels: np.ndarray, n: int) -> np.ndarray:
-    """``(n + 1,) float64``: the highest grey (0..1) of each label ``1..n`` of ``labels``
-    (index 0 is the background)."""
-    if grey.shape != labels.shape or grey.ndim != 2:
-        raise ImageError(f"mask and labels must be 2-D of one shape, got {grey.shape} and {labels.shape}")
-    out = np.zeros(n + 1)
-    np.maximum.at(out, labels.ravel(), grey.ravel().astype(np.float64) / 255.0)
-    return out
