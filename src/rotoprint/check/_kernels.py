@@ -19,9 +19,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 _PARALLEL_EPS = 1e-15
+#: Segments shorter than this (mm) are rounding slivers (e.g. of an open mesh's gap closing):
+#: they are not sampled, their direction being noise.
+_MIN_LEN_MM = 1e-9
 
 
 # ---------------------------------------------------------------- bucketing helpers
@@ -76,14 +79,16 @@ def _winding(qx, qy, sx, sy, ex, ey, start, idx, y0, hb, nb):  # pragma: no cove
     return w
 
 
-@njit(cache=True, nogil=True, parallel=True)
-def classify_segments(sx, sy, ex, ey, evenodd, eps):  # pragma: no cover - jit
+@njit(cache=True, nogil=True)
+def classify_segments(sx, sy, ex, ey, comp, ncomp, evenodd, eps):  # pragma: no cover - jit
     """Boundary flag ``(S,) bool`` and inward unit normal ``(S,)``, ``(S,)`` of each segment.
 
-    A segment is on the boundary when the fill rule puts material on exactly one side of its
-    midpoint (the winding number is evaluated ``eps`` mm to its left and to its right; a
-    coincident segment of a touching shell makes both sides material).
-    Zero-length segments are never boundary.
+    A segment is on the boundary when the fill rule puts material on exactly one side of it:
+    the winding number is evaluated ``eps`` mm to the left and to the right of the midpoint of
+    the longest segment of each chain ``comp`` (labels ``0..ncomp-1`` from
+    :func:`chain_components`), and the verdict, material left or right, holds for the whole
+    chain. A coincident segment of a touching shell makes both sides material. Slivers
+    segments are never boundary.
     """
     n = sx.shape[0]
     is_b = np.zeros(n, np.bool_)
@@ -91,27 +96,37 @@ def classify_segments(sx, sy, ex, ey, evenodd, eps):  # pragma: no cover - jit
     ny = np.zeros(n)
     if n == 0:
         return is_b, nx, ny
+    rep = np.full(ncomp, -1, np.int64)
+    rep_len = np.zeros(ncomp)
+    for k in range(n):
+        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        if L > rep_len[comp[k]]:
+            rep_len[comp[k]] = L
+            rep[comp[k]] = k
     ymin = min(sy.min(), ey.min())
     ymax = max(sy.max(), ey.max())
-    nb = max(1, min(1 << 16, n // 4))
+    nq = 0
+    for c in range(ncomp):
+        if rep[c] >= 0:
+            nq += 1
+    # bands pay off with many queries; a few chains need only a few
+    nb = max(1, min(1 << 16, n // 4, 4 * nq))
     hb = max((ymax - ymin) / nb, 1e-12) * (1.0 + 1e-12)
     start, idx = _bands(sy, ey, ymin, hb, nb)
-    for k in prange(n):
+    verdict = np.zeros(ncomp, np.int64)  # 0 none, 1 material left, -1 material right
+    for c in range(ncomp):
+        k = rep[c]
+        if k < 0:
+            continue
         dx = ex[k] - sx[k]
         dy = ey[k] - sy[k]
         L = math.hypot(dx, dy)
-        if L == 0.0:
-            continue
         lx = -dy / L
         ly = dx / L
         mx = 0.5 * (sx[k] + ex[k])
         my = 0.5 * (sy[k] + ey[k])
-        qx = mx + eps * lx
-        qy = my + eps * ly
-        rx = mx - eps * lx
-        ry = my - eps * ly
-        wl = _winding(qx, qy, sx, sy, ex, ey, start, idx, ymin, hb, nb)
-        wr = _winding(rx, ry, sx, sy, ex, ey, start, idx, ymin, hb, nb)
+        wl = _winding(mx + eps * lx, my + eps * ly, sx, sy, ex, ey, start, idx, ymin, hb, nb)
+        wr = _winding(mx - eps * lx, my - eps * ly, sx, sy, ex, ey, start, idx, ymin, hb, nb)
         if evenodd:
             inl = (wl & 1) != 0
             inr = (wr & 1) != 0
@@ -119,13 +134,21 @@ def classify_segments(sx, sy, ex, ey, evenodd, eps):  # pragma: no cover - jit
             inl = wl != 0
             inr = wr != 0
         if inl != inr:
-            is_b[k] = True
-            if inl:
-                nx[k] = lx
-                ny[k] = ly
-            else:
-                nx[k] = -lx
-                ny[k] = -ly
+            verdict[c] = 1 if inl else -1
+    for k in range(n):
+        v = verdict[comp[k]]
+        if v == 0:
+            continue
+        dx = ex[k] - sx[k]
+        dy = ey[k] - sy[k]
+        L = math.hypot(dx, dy)
+        if L == 0.0:
+            continue
+        if L <= _MIN_LEN_MM:
+            continue  # a rounding sliver: its direction means nothing
+        is_b[k] = True
+        nx[k] = -v * dy / L
+        ny[k] = v * dx / L
     return is_b, nx, ny
 
 
@@ -220,70 +243,165 @@ def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
-def split_at_crossings(sx, sy, ex, ey, cell_mm):  # pragma: no cover - jit
-    """Cut every segment where another one crosses or touches its interior, so that each piece
-    is wholly on the boundary of the filled region or wholly inside it (overlapping shells).
+def _push(rec_s, rec_t, m, seg_id, t):  # pragma: no cover - jit
+    if m == rec_s.shape[0]:
+        ns = np.empty(2 * m, np.int64)
+        nt = np.empty(2 * m)
+        ns[:m] = rec_s[:m]
+        nt[:m] = rec_t[:m]
+        rec_s = ns
+        rec_t = nt
+    rec_s[m] = seg_id
+    rec_t[m] = t
+    return rec_s, rec_t, m + 1
 
-    Returns the pieces ``(Q,)`` start x, y, end x, y and the ``(Q,) int64`` segment each comes
-    from, in segment order.
+
+@njit(cache=True, nogil=True)
+def _pt_seg_d2(px, py, ax, ay, bx, by):  # pragma: no cover - jit
+    dx = bx - ax
+    dy = by - ay
+    ll = dx * dx + dy * dy
+    t = 0.0 if ll == 0.0 else max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / ll))
+    qx = ax + t * dx - px
+    qy = ay + t * dy - py
+    return qx * qx + qy * qy
+
+
+@njit(cache=True, nogil=True)
+def _isolate(touch_s, touch_e, A, B):  # pragma: no cover - jit
+    touch_s[A] = True
+    touch_e[A] = True
+    touch_s[B] = True
+    touch_e[B] = True
+
+
+@njit(cache=True, nogil=True)
+def _near(sx, sy, ex, ey, A, B, d):  # pragma: no cover - jit
+    """Whether segments ``A`` and ``B`` (not crossing) come within ``d`` of each other away
+    from a shared end."""
+    if d <= 0.0:
+        return False
+    if (sx[A] == ex[B] and sy[A] == ey[B]) or (ex[A] == sx[B] and ey[A] == sy[B]):
+        return False  # neighbours in a chain
+    d2 = d * d
+    return (
+        _pt_seg_d2(sx[A], sy[A], sx[B], sy[B], ex[B], ey[B]) < d2
+        or _pt_seg_d2(ex[A], ey[A], sx[B], sy[B], ex[B], ey[B]) < d2
+        or _pt_seg_d2(sx[B], sy[B], sx[A], sy[A], ex[A], ey[A]) < d2
+        or _pt_seg_d2(ex[B], ey[B], sx[A], sy[A], ex[A], ey[A]) < d2
+    )
+
+
+@njit(cache=True, nogil=True)
+def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - jit
+    """Cut every segment where another one crosses, touches or overlaps its interior, so that
+    each piece is wholly on the boundary of the filled region or wholly inside it (overlapping
+    or touching shells).
+
+    Returns the pieces ``(Q,)`` start x, y, end x, y, the ``(Q,) int64`` segment each comes
+    from, and ``(Q,) bool`` flags saying whether the piece's start / end is an ordinary chain
+    joint (not a cut, and touching no other segment), in segment order. Segments of other
+    chains that come within ``near_mm`` without meeting (coincident faces of touching shells,
+    to rounding) are not ordinary at either end, so the classification looks at each of them.
     """
     n = sx.shape[0]
     keep = np.ones(n, np.bool_)
-    if n == 0:
-        return sx.copy(), sy.copy(), ex.copy(), ey.copy(), np.arange(0, dtype=np.int64)
-    h = max(cell_mm, 1e-9)
-    xmin = min(sx.min(), ex.min()) - h
-    ymin = min(sy.min(), ey.min()) - h
-    xmax = max(sx.max(), ex.max()) + h
-    ymax = max(sy.max(), ey.max()) + h
-    while ((xmax - xmin) / h + 1) * ((ymax - ymin) / h + 1) > 4e6:
-        h *= 2.0
-    ncx = int((xmax - xmin) / h) + 1
-    ncy = int((ymax - ymin) / h) + 1
-    px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
-    cap = 64
-    rec_s = np.empty(cap, np.int64)
-    rec_t = np.empty(cap)
+    tol = 1e-12
+    touch_s = np.zeros(n, np.bool_)
+    touch_e = np.zeros(n, np.bool_)
+    rec_s = np.empty(64, np.int64)
+    rec_t = np.empty(64)
     m = 0
-    for c in range(ncx * ncy):
-        for a in range(start[c], start[c + 1]):
-            pa = idx[a]
-            A = par[pa]
-            for b in range(a + 1, start[c + 1]):
-                pb = idx[b]
-                B = par[pb]
-                if A == B:
-                    continue
-                # parents' own parametrisation: exact same numbers for every cell
-                d0x = ex[A] - sx[A]
-                d0y = ey[A] - sy[A]
-                d1x = ex[B] - sx[B]
-                d1y = ey[B] - sy[B]
-                den = d0x * d1y - d0y * d1x
-                if den == 0.0:
-                    continue
-                wx = sx[B] - sx[A]
-                wy = sy[B] - sy[A]
-                ta = (wx * d1y - wy * d1x) / den
-                tb = (wx * d0y - wy * d0x) / den
-                if ta < 0.0 or ta > 1.0 or tb < 0.0 or tb > 1.0:
-                    continue
-                for q in range(2):
-                    seg_id = A if q == 0 else B
-                    t = ta if q == 0 else tb
-                    if t <= 1e-12 or t >= 1.0 - 1e-12:
+    if n > 0:
+        h = max(cell_mm, 1e-9)
+        xmin = min(sx.min(), ex.min()) - h
+        ymin = min(sy.min(), ey.min()) - h
+        xmax = max(sx.max(), ex.max()) + h
+        ymax = max(sy.max(), ey.max()) + h
+        while ((xmax - xmin) / h + 1) * ((ymax - ymin) / h + 1) > 4e6:
+            h *= 2.0
+        ncx = int((xmax - xmin) / h) + 1
+        ncy = int((ymax - ymin) / h) + 1
+        px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+        for c in range(ncx * ncy):
+            for a in range(start[c], start[c + 1]):
+                A = par[idx[a]]
+                for b in range(a + 1, start[c + 1]):
+                    B = par[idx[b]]
+                    if A == B:
                         continue
-                    if m == cap:
-                        cap *= 2
-                        ns = np.empty(cap, np.int64)
-                        nt = np.empty(cap)
-                        ns[:m] = rec_s[:m]
-                        nt[:m] = rec_t[:m]
-                        rec_s = ns
-                        rec_t = nt
-                    rec_s[m] = seg_id
-                    rec_t[m] = t
-                    m += 1
+                    d0x = ex[A] - sx[A]
+                    d0y = ey[A] - sy[A]
+                    d1x = ex[B] - sx[B]
+                    d1y = ey[B] - sy[B]
+                    wx = sx[B] - sx[A]
+                    wy = sy[B] - sy[A]
+                    den = d0x * d1y - d0y * d1x
+                    l0 = d0x * d0x + d0y * d0y
+                    l1 = d1x * d1x + d1y * d1y
+                    if l0 == 0.0 or l1 == 0.0:
+                        continue
+                    if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
+                        # parallel: only collinear overlaps matter
+                        if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
+                            if _near(sx, sy, ex, ey, A, B, near_mm):
+                                _isolate(touch_s, touch_e, A, B)
+                            continue
+                        # B's ends along A: an overlap of positive length, or just a joint
+                        u0 = (wx * d0x + wy * d0y) / l0
+                        u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
+                        if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
+                            continue  # end to end (a straight run of a chain) or apart
+                        for q in range(2):
+                            X = A if q == 0 else B
+                            Y = B if q == 0 else A
+                            dx = ex[X] - sx[X]
+                            dy = ey[X] - sy[X]
+                            ll = dx * dx + dy * dy
+                            for r in range(2):  # Y's ends on X
+                                yx = sx[Y] if r == 0 else ex[Y]
+                                yy = sy[Y] if r == 0 else ey[Y]
+                                t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
+                                if tol < t < 1.0 - tol:
+                                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
+                                    if r == 0:
+                                        touch_s[Y] = True
+                                    else:
+                                        touch_e[Y] = True
+                                elif -tol <= t <= 1.0 + tol:
+                                    # ends meet on an overlap: neither end is an ordinary joint
+                                    ty = 0.0 if r == 0 else 1.0
+                                    if t <= tol:
+                                        touch_s[X] = True
+                                    else:
+                                        touch_e[X] = True
+                                    if ty == 0.0:
+                                        touch_s[Y] = True
+                                    else:
+                                        touch_e[Y] = True
+                        continue
+                    ta = (wx * d1y - wy * d1x) / den
+                    tb = (wx * d0y - wy * d0x) / den
+                    if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
+                        if _near(sx, sy, ex, ey, A, B, near_mm):
+                            _isolate(touch_s, touch_e, A, B)
+                        continue
+                    ia = tol < ta < 1.0 - tol
+                    ib = tol < tb < 1.0 - tol
+                    if not ia and not ib:
+                        continue  # a shared vertex: an ordinary joint
+                    if ia:
+                        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
+                    elif ta <= tol:
+                        touch_s[A] = True
+                    else:
+                        touch_e[A] = True
+                    if ib:
+                        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
+                    elif tb <= tol:
+                        touch_s[B] = True
+                    else:
+                        touch_e[B] = True
     # pieces: every segment from 0 to 1 through its sorted cut parameters
     cuts_n = np.zeros(n + 1, np.int64)
     for i in range(m):
@@ -301,17 +419,31 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm):  # pragma: no cover - jit
     ox1 = np.empty(total)
     oy1 = np.empty(total)
     opar = np.empty(total, np.int64)
+    js = np.empty(total, np.bool_)
+    je = np.empty(total, np.bool_)
     q = 0
     for k in range(n):
+        if cuts_n[k + 1] == cuts_n[k]:
+            ox0[q] = sx[k]
+            oy0[q] = sy[k]
+            ox1[q] = ex[k]
+            oy1[q] = ey[k]
+            opar[q] = k
+            js[q] = not touch_s[k]
+            je[q] = not touch_e[k]
+            q += 1
+            continue
         cs = np.sort(ts[cuts_n[k] : cuts_n[k + 1]])
         prev = 0.0
         px = sx[k]
         py = sy[k]
+        first = True
         for j in range(cs.shape[0] + 1):
             t = cs[j] if j < cs.shape[0] else 1.0
-            if j < cs.shape[0] and t - prev <= 1e-12:
+            if j < cs.shape[0] and t - prev <= tol:
                 continue  # the same cut found twice (several cells, several crossers)
-            if j == cs.shape[0]:
+            last = j == cs.shape[0]
+            if last:
                 qx = ex[k]
                 qy = ey[k]
             else:
@@ -322,14 +454,60 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm):  # pragma: no cover - jit
             ox1[q] = qx
             oy1[q] = qy
             opar[q] = k
+            js[q] = first and not touch_s[k]
+            je[q] = last and not touch_e[k]
             q += 1
             px = qx
             py = qy
             prev = t
-    return ox0[:q], oy0[:q], ox1[:q], oy1[:q], opar[:q]
+            first = False
+    return ox0[:q], oy0[:q], ox1[:q], oy1[:q], opar[:q], js[:q], je[:q]
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@njit(cache=True, nogil=True)
+def _find(parent, i):  # pragma: no cover - jit
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(cache=True, nogil=True)
+def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: no cover - jit
+    """Label the pieces joined end to start at ordinary joints (bit-identical points flagged
+    joinable at both sides): ``(Q,) int64`` labels ``0..k-1`` and ``k``. Along such a chain
+    nothing crosses or touches, so the fill rule's verdict is the same for all its pieces.
+    ``key_s``, ``key_e`` are ``(Q,) int64`` hashes of the start and end points."""
+    n = sx.shape[0]
+    parent = np.arange(n)
+    order = np.argsort(key_s)
+    ks = key_s[order]
+    for i in range(n):
+        if not join_e[i]:
+            continue
+        lo = np.searchsorted(ks, key_e[i])
+        j = lo
+        while j < n and ks[j] == key_e[i]:
+            o = order[j]
+            if join_s[o] and sx[o] == ex[i] and sy[o] == ey[i]:
+                a = _find(parent, i)
+                b = _find(parent, o)
+                if a != b:
+                    parent[a] = b
+            j += 1
+    lab = np.empty(n, np.int64)
+    root_lab = np.full(n, -1, np.int64)
+    k = 0
+    for i in range(n):
+        r = _find(parent, i)
+        if root_lab[r] < 0:
+            root_lab[r] = k
+            k += 1
+        lab[i] = root_lab[r]
+    return lab, k
+
+
+@njit(cache=True, nogil=True)
 def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):  # pragma: no cover - jit
     """Distance from every sample along ``+u`` (into the material: wall width) and ``-u``
     (out of it: gap width) to the first other boundary segment, or ``inf`` beyond ``max_mm``.
@@ -355,7 +533,7 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
     ncx = int((xmax - xmin) / h) + 1
     ncy = int((ymax - ymin) / h) + 1
     px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
-    for i in prange(P):
+    for i in range(P):
         for side in range(2):
             sgn = 1.0 if side == 0 else -1.0
             dx = sgn * ux[i]

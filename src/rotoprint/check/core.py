@@ -43,6 +43,8 @@ KINDS: tuple[str, ...] = ("thin_wall", "narrow_gap", "vanished_wall", "closed_ga
 
 #: Side offset (mm) at which the fill rule is evaluated to tell boundary from inner segments.
 _SIDE_EPS_MM = 1e-7
+#: Segments of different chains closer than this (mm) without meeting are classified one by one.
+_NEAR_MM = 1e-5
 #: Rays ignore hits nearer than this (mm): the segment a sample lies on, and touching ends.
 _RAY_TMIN_MM = 1e-9
 #: Side of the cells (in pixels) in which rays look for the other side of a wall or gap.
@@ -169,6 +171,12 @@ def _positive(name: str, value, *, allow_none: bool = True) -> float | None:
     return v
 
 
+def _point_keys(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``(n,) int64`` hashes of points from their exact bits (equal points, equal keys)."""
+    with np.errstate(over="ignore"):
+        return x.view(np.int64) * np.int64(-7046029254386353131) ^ y.view(np.int64)
+
+
 def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return m[0, 0] * x + m[0, 1] * y + m[0, 2], m[1, 0] * x + m[1, 1] * y + m[1, 2]
 
@@ -208,8 +216,9 @@ class _LayerChecker:
         chords: dict[str, np.ndarray] = {}
         thin_w = narrow_g = None
         if sx.size:
-            sx, sy, ex, ey, _ = K.split_at_crossings(sx, sy, ex, ey, _CELL_PX * self.pmax)
-            keep, nx, ny = K.classify_segments(sx, sy, ex, ey, self.evenodd, _SIDE_EPS_MM)
+            sx, sy, ex, ey, _, join_s, join_e = K.split_at_crossings(sx, sy, ex, ey, _CELL_PX * self.pmax, _NEAR_MM)
+            comp, ncomp = K.chain_components(sx, sy, ex, ey, join_s, join_e, _point_keys(sx, sy), _point_keys(ex, ey))
+            keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, ncomp, self.evenodd, _SIDE_EPS_MM)
             bx, by, ux, uy, sid, ln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, self.spacing)
             wall, gap = K.cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * self.pmax)
             thin_w = self._extreme(wall, bx, by, ux, uy, +1.0, index, z)
