@@ -88,7 +88,7 @@ def classify_segments(sx, sy, ex, ey, comp, ncomp, evenodd, eps):  # pragma: no 
     the longest segment of each chain ``comp`` (labels ``0..ncomp-1`` from
     :func:`chain_components`), and the verdict, material left or right, holds for the whole
     chain. A coincident segment of a touching shell makes both sides material. Slivers
-    segments are never boundary.
+    shorter than ``_MIN_LEN_MM`` are never boundary.
     """
     n = sx.shape[0]
     is_b = np.zeros(n, np.bool_)
@@ -281,6 +281,10 @@ def _near(sx, sy, ex, ey, A, B, d):  # pragma: no cover - jit
     from a shared end."""
     if d <= 0.0:
         return False
+    if min(sx[A], ex[A]) - d > max(sx[B], ex[B]) or min(sx[B], ex[B]) - d > max(sx[A], ex[A]):
+        return False
+    if min(sy[A], ey[A]) - d > max(sy[B], ey[B]) or min(sy[B], ey[B]) - d > max(sy[A], ey[A]):
+        return False
     if (sx[A] == ex[B] and sy[A] == ey[B]) or (ex[A] == sx[B] and ey[A] == sy[B]):
         return False  # neighbours in a chain
     d2 = d * d
@@ -323,12 +327,19 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
         ncx = int((xmax - xmin) / h) + 1
         ncy = int((ymax - ymin) / h) + 1
         px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+        g = max(near_mm, 0.0)
+        bx0 = np.minimum(sx, ex) - g
+        bx1 = np.maximum(sx, ex) + g
+        by0 = np.minimum(sy, ey) - g
+        by1 = np.maximum(sy, ey) + g
         for c in range(ncx * ncy):
             for a in range(start[c], start[c + 1]):
                 A = par[idx[a]]
                 for b in range(a + 1, start[c + 1]):
                     B = par[idx[b]]
                     if A == B:
+                        continue
+                    if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
                         continue
                     d0x = ex[A] - sx[A]
                     d0y = ey[A] - sy[A]
