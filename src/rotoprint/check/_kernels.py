@@ -243,6 +243,16 @@ def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
+def _cell_size(w, h, n, cell_mm):  # pragma: no cover - jit
+    """Cell side for ``n`` segments over a ``w`` x ``h`` mm box: ``cell_mm``, or larger so that
+    there are not many more cells than segments (and never more than four million)."""
+    c = max(cell_mm, 1e-9, math.sqrt(max(w * h, 0.0) / (4.0 * max(n, 1))))
+    while (w / c + 1) * (h / c + 1) > 4e6:
+        c *= 2.0
+    return c
+
+
+@njit(cache=True, nogil=True)
 def _push(rec_s, rec_t, m, seg_id, t):  # pragma: no cover - jit
     if m == rec_s.shape[0]:
         ns = np.empty(2 * m, np.int64)
@@ -317,13 +327,11 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
     rec_t = np.empty(64)
     m = 0
     if n > 0:
-        h = max(cell_mm, 1e-9)
+        h = _cell_size(max(sx.max(), ex.max()) - min(sx.min(), ex.min()), max(sy.max(), ey.max()) - min(sy.min(), ey.min()), n, cell_mm)
         xmin = min(sx.min(), ex.min()) - h
         ymin = min(sy.min(), ey.min()) - h
         xmax = max(sx.max(), ex.max()) + h
         ymax = max(sy.max(), ey.max()) + h
-        while ((xmax - xmin) / h + 1) * ((ymax - ymin) / h + 1) > 4e6:
-            h *= 2.0
         ncx = int((xmax - xmin) / h) + 1
         ncy = int((ymax - ymin) / h) + 1
         px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
@@ -534,13 +542,15 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
     gap = np.full(P, np.inf)
     if P == 0:
         return wall, gap
-    xmin = min(sx.min(), ex.min()) - cell_mm
-    ymin = min(sy.min(), ey.min()) - cell_mm
-    xmax = max(sx.max(), ex.max()) + cell_mm
-    ymax = max(sy.max(), ey.max()) + cell_mm
-    h = max(cell_mm, 1e-9)
-    while ((xmax - xmin) / h + 1) * ((ymax - ymin) / h + 1) > 4e6:
-        h *= 2.0
+    nk = 0
+    for k in range(keep.shape[0]):
+        if keep[k]:
+            nk += 1
+    h = _cell_size(max(sx.max(), ex.max()) - min(sx.min(), ex.min()), max(sy.max(), ey.max()) - min(sy.min(), ey.min()), nk, cell_mm)
+    xmin = min(sx.min(), ex.min()) - h
+    ymin = min(sy.min(), ey.min()) - h
+    xmax = max(sx.max(), ex.max()) + h
+    ymax = max(sy.max(), ey.max()) + h
     ncx = int((xmax - xmin) / h) + 1
     ncy = int((ymax - ymin) / h) + 1
     px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
@@ -699,3 +709,32 @@ def chord_extreme(ac, ar, bc, br, grey, take_max):  # pragma: no cover - jit
                 best = v
         out[i] = best
     return out
+
+
+@njit(cache=True, nogil=True)
+def loose_pixels(new, held):  # pragma: no cover - jit
+    """``(H, W) bool``: pixels of ``new`` with no pixel of ``held`` among their 8 neighbours
+    (both ``(H, W) bool``), and how many there are."""
+    H, W = new.shape
+    out = np.zeros((H, W), np.bool_)
+    n = 0
+    for r in range(H):
+        for c in range(W):
+            if not new[r, c]:
+                continue
+            ok = False
+            for dr in range(-1, 2):
+                rr = r + dr
+                if rr < 0 or rr >= H:
+                    continue
+                for dc in range(-1, 2):
+                    cc = c + dc
+                    if 0 <= cc < W and held[rr, cc]:
+                        ok = True
+                        break
+                if ok:
+                    break
+            if not ok:
+                out[r, c] = True
+                n += 1
+    return out, n

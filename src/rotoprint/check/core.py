@@ -348,37 +348,46 @@ class _LayerChecker:
             )
 
     def _islands(self, img: np.ndarray, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
+        """Regions (8-connected) of this layer with no material pixel of the layer below.
+
+        Such a region lies wholly in ``new = material & ~below``; a connected part of ``new``
+        is one when none of its pixels is next to a pixel of ``material & below``.
+        """
         prev = self.prev
         if prev is None:
             return None  # the first layer stands on the platform
-        mat = img > 0
-        rows = np.flatnonzero(mat.any(axis=1))
+        new = (img > 0) & (prev == 0)
+        rows = np.flatnonzero(new.any(axis=1))
         if not rows.size:
             return None
-        cols = np.flatnonzero(mat.any(axis=0))
-        r0, r1, c0, c1 = rows[0], rows[-1] + 1, cols[0], cols[-1] + 1
-        sub = mat[r0:r1, c0:c1]
-        lab, n = ndimage.label(sub, structure=np.ones((3, 3), bool))
-        supported = np.zeros(n + 1, bool)
-        supported[np.unique(lab[prev[r0:r1, c0:c1] > 0])] = True
-        supported[0] = True
-        if supported.all():
+        cols = np.flatnonzero(new.any(axis=0))
+        r0, r1 = max(rows[0] - 1, 0), min(rows[-1] + 2, img.shape[0])
+        c0, c1 = max(cols[0] - 1, 0), min(cols[-1] + 2, img.shape[1])
+        sub_new = np.ascontiguousarray(new[r0:r1, c0:c1])
+        held = np.ascontiguousarray((img[r0:r1, c0:c1] > 0) & (prev[r0:r1, c0:c1] > 0))
+        loose, n_loose = K.loose_pixels(sub_new, held)
+        if n_loose == 0:
+            return None  # every new pixel touches one that stands on the layer below
+        eight = np.ones((3, 3), bool)
+        lab, n = ndimage.label(sub_new, structure=eight)
+        touched = np.zeros(n + 1, bool)
+        touched[lab[sub_new & ~loose]] = True
+        touched[0] = True
+        if touched.all():
             return None
-        bad = np.flatnonzero(~supported)
+        bad = np.flatnonzero(~touched)
         g = self.grid
         px_area = g.pitch_x_mm * g.pitch_y_mm
         areas = np.bincount(lab.ravel(), minlength=n + 1)
-        rr, cc = np.nonzero(lab)
-        ll = lab[rr, cc]
-        sum_r = np.bincount(ll, weights=rr, minlength=n + 1)
-        sum_c = np.bincount(ll, weights=cc, minlength=n + 1)
         slices = ndimage.find_objects(lab)
         out = np.zeros(img.shape, bool)
         for b in bad:
-            cr = sum_r[b] / areas[b] + r0
-            ccn = sum_c[b] / areas[b] + c0
-            x, y = _affine_apply(self.p2m, ccn, cr)
             sl = slices[b - 1]
+            part = lab[sl] == b
+            rr, cc = np.nonzero(part)
+            cr = rr.mean() + sl[0].start + r0
+            ccn = cc.mean() + sl[1].start + c0
+            x, y = _affine_apply(self.p2m, ccn, cr)
             corners_c = np.array([sl[1].start - 0.5, sl[1].stop - 0.5]) + c0
             corners_r = np.array([sl[0].start - 0.5, sl[0].stop - 0.5]) + r0
             X, Y = _affine_apply(self.p2m, np.repeat(corners_c, 2), np.tile(corners_r, 2))
@@ -395,7 +404,7 @@ class _LayerChecker:
                     bbox_mm=(float(X.min()), float(Y.min()), float(X.max()), float(Y.max())),
                 )
             )
-            out[r0:r1, c0:c1] |= lab == b
+            out[r0 + sl[0].start : r0 + sl[0].stop, c0 + sl[1].start : c0 + sl[1].stop] |= part
         return out
 
 
