@@ -47,8 +47,9 @@ _SIDE_EPS_MM = 1e-7
 _NEAR_MM = 1e-5
 #: Rays ignore hits nearer than this (mm): the segment a sample lies on, and touching ends.
 _RAY_TMIN_MM = 1e-9
-#: Side of the cells (in pixels) in which rays look for the other side of a wall or gap.
-_CELL_PX = 2.0
+#: Smallest side of the cells (in pixels) in which rays look for the other side of a wall or gap
+#: (cells grow where segments are sparse, see ``_kernels._cell_size``).
+_CELL_PX = 0.5
 #: Chords of one kind closer than this many pixels are reported as one finding.
 _GROUP_PX = 1
 #: Walls and gaps narrower than this many pixels are tested against the raster.
@@ -216,11 +217,11 @@ class _LayerChecker:
         chords: dict[str, np.ndarray] = {}
         thin_w = narrow_g = None
         if sx.size:
-            sx, sy, ex, ey, _, join_s, join_e = K.split_at_crossings(sx, sy, ex, ey, _CELL_PX * self.pmax, _NEAR_MM)
+            sx, sy, ex, ey, _, join_s, join_e = K.split_at_crossings(sx, sy, ex, ey, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm), _NEAR_MM)
             comp, ncomp = K.chain_components(sx, sy, ex, ey, join_s, join_e, _point_keys(sx, sy), _point_keys(ex, ey))
             keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, ncomp, self.evenodd, _SIDE_EPS_MM)
             bx, by, ux, uy, sid, ln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, self.spacing)
-            wall, gap = K.cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * self.pmax)
+            wall, gap = K.cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm))
             thin_w = self._extreme(wall, bx, by, ux, uy, +1.0, index, z)
             narrow_g = self._extreme(gap, bx, by, ux, uy, -1.0, index, z)
             # widths against the thresholds
