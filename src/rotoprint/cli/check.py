@@ -23,7 +23,6 @@ from ._common import (
     ScaleOpt,
     TranslateOpt,
     UnitsOpt,
-    console,
     load_mesh_from_options,
     out_console,
     parse_pair,
