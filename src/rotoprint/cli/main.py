@@ -26,12 +26,13 @@ def _register() -> None:
     from . import demo
 
     app.command("demo")(demo.demo)
-    from . import dlp, head, simulate, transform
+    from . import check as check_cmd, dlp, head, simulate, transform
 
     app.command("dlp")(dlp.dlp_command)
     app.command("head")(head.head_command)
     app.command("transform")(transform.transform_command)
     app.command("simulate")(simulate.simulate_command)
+    app.command("check")(check_cmd.check_command)
 
 
 _register()
@@ -40,9 +41,9 @@ _register()
 def main(argv: list[str] | None = None) -> int:
     """Entry point: runs the app; a RotoprintError becomes one line on stderr and exit 2."""
     try:
-        rc = app(args=argv, prog_name="rotoprint", standalone_mode=False)
-        if isinstance(rc, int):  # a typer.Exit(code) comes back as its code
-            return rc
+        result = app(args=argv, prog_name="rotoprint", standalone_mode=False)
+        if isinstance(result, int) and not isinstance(result, bool):  # typer.Exit(code) lands here
+            return result
     except RotoprintError as exc:
         console.print(f"[red]rotoprint: error:[/red] {exc}", soft_wrap=True)
         return EXIT_BAD_INPUT

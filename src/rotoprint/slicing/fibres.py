@@ -128,19 +128,24 @@ class SliceJob:
 
     def layer(self, index: int) -> Layer:
         """Slice one layer."""
+        return self.layer_and_segments(index)[0]
+
+    def layer_and_segments(self, index: int) -> tuple[Layer, Segments]:
+        """Slice one layer and return it with its closed cross-section (model XY mm), computing
+        the section once (for checks that need both the image and the exact outline)."""
         if not 0 <= index < len(self):
             raise IndexError(f"layer {index} out of range 0..{len(self) - 1}")
         seg, rep = self.segments(index)
-        img = self._fill(seg)
-        return Layer(
+        layer = Layer(
             index=index,
             z_mm=float(self.plan.z_slice_mm[index]),
             z_bottom_mm=float(self.plan.z_bottom_mm[index]),
             z_top_mm=float(self.plan.z_top_mm[index]),
-            image=img,
+            image=self._fill(seg),
             gaps=rep,
             n_segments=len(seg),
         )
+        return layer, seg
 
     def __iter__(self) -> Iterator[Layer]:
         for i in range(len(self)):

@@ -1,0 +1,740 @@
+"""Jit kernels of the printability check (numba). Inputs are validated by the callers in
+:mod:`rotoprint.check.core`; everything here takes contiguous float64 / int64 / uint8 arrays.
+
+Geometry is done in model millimetres on the exact cross-section (the slicer's segments):
+
+- :func:`classify_segments` keeps the segments that are on the boundary of the filled region
+  (the winding number is non-zero on exactly one side) and gives each its inward normal, so
+  overlapping shells and inside-out shells are handled by the fill rule, not by orientation;
+- :func:`cast_rays` measures, from sample points along the boundary, the distance along the
+  inward normal to the next boundary (the local wall width) and along the outward normal (the
+  local gap width). For two parallel sides this is the exact width, at any angle to the grid.
+
+The raster kernels (:func:`paint_chords`, :func:`chord_presence`, :func:`chord_extreme`) work
+on the device image in pixel indices ``(col, row)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+_PARALLEL_EPS = 1e-15
+#: Segments shorter than this (mm) are rounding slivers (e.g. of an open mesh's gap closing):
+#: they are not sampled, their direction being noise.
+_MIN_LEN_MM = 1e-9
+
+
+# ---------------------------------------------------------------- bucketing helpers
+
+
+@njit(cache=True, nogil=True)
+def _bands(sy, ey, y0, hb, nb):  # pragma: no cover - jit
+    """CSR of segment indices per horizontal band of height ``hb`` starting at ``y0``."""
+    n = sy.shape[0]
+    count = np.zeros(nb + 1, np.int64)
+    for k in range(n):
+        a = min(sy[k], ey[k])
+        b = max(sy[k], ey[k])
+        i0 = max(0, min(nb - 1, int(math.floor((a - y0) / hb))))
+        i1 = max(0, min(nb - 1, int(math.floor((b - y0) / hb))))
+        for i in range(i0, i1 + 1):
+            count[i + 1] += 1
+    for i in range(nb):
+        count[i + 1] += count[i]
+    idx = np.empty(count[nb], np.int64)
+    fill = count[:-1].copy()
+    for k in range(n):
+        a = min(sy[k], ey[k])
+        b = max(sy[k], ey[k])
+        i0 = max(0, min(nb - 1, int(math.floor((a - y0) / hb))))
+        i1 = max(0, min(nb - 1, int(math.floor((b - y0) / hb))))
+        for i in range(i0, i1 + 1):
+            idx[fill[i]] = k
+            fill[i] += 1
+    return count, idx
+
+
+@njit(cache=True, nogil=True)
+def _winding(qx, qy, sx, sy, ex, ey, start, idx, y0, hb, nb):  # pragma: no cover - jit
+    """Winding number of the closed segment set about ``(qx, qy)`` (crossings of the ray +x)."""
+    b = int(math.floor((qy - y0) / hb))
+    if b < 0 or b >= nb:
+        return 0
+    w = 0
+    for j in range(start[b], start[b + 1]):
+        k = idx[j]
+        ay = sy[k]
+        by = ey[k]
+        if ay <= qy < by:
+            xi = sx[k] + (qy - ay) * (ex[k] - sx[k]) / (by - ay)
+            if xi > qx:
+                w += 1
+        elif by <= qy < ay:
+            xi = sx[k] + (qy - ay) * (ex[k] - sx[k]) / (by - ay)
+            if xi > qx:
+                w -= 1
+    return w
+
+
+@njit(cache=True, nogil=True)
+def classify_segments(sx, sy, ex, ey, comp, ncomp, evenodd, eps):  # pragma: no cover - jit
+    """Boundary flag ``(S,) bool`` and inward unit normal ``(S,)``, ``(S,)`` of each segment.
+
+    A segment is on the boundary when the fill rule puts material on exactly one side of it:
+    the winding number is evaluated ``eps`` mm to the left and to the right of the midpoint of
+    the longest segment of each chain ``comp`` (labels ``0..ncomp-1`` from
+    :func:`chain_components`), and the verdict, material left or right, holds for the whole
+    chain. A coincident segment of a touching shell makes both sides material. Slivers
+    shorter than ``_MIN_LEN_MM`` are never boundary.
+    """
+    n = sx.shape[0]
+    is_b = np.zeros(n, np.bool_)
+    nx = np.zeros(n)
+    ny = np.zeros(n)
+    if n == 0:
+        return is_b, nx, ny
+    rep = np.full(ncomp, -1, np.int64)
+    rep_len = np.zeros(ncomp)
+    for k in range(n):
+        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        if L > rep_len[comp[k]]:
+            rep_len[comp[k]] = L
+            rep[comp[k]] = k
+    ymin = min(sy.min(), ey.min())
+    ymax = max(sy.max(), ey.max())
+    nq = 0
+    for c in range(ncomp):
+        if rep[c] >= 0:
+            nq += 1
+    # bands pay off with many queries; a few chains need only a few
+    nb = max(1, min(1 << 16, n // 4, 4 * nq))
+    hb = max((ymax - ymin) / nb, 1e-12) * (1.0 + 1e-12)
+    start, idx = _bands(sy, ey, ymin, hb, nb)
+    verdict = np.zeros(ncomp, np.int64)  # 0 none, 1 material left, -1 material right
+    for c in range(ncomp):
+        k = rep[c]
+        if k < 0:
+            continue
+        dx = ex[k] - sx[k]
+        dy = ey[k] - sy[k]
+        L = math.hypot(dx, dy)
+        lx = -dy / L
+        ly = dx / L
+        mx = 0.5 * (sx[k] + ex[k])
+        my = 0.5 * (sy[k] + ey[k])
+        wl = _winding(mx + eps * lx, my + eps * ly, sx, sy, ex, ey, start, idx, ymin, hb, nb)
+        wr = _winding(mx - eps * lx, my - eps * ly, sx, sy, ex, ey, start, idx, ymin, hb, nb)
+        if evenodd:
+            inl = (wl & 1) != 0
+            inr = (wr & 1) != 0
+        else:
+            inl = wl != 0
+            inr = wr != 0
+        if inl != inr:
+            verdict[c] = 1 if inl else -1
+    for k in range(n):
+        v = verdict[comp[k]]
+        if v == 0:
+            continue
+        dx = ex[k] - sx[k]
+        dy = ey[k] - sy[k]
+        L = math.hypot(dx, dy)
+        if L == 0.0:
+            continue
+        if L <= _MIN_LEN_MM:
+            continue  # a rounding sliver: its direction means nothing
+        is_b[k] = True
+        nx[k] = -v * dy / L
+        ny[k] = v * dx / L
+    return is_b, nx, ny
+
+
+@njit(cache=True, nogil=True)
+def boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing):  # pragma: no cover - jit
+    """Sample points along the kept segments, at most ``spacing`` mm apart, at least one per
+    segment: ``(P,)`` x, y, inward normal x, y, segment index, and the length each stands for."""
+    n = sx.shape[0]
+    total = 0
+    for k in range(n):
+        if keep[k]:
+            L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+            total += max(1, int(math.ceil(L / spacing)))
+    bx = np.empty(total)
+    by = np.empty(total)
+    ux = np.empty(total)
+    uy = np.empty(total)
+    seg = np.empty(total, np.int64)
+    ln = np.empty(total)
+    p = 0
+    for k in range(n):
+        if not keep[k]:
+            continue
+        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        m = max(1, int(math.ceil(L / spacing)))
+        for j in range(m):
+            f = (j + 0.5) / m
+            bx[p] = sx[k] + f * (ex[k] - sx[k])
+            by[p] = sy[k] + f * (ey[k] - sy[k])
+            ux[p] = nx[k]
+            uy[p] = ny[k]
+            seg[p] = k
+            ln[p] = L / m
+            p += 1
+    return bx, by, ux, uy, seg, ln
+
+
+@njit(cache=True, nogil=True)
+def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy):  # pragma: no cover - jit
+    """CSR of (piece start x, y, end x, y, parent segment) per square cell of side ``h``:
+    every kept segment is cut into pieces no longer than ``h`` and each piece is listed in the
+    cells its bounding box touches (at most four, nine on cell corners)."""
+    n = sx.shape[0]
+    npieces = 0
+    for k in range(n):
+        if keep[k]:
+            L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+            npieces += max(1, int(math.ceil(L / h)))
+    px0 = np.empty(npieces)
+    py0 = np.empty(npieces)
+    px1 = np.empty(npieces)
+    py1 = np.empty(npieces)
+    par = np.empty(npieces, np.int64)
+    p = 0
+    for k in range(n):
+        if not keep[k]:
+            continue
+        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        m = max(1, int(math.ceil(L / h)))
+        for j in range(m):
+            f0 = j / m
+            f1 = (j + 1) / m
+            px0[p] = sx[k] + f0 * (ex[k] - sx[k])
+            py0[p] = sy[k] + f0 * (ey[k] - sy[k])
+            px1[p] = ex[k] if j == m - 1 else sx[k] + f1 * (ex[k] - sx[k])
+            py1[p] = ey[k] if j == m - 1 else sy[k] + f1 * (ey[k] - sy[k])
+            par[p] = k
+            p += 1
+    ncell = ncx * ncy
+    count = np.zeros(ncell + 1, np.int64)
+    for q in range(2):
+        if q == 1:
+            for i in range(ncell):
+                count[i + 1] += count[i]
+            idx = np.empty(count[ncell], np.int64)
+            fill = count[:-1].copy()
+        for p in range(npieces):
+            pad = 1e-9 * h
+            cx0 = max(0, min(ncx - 1, int(math.floor((min(px0[p], px1[p]) - pad - x0) / h))))
+            cx1 = max(0, min(ncx - 1, int(math.floor((max(px0[p], px1[p]) + pad - x0) / h))))
+            cy0 = max(0, min(ncy - 1, int(math.floor((min(py0[p], py1[p]) - pad - y0) / h))))
+            cy1 = max(0, min(ncy - 1, int(math.floor((max(py0[p], py1[p]) + pad - y0) / h))))
+            for cy in range(cy0, cy1 + 1):
+                for cx in range(cx0, cx1 + 1):
+                    c = cy * ncx + cx
+                    if q == 0:
+                        count[c + 1] += 1
+                    else:
+                        idx[fill[c]] = p
+                        fill[c] += 1
+    return px0, py0, px1, py1, par, count, idx
+
+
+@njit(cache=True, nogil=True)
+def _cell_size(w, h, n, cell_mm):  # pragma: no cover - jit
+    """Cell side for ``n`` segments over a ``w`` x ``h`` mm box: ``cell_mm``, or larger so that
+    there are not many more cells than segments (and never more than four million)."""
+    c = max(cell_mm, 1e-9, math.sqrt(max(w * h, 0.0) / (4.0 * max(n, 1))))
+    while (w / c + 1) * (h / c + 1) > 4e6:
+        c *= 2.0
+    return c
+
+
+@njit(cache=True, nogil=True)
+def _push(rec_s, rec_t, m, seg_id, t):  # pragma: no cover - jit
+    if m == rec_s.shape[0]:
+        ns = np.empty(2 * m, np.int64)
+        nt = np.empty(2 * m)
+        ns[:m] = rec_s[:m]
+        nt[:m] = rec_t[:m]
+        rec_s = ns
+        rec_t = nt
+    rec_s[m] = seg_id
+    rec_t[m] = t
+    return rec_s, rec_t, m + 1
+
+
+@njit(cache=True, nogil=True)
+def _pt_seg_d2(px, py, ax, ay, bx, by):  # pragma: no cover - jit
+    dx = bx - ax
+    dy = by - ay
+    ll = dx * dx + dy * dy
+    t = 0.0 if ll == 0.0 else max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / ll))
+    qx = ax + t * dx - px
+    qy = ay + t * dy - py
+    return qx * qx + qy * qy
+
+
+@njit(cache=True, nogil=True)
+def _isolate(touch_s, touch_e, A, B):  # pragma: no cover - jit
+    touch_s[A] = True
+    touch_e[A] = True
+    touch_s[B] = True
+    touch_e[B] = True
+
+
+@njit(cache=True, nogil=True)
+def _near(sx, sy, ex, ey, A, B, d):  # pragma: no cover - jit
+    """Whether segments ``A`` and ``B`` (not crossing) come within ``d`` of each other away
+    from a shared end."""
+    if d <= 0.0:
+        return False
+    if min(sx[A], ex[A]) - d > max(sx[B], ex[B]) or min(sx[B], ex[B]) - d > max(sx[A], ex[A]):
+        return False
+    if min(sy[A], ey[A]) - d > max(sy[B], ey[B]) or min(sy[B], ey[B]) - d > max(sy[A], ey[A]):
+        return False
+    if (sx[A] == ex[B] and sy[A] == ey[B]) or (ex[A] == sx[B] and ey[A] == sy[B]):
+        return False  # neighbours in a chain
+    d2 = d * d
+    return (
+        _pt_seg_d2(sx[A], sy[A], sx[B], sy[B], ex[B], ey[B]) < d2
+        or _pt_seg_d2(ex[A], ey[A], sx[B], sy[B], ex[B], ey[B]) < d2
+        or _pt_seg_d2(sx[B], sy[B], sx[A], sy[A], ex[A], ey[A]) < d2
+        or _pt_seg_d2(ex[B], ey[B], sx[A], sy[A], ex[A], ey[A]) < d2
+    )
+
+
+@njit(cache=True, nogil=True)
+def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - jit
+    """Cut every segment where another one crosses, touches or overlaps its interior, so that
+    each piece is wholly on the boundary of the filled region or wholly inside it (overlapping
+    or touching shells).
+
+    Returns the pieces ``(Q,)`` start x, y, end x, y, the ``(Q,) int64`` segment each comes
+    from, and ``(Q,) bool`` flags saying whether the piece's start / end is an ordinary chain
+    joint (not a cut, and touching no other segment), in segment order. Segments of other
+    chains that come within ``near_mm`` without meeting (coincident faces of touching shells,
+    to rounding) are not ordinary at either end, so the classification looks at each of them.
+    """
+    n = sx.shape[0]
+    keep = np.ones(n, np.bool_)
+    tol = 1e-12
+    touch_s = np.zeros(n, np.bool_)
+    touch_e = np.zeros(n, np.bool_)
+    rec_s = np.empty(64, np.int64)
+    rec_t = np.empty(64)
+    m = 0
+    if n > 0:
+        h = _cell_size(max(sx.max(), ex.max()) - min(sx.min(), ex.min()), max(sy.max(), ey.max()) - min(sy.min(), ey.min()), n, cell_mm)
+        xmin = min(sx.min(), ex.min()) - h
+        ymin = min(sy.min(), ey.min()) - h
+        xmax = max(sx.max(), ex.max()) + h
+        ymax = max(sy.max(), ey.max()) + h
+        ncx = int((xmax - xmin) / h) + 1
+        ncy = int((ymax - ymin) / h) + 1
+        px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+        g = max(near_mm, 0.0)
+        bx0 = np.minimum(sx, ex) - g
+        bx1 = np.maximum(sx, ex) + g
+        by0 = np.minimum(sy, ey) - g
+        by1 = np.maximum(sy, ey) + g
+        for c in range(ncx * ncy):
+            for a in range(start[c], start[c + 1]):
+                A = par[idx[a]]
+                for b in range(a + 1, start[c + 1]):
+                    B = par[idx[b]]
+                    if A == B:
+                        continue
+                    if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
+                        continue
+                    d0x = ex[A] - sx[A]
+                    d0y = ey[A] - sy[A]
+                    d1x = ex[B] - sx[B]
+                    d1y = ey[B] - sy[B]
+                    wx = sx[B] - sx[A]
+                    wy = sy[B] - sy[A]
+                    den = d0x * d1y - d0y * d1x
+                    l0 = d0x * d0x + d0y * d0y
+                    l1 = d1x * d1x + d1y * d1y
+                    if l0 == 0.0 or l1 == 0.0:
+                        continue
+                    if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
+                        # parallel: only collinear overlaps matter
+                        if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
+                            if _near(sx, sy, ex, ey, A, B, near_mm):
+                                _isolate(touch_s, touch_e, A, B)
+                            continue
+                        # B's ends along A: an overlap of positive length, or just a joint
+                        u0 = (wx * d0x + wy * d0y) / l0
+                        u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
+                        if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
+                            continue  # end to end (a straight run of a chain) or apart
+                        for q in range(2):
+                            X = A if q == 0 else B
+                            Y = B if q == 0 else A
+                            dx = ex[X] - sx[X]
+                            dy = ey[X] - sy[X]
+                            ll = dx * dx + dy * dy
+                            for r in range(2):  # Y's ends on X
+                                yx = sx[Y] if r == 0 else ex[Y]
+                                yy = sy[Y] if r == 0 else ey[Y]
+                                t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
+                                if tol < t < 1.0 - tol:
+                                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
+                                    if r == 0:
+                                        touch_s[Y] = True
+                                    else:
+                                        touch_e[Y] = True
+                                elif -tol <= t <= 1.0 + tol:
+                                    # ends meet on an overlap: neither end is an ordinary joint
+                                    ty = 0.0 if r == 0 else 1.0
+                                    if t <= tol:
+                                        touch_s[X] = True
+                                    else:
+                                        touch_e[X] = True
+                                    if ty == 0.0:
+                                        touch_s[Y] = True
+                                    else:
+                                        touch_e[Y] = True
+                        continue
+                    ta = (wx * d1y - wy * d1x) / den
+                    tb = (wx * d0y - wy * d0x) / den
+                    if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
+                        if _near(sx, sy, ex, ey, A, B, near_mm):
+                            _isolate(touch_s, touch_e, A, B)
+                        continue
+                    ia = tol < ta < 1.0 - tol
+                    ib = tol < tb < 1.0 - tol
+                    if not ia and not ib:
+                        continue  # a shared vertex: an ordinary joint
+                    if ia:
+                        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
+                    elif ta <= tol:
+                        touch_s[A] = True
+                    else:
+                        touch_e[A] = True
+                    if ib:
+                        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
+                    elif tb <= tol:
+                        touch_s[B] = True
+                    else:
+                        touch_e[B] = True
+    # pieces: every segment from 0 to 1 through its sorted cut parameters
+    cuts_n = np.zeros(n + 1, np.int64)
+    for i in range(m):
+        cuts_n[rec_s[i] + 1] += 1
+    for i in range(n):
+        cuts_n[i + 1] += cuts_n[i]
+    ts = np.empty(m)
+    fill = cuts_n[:-1].copy()
+    for i in range(m):
+        ts[fill[rec_s[i]]] = rec_t[i]
+        fill[rec_s[i]] += 1
+    total = n + m
+    ox0 = np.empty(total)
+    oy0 = np.empty(total)
+    ox1 = np.empty(total)
+    oy1 = np.empty(total)
+    opar = np.empty(total, np.int64)
+    js = np.empty(total, np.bool_)
+    je = np.empty(total, np.bool_)
+    q = 0
+    for k in range(n):
+        if cuts_n[k + 1] == cuts_n[k]:
+            ox0[q] = sx[k]
+            oy0[q] = sy[k]
+            ox1[q] = ex[k]
+            oy1[q] = ey[k]
+            opar[q] = k
+            js[q] = not touch_s[k]
+            je[q] = not touch_e[k]
+            q += 1
+            continue
+        cs = np.sort(ts[cuts_n[k] : cuts_n[k + 1]])
+        prev = 0.0
+        px = sx[k]
+        py = sy[k]
+        first = True
+        for j in range(cs.shape[0] + 1):
+            t = cs[j] if j < cs.shape[0] else 1.0
+            if j < cs.shape[0] and t - prev <= tol:
+                continue  # the same cut found twice (several cells, several crossers)
+            last = j == cs.shape[0]
+            if last:
+                qx = ex[k]
+                qy = ey[k]
+            else:
+                qx = sx[k] + t * (ex[k] - sx[k])
+                qy = sy[k] + t * (ey[k] - sy[k])
+            ox0[q] = px
+            oy0[q] = py
+            ox1[q] = qx
+            oy1[q] = qy
+            opar[q] = k
+            js[q] = first and not touch_s[k]
+            je[q] = last and not touch_e[k]
+            q += 1
+            px = qx
+            py = qy
+            prev = t
+            first = False
+    return ox0[:q], oy0[:q], ox1[:q], oy1[:q], opar[:q], js[:q], je[:q]
+
+
+@njit(cache=True, nogil=True)
+def _find(parent, i):  # pragma: no cover - jit
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@njit(cache=True, nogil=True)
+def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: no cover - jit
+    """Label the pieces joined end to start at ordinary joints (bit-identical points flagged
+    joinable at both sides): ``(Q,) int64`` labels ``0..k-1`` and ``k``. Along such a chain
+    nothing crosses or touches, so the fill rule's verdict is the same for all its pieces.
+    ``key_s``, ``key_e`` are ``(Q,) int64`` hashes of the start and end points."""
+    n = sx.shape[0]
+    parent = np.arange(n)
+    order = np.argsort(key_s)
+    ks = key_s[order]
+    for i in range(n):
+        if not join_e[i]:
+            continue
+        lo = np.searchsorted(ks, key_e[i])
+        j = lo
+        while j < n and ks[j] == key_e[i]:
+            o = order[j]
+            if join_s[o] and sx[o] == ex[i] and sy[o] == ey[i]:
+                a = _find(parent, i)
+                b = _find(parent, o)
+                if a != b:
+                    parent[a] = b
+            j += 1
+    lab = np.empty(n, np.int64)
+    root_lab = np.full(n, -1, np.int64)
+    k = 0
+    for i in range(n):
+        r = _find(parent, i)
+        if root_lab[r] < 0:
+            root_lab[r] = k
+            k += 1
+        lab[i] = root_lab[r]
+    return lab, k
+
+
+@njit(cache=True, nogil=True)
+def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):  # pragma: no cover - jit
+    """Distance from every sample along ``+u`` (into the material: wall width) and ``-u``
+    (out of it: gap width) to the first other boundary segment, or ``inf`` beyond ``max_mm``.
+
+    Segments are cut into pieces no longer than ``cell_mm`` and listed in a uniform grid of
+    cells of that size; every ray walks the cells it crosses in order (a 2-D DDA) and stops as
+    soon as its nearest hit lies before the cell it would enter next.
+
+    Returns ``(P,) float64`` wall widths and ``(P,) float64`` gap widths.
+    """
+    P = bx.shape[0]
+    wall = np.full(P, np.inf)
+    gap = np.full(P, np.inf)
+    if P == 0:
+        return wall, gap
+    nk = 0
+    for k in range(keep.shape[0]):
+        if keep[k]:
+            nk += 1
+    h = _cell_size(max(sx.max(), ex.max()) - min(sx.min(), ex.min()), max(sy.max(), ey.max()) - min(sy.min(), ey.min()), nk, cell_mm)
+    xmin = min(sx.min(), ex.min()) - h
+    ymin = min(sy.min(), ey.min()) - h
+    xmax = max(sx.max(), ex.max()) + h
+    ymax = max(sy.max(), ey.max()) + h
+    ncx = int((xmax - xmin) / h) + 1
+    ncy = int((ymax - ymin) / h) + 1
+    px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+    for i in range(P):
+        for side in range(2):
+            sgn = 1.0 if side == 0 else -1.0
+            dx = sgn * ux[i]
+            dy = sgn * uy[i]
+            ox = bx[i]
+            oy = by[i]
+            cx = int(math.floor((ox - xmin) / h))
+            cy = int(math.floor((oy - ymin) / h))
+            if dx > 0.0:
+                stx = 1
+                tmx = (xmin + (cx + 1) * h - ox) / dx
+                tdx = h / dx
+            elif dx < 0.0:
+                stx = -1
+                tmx = (xmin + cx * h - ox) / dx
+                tdx = -h / dx
+            else:
+                stx = 0
+                tmx = np.inf
+                tdx = np.inf
+            if dy > 0.0:
+                sty = 1
+                tmy = (ymin + (cy + 1) * h - oy) / dy
+                tdy = h / dy
+            elif dy < 0.0:
+                sty = -1
+                tmy = (ymin + cy * h - oy) / dy
+                tdy = -h / dy
+            else:
+                sty = 0
+                tmy = np.inf
+                tdy = np.inf
+            best = max_mm
+            hit = False
+            while True:
+                if 0 <= cx < ncx and 0 <= cy < ncy:
+                    c = cy * ncx + cx
+                    for j in range(start[c], start[c + 1]):
+                        p = idx[j]
+                        if par[p] == seg[i]:
+                            continue
+                        e0 = px1[p] - px0[p]
+                        e1 = py1[p] - py0[p]
+                        den = dx * e1 - dy * e0
+                        if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
+                            continue
+                        w0 = px0[p] - ox
+                        w1 = py0[p] - oy
+                        t = (w0 * e1 - w1 * e0) / den
+                        if t <= tmin or t > best:
+                            continue
+                        s = (w0 * dy - w1 * dx) / den
+                        if s < 0.0 or s > 1.0:
+                            continue
+                        best = t
+                        hit = True
+                else:
+                    break
+                texit = min(tmx, tmy)
+                if texit >= best:
+                    break
+                if tmx < tmy:
+                    cx += stx
+                    tmx += tdx
+                else:
+                    cy += sty
+                    tmy += tdy
+            if hit:
+                if side == 0:
+                    wall[i] = best
+                else:
+                    gap[i] = best
+    return wall, gap
+
+
+# ---------------------------------------------------------------- raster kernels
+
+
+@njit(cache=True, nogil=True)
+def paint_chords(ac, ar, bc, br, out, value):  # pragma: no cover - jit
+    """Set ``out[row, col] = value`` on the pixels nearest to points every quarter pixel along
+    each chord from ``(ac, ar)`` to ``(bc, br)`` (pixel indices), both ends included."""
+    H, W = out.shape
+    for i in range(ac.shape[0]):
+        L = math.hypot(bc[i] - ac[i], br[i] - ar[i])
+        m = max(1, int(math.ceil(L * 4.0)))
+        for j in range(m + 1):
+            f = j / m
+            c = int(math.floor(ac[i] + f * (bc[i] - ac[i]) + 0.5))
+            r = int(math.floor(ar[i] + f * (br[i] - ar[i]) + 0.5))
+            if 0 <= r < H and 0 <= c < W:
+                out[r, c] = value
+    return out
+
+
+@njit(cache=True, nogil=True)
+def chord_presence(bx, by, ux, uy, width, image, want, p2m, m2p, half_along):  # pragma: no cover - jit
+    """For every chord (from ``(bx, by)`` along unit ``(ux, uy)`` for ``width`` mm), whether some
+    pixel centre lying in the strip ``0 <= across <= width``, ``|along| <= half_along`` about it
+    has ``image == want`` (255: the wall is in the raster; 0: the gap is open in the raster).
+
+    ``p2m`` and ``m2p`` are the ``(2, 3)`` pixel-to-model and model-to-pixel affines.
+    """
+    n = bx.shape[0]
+    H, W = image.shape
+    out = np.zeros(n, np.bool_)
+    for i in range(n):
+        w = width[i]
+        mx = bx[i] + 0.5 * w * ux[i]
+        my = by[i] + 0.5 * w * uy[i]
+        mc = m2p[0, 0] * mx + m2p[0, 1] * my + m2p[0, 2]
+        mr = m2p[1, 0] * mx + m2p[1, 1] * my + m2p[1, 2]
+        c0 = int(math.floor(mc)) - 2
+        r0 = int(math.floor(mr)) - 2
+        found = False
+        for r in range(max(0, r0), min(H, r0 + 6)):
+            if found:
+                break
+            for c in range(max(0, c0), min(W, c0 + 6)):
+                qx = p2m[0, 0] * c + p2m[0, 1] * r + p2m[0, 2] - bx[i]
+                qy = p2m[1, 0] * c + p2m[1, 1] * r + p2m[1, 2] - by[i]
+                across = qx * ux[i] + qy * uy[i]
+                along = -qx * uy[i] + qy * ux[i]
+                if across >= 0.0 and across <= w and abs(along) <= half_along:
+                    if (image[r, c] != 0) == (want != 0):
+                        found = True
+                        break
+        out[i] = found
+    return out
+
+
+@njit(cache=True, nogil=True)
+def chord_extreme(ac, ar, bc, br, grey, take_max):  # pragma: no cover - jit
+    """Maximum (``take_max``) or minimum of ``grey`` over the pixels nearest to points every
+    quarter pixel along each chord (pixel indices); ``(n,) float64``."""
+    H, W = grey.shape
+    n = ac.shape[0]
+    out = np.empty(n)
+    for i in range(n):
+        L = math.hypot(bc[i] - ac[i], br[i] - ar[i])
+        m = max(1, int(math.ceil(L * 4.0)))
+        best = -1.0 if take_max else 1e9
+        for j in range(m + 1):
+            f = j / m
+            c = int(math.floor(ac[i] + f * (bc[i] - ac[i]) + 0.5))
+            r = int(math.floor(ar[i] + f * (br[i] - ar[i]) + 0.5))
+            v = float(grey[r, c]) if (0 <= r < H and 0 <= c < W) else 0.0
+            if take_max:
+                if v > best:
+                    best = v
+            elif v < best:
+                best = v
+        out[i] = best
+    return out
+
+
+@njit(cache=True, nogil=True)
+def loose_pixels(new, held):  # pragma: no cover - jit
+    """``(H, W) bool``: pixels of ``new`` with no pixel of ``held`` among their 8 neighbours
+    (both ``(H, W) bool``), and how many there are."""
+    H, W = new.shape
+    out = np.zeros((H, W), np.bool_)
+    n = 0
+    for r in range(H):
+        for c in range(W):
+            if not new[r, c]:
+                continue
+            ok = False
+            for dr in range(-1, 2):
+                rr = r + dr
+                if rr < 0 or rr >= H:
+                    continue
+                for dc in range(-1, 2):
+                    cc = c + dc
+                    if 0 <= cc < W and held[rr, cc]:
+                        ok = True
+                        break
+                if ok:
+                    break
+            if not ok:
+                out[r, c] = True
+                n += 1
+    return out, n

@@ -1,0 +1,631 @@
+"""Printability: what a part loses on a device, layer by layer.
+
+Widths are measured on the exact cross-section (the slicer's segments), not on the image: from
+sample points at most half a pixel apart along the boundary, a ray along the inward normal
+meets the other side of the wall after exactly the wall's width, and one along the outward
+normal crosses the gap to the next material. A wall narrower than the minimum is what an
+opening by a disc of that diameter removes, a gap narrower than the minimum what a closing
+fills; the rays find both without the opening's artefacts (an opening also shaves every convex
+corner, a closing fills every concave one) and find walls too thin to hold a single pixel.
+
+Against the image (the device raster at the given fibre angle):
+
+- ``vanished_wall``: a wall with no material pixel centre in it (over two pixels of its length);
+- ``closed_gap``: a gap with no empty pixel centre in it (the two sides merge);
+- ``island``: a connected region (8-neighbours) with no material pixel directly below it;
+- with an exposure model (DLP masks): ``underexposed`` walls whose peak grey along their width
+  stays below the cure threshold, and ``cured_gap`` gaps whose darkest pixel across is above it.
+
+See ``docs/check.md``.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from ..errors import ConfigError
+from ..mesh import Mesh
+from . import _kernels as K
+from .limits import default_minimum_mm, device_limits
+
+__all__ = ["KINDS", "Finding", "LayerCheck", "CheckReport", "check_layers", "check_printability", "compare_orientations"]
+
+log = logging.getLogger(__name__)
+
+#: Problem kinds, in the order they are reported.
+KINDS: tuple[str, ...] = ("thin_wall", "narrow_gap", "vanished_wall", "closed_gap", "island", "underexposed", "cured_gap")
+
+#: Side offset (mm) at which the fill rule is evaluated to tell boundary from inner segments.
+_SIDE_EPS_MM = 1e-7
+#: Segments of different chains closer than this (mm) without meeting are classified one by one.
+_NEAR_MM = 1e-5
+#: Rays ignore hits nearer than this (mm): the segment a sample lies on, and touching ends.
+_RAY_TMIN_MM = 1e-9
+#: Smallest side of the cells (in pixels) in which rays look for the other side of a wall or gap
+#: (cells grow where segments are sparse, see ``_kernels._cell_size``).
+_CELL_PX = 0.5
+#: Chords of one kind closer than this many pixels are reported as one finding.
+_GROUP_PX = 1
+#: Walls and gaps narrower than this many pixels are tested against the raster.
+_RASTER_TEST_PX = 2.0
+#: Walls and gaps narrower than this many pixels are tested against the exposure.
+_EXPOSURE_TEST_PX = 3.0
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One problem region in one layer.
+
+    ``x_mm, y_mm`` (model frame) and ``col, row`` (device pixel) locate its worst point: the
+    middle of its narrowest chord, or an island's centroid. ``width_mm`` is that narrowest
+    width (``None`` for islands); ``length_mm`` the boundary length it spans (half of it is
+    each side of a wall); ``area_mm2`` an island's area; ``value`` the peak (underexposed) or
+    lowest (cured gap) exposure as a fraction of full.
+    """
+
+    kind: str
+    layer: int
+    z_mm: float
+    x_mm: float
+    y_mm: float
+    col: float
+    row: float
+    width_mm: float | None = None
+    length_mm: float | None = None
+    area_mm2: float | None = None
+    value: float | None = None
+    bbox_mm: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+    def to_json(self) -> dict:
+        d = asdict(self)
+        d["bbox_mm"] = list(self.bbox_mm)
+        return d
+
+
+@dataclass
+class LayerCheck:
+    """What one layer's check found, with what an overlay needs.
+
+    ``chords[kind]`` is ``(n, 4) float64`` pixel-index chords ``(col0, row0, col1, row1)``
+    across each problem wall or gap; ``islands`` the ``(H, W) bool`` unsupported pixels.
+    """
+
+    index: int
+    z_mm: float
+    image: np.ndarray
+    findings: list[Finding]
+    chords: dict[str, np.ndarray]
+    islands: np.ndarray | None
+    thinnest_wall: dict | None
+    narrowest_gap: dict | None
+
+
+@dataclass
+class CheckReport:
+    """The result of :func:`check_printability`; ``to_json()`` gives the JSON report."""
+
+    device: str
+    settings: dict
+    grid: dict
+    n_layers: int
+    limits: dict
+    findings: list[Finding] = field(default_factory=list)
+    thinnest_wall: dict | None = None
+    narrowest_gap: dict | None = None
+    layers_with_findings: list[int] = field(default_factory=list)
+
+    @property
+    def ok(self) -> bool:
+        return not self.findings
+
+    def counts(self) -> dict[str, int]:
+        return {k: sum(1 for f in self.findings if f.kind == k) for k in KINDS}
+
+    def lengths_mm(self) -> dict[str, float]:
+        out = {k: 0.0 for k in KINDS}
+        for f in self.findings:
+            out[f.kind] += f.length_mm or 0.0
+        return out
+
+    def loss_mm(self) -> float:
+        """Boundary length (mm) that the raster or the exposure loses: vanished walls, closed
+        gaps, underexposed walls and cured gaps (the orientation-dependent problems)."""
+        L = self.lengths_mm()
+        return L["vanished_wall"] + L["closed_gap"] + L["underexposed"] + L["cured_gap"]
+
+    def to_json(self) -> dict:
+        return {
+            "ok": self.ok,
+            "device": self.device,
+            "settings": self.settings,
+            "limits": self.limits,
+            "n_layers": self.n_layers,
+            "thinnest_wall": self.thinnest_wall,
+            "narrowest_gap": self.narrowest_gap,
+            "counts": self.counts(),
+            "lengths_mm": self.lengths_mm(),
+            "island_area_mm2": sum(f.area_mm2 or 0.0 for f in self.findings if f.kind == "island"),
+            "layers_with_findings": self.layers_with_findings,
+            "grid": self.grid,
+            "findings": [f.to_json() for f in self.findings],
+        }
+
+
+# ----------------------------------------------------------------------------- validation
+
+
+def _positive(name: str, value, *, allow_none: bool = True) -> float | None:
+    if value is None and allow_none:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{name} must be a positive number of mm, got {value!r}") from None
+    if not (math.isfinite(v) and v > 0):
+        raise ConfigError(f"{name} must be a positive number of mm, got {value!r}")
+    return v
+
+
+def _point_keys(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``(n,) int64`` hashes of points from their exact bits (equal points, equal keys)."""
+    with np.errstate(over="ignore"):
+        return x.view(np.int64) * np.int64(-7046029254386353131) ^ y.view(np.int64)
+
+
+def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    return m[0, 0] * x + m[0, 1] * y + m[0, 2], m[1, 0] * x + m[1, 1] * y + m[1, 2]
+
+
+# ----------------------------------------------------------------------------- one layer
+
+
+class _LayerChecker:
+    """Everything fixed for a job: thresholds, affines, sampling."""
+
+    def __init__(self, job, *, min_wall_mm, min_gap_mm, grey_fn, cure_threshold, islands, measure_up_to_mm) -> None:
+        g = job.grid
+        self.job = job
+        self.grid = g
+        self.m2p = np.ascontiguousarray(g.model_to_pixel)
+        self.p2m = np.ascontiguousarray(g.pixel_to_model)
+        self.pmax = max(g.pitch_x_mm, g.pitch_y_mm)
+        self.spacing = 0.5 * min(g.pitch_x_mm, g.pitch_y_mm)
+        self.min_wall = min_wall_mm
+        self.min_gap = min_gap_mm
+        self.cap = measure_up_to_mm
+        self.grey_fn = grey_fn
+        self.thr = cure_threshold
+        self.islands = islands
+        self.evenodd = job.fill == "evenodd"
+        self.prev: np.ndarray | None = None
+
+    def run(self, index: int) -> LayerCheck:
+        layer, seg = self.job.layer_and_segments(index)
+        img = layer.image
+        z = layer.z_mm
+        sx = np.ascontiguousarray(seg.start[:, 0])
+        sy = np.ascontiguousarray(seg.start[:, 1])
+        ex = np.ascontiguousarray(seg.end[:, 0])
+        ey = np.ascontiguousarray(seg.end[:, 1])
+        findings: list[Finding] = []
+        chords: dict[str, np.ndarray] = {}
+        thin_w = narrow_g = None
+        if sx.size:
+            sx, sy, ex, ey, _, join_s, join_e = K.split_at_crossings(sx, sy, ex, ey, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm), _NEAR_MM)
+            comp, ncomp = K.chain_components(sx, sy, ex, ey, join_s, join_e, _point_keys(sx, sy), _point_keys(ex, ey))
+            keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, ncomp, self.evenodd, _SIDE_EPS_MM)
+            bx, by, ux, uy, sid, ln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, self.spacing)
+            wall, gap = K.cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm))
+            thin_w = self._extreme(wall, bx, by, ux, uy, +1.0, index, z)
+            narrow_g = self._extreme(gap, bx, by, ux, uy, -1.0, index, z)
+            # widths against the thresholds
+            self._emit("thin_wall", wall < self.min_wall, wall, +1.0, bx, by, ux, uy, ln, index, z, findings, chords)
+            self._emit("narrow_gap", gap < self.min_gap, gap, -1.0, bx, by, ux, uy, ln, index, z, findings, chords)
+            # widths against the raster
+            lim = _RASTER_TEST_PX * self.pmax
+            for kind, width, sgn, want in (("vanished_wall", wall, 1.0, 255), ("closed_gap", gap, -1.0, 0)):
+                cand = np.flatnonzero(width < lim)
+                if cand.size:
+                    present = K.chord_presence(
+                        bx[cand], by[cand], sgn * ux[cand], sgn * uy[cand], width[cand], img, want, self.p2m, self.m2p, self.pmax
+                    )
+                    sel = np.zeros(width.shape, bool)
+                    sel[cand[~present]] = True
+                    self._emit(kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords)
+            # widths against the exposure
+            if self.grey_fn is not None:
+                grey = np.asarray(self.grey_fn(index, img))
+                if grey.shape != img.shape or grey.dtype != np.uint8:
+                    raise ConfigError(f"the mask function must return {img.shape} uint8, got {grey.shape} {grey.dtype}")
+                lim = _EXPOSURE_TEST_PX * self.pmax
+                level = self.thr * 255.0
+                for kind, width, sgn, take_max in (("underexposed", wall, 1.0, True), ("cured_gap", gap, -1.0, False)):
+                    cand = np.flatnonzero(width < lim)
+                    if not cand.size:
+                        continue
+                    ac, ar, bc, br = self._chord_px(bx[cand], by[cand], sgn * ux[cand], sgn * uy[cand], width[cand])
+                    ext = K.chord_extreme(ac, ar, bc, br, grey, take_max)
+                    bad = ext < level if take_max else ext >= level
+                    sel = np.zeros(width.shape, bool)
+                    sel[cand[bad]] = True
+                    vals = np.full(width.shape, np.nan)
+                    vals[cand] = ext / 255.0
+                    self._emit(kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
+        island_mask = None
+        if self.islands:
+            island_mask = self._islands(img, index, z, findings)
+        self.prev = img
+        return LayerCheck(index, z, img, findings, chords, island_mask, thin_w, narrow_g)
+
+    # -- helpers
+
+    def _chord_px(self, bx, by, ux, uy, w):
+        ac, ar = _affine_apply(self.m2p, bx, by)
+        bc, br = _affine_apply(self.m2p, bx + w * ux, by + w * uy)
+        return (np.ascontiguousarray(a) for a in (ac, ar, bc, br))
+
+    def _extreme(self, width, bx, by, ux, uy, sgn, index, z) -> dict | None:
+        if not width.size or not np.isfinite(width).any():
+            return None
+        i = int(np.argmin(width))
+        w = float(width[i])
+        mx = bx[i] + 0.5 * w * sgn * ux[i]
+        my = by[i] + 0.5 * w * sgn * uy[i]
+        c, r = _affine_apply(self.m2p, mx, my)
+        return {"width_mm": w, "layer": index, "z_mm": z, "x_mm": float(mx), "y_mm": float(my), "col": float(c), "row": float(r)}
+
+    def _emit(self, kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=None) -> None:
+        """Group the selected samples' chords into pixel regions (chords closer than
+        ``_GROUP_PX`` pixels join), one finding per region."""
+        idx = np.flatnonzero(sel)
+        if not idx.size:
+            return
+        w = width[idx]
+        x0, y0 = bx[idx], by[idx]
+        dx, dy = sgn * ux[idx], sgn * uy[idx]
+        ac, ar, bc, br = self._chord_px(x0, y0, dx, dy, w)
+        chords[kind] = np.stack([ac, ar, bc, br], axis=1)
+        pad = _GROUP_PX + 1
+        c0 = int(math.floor(min(ac.min(), bc.min()) + 0.5)) - pad
+        r0 = int(math.floor(min(ar.min(), br.min()) + 0.5)) - pad
+        c1 = int(math.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
+        r1 = int(math.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
+        canvas = np.zeros((r1 - r0, c1 - c0), np.uint8)
+        K.paint_chords(ac - c0, ar - r0, bc - c0, br - r0, canvas, 1)
+        if _GROUP_PX:
+            canvas = ndimage.binary_dilation(canvas, structure=np.ones((3, 3), bool), iterations=_GROUP_PX)
+        lab, n = ndimage.label(canvas, structure=np.ones((3, 3), bool))
+        sc = np.floor(ac + 0.5).astype(np.int64) - c0
+        sr = np.floor(ar + 0.5).astype(np.int64) - r0
+        g = lab[sr, sc] - 1
+        ng = int(g.max()) + 1
+        mx, my = x0 + 0.5 * w * dx, y0 + 0.5 * w * dy
+        x1, y1 = x0 + w * dx, y0 + w * dy
+        order = np.lexsort((w, g))  # by group, narrowest first
+        first = np.ones(order.size, bool)
+        first[1:] = g[order][1:] != g[order][:-1]
+        worst = order[first]  # one sample per group, in group order
+        length = np.bincount(g, weights=ln[idx], minlength=ng)
+        lo_x = np.full(ng, np.inf)
+        lo_y = np.full(ng, np.inf)
+        hi_x = np.full(ng, -np.inf)
+        hi_y = np.full(ng, -np.inf)
+        np.minimum.at(lo_x, g, np.minimum(x0, x1))
+        np.minimum.at(lo_y, g, np.minimum(y0, y1))
+        np.maximum.at(hi_x, g, np.maximum(x0, x1))
+        np.maximum.at(hi_y, g, np.maximum(y0, y1))
+        val = None
+        if values is not None:
+            v = values[idx]
+            if kind == "underexposed":
+                val = np.full(ng, -np.inf)
+                np.maximum.at(val, g, v)
+            else:
+                val = np.full(ng, np.inf)
+                np.minimum.at(val, g, v)
+        cols, rows = _affine_apply(self.m2p, mx[worst], my[worst])
+        for k, j in enumerate(worst):
+            gi = g[j]
+            findings.append(
+                Finding(
+                    kind=kind,
+                    layer=index,
+                    z_mm=z,
+                    x_mm=float(mx[j]),
+                    y_mm=float(my[j]),
+                    col=float(cols[k]),
+                    row=float(rows[k]),
+                    width_mm=float(w[j]),
+                    length_mm=float(length[gi]),
+                    value=None if val is None else float(val[gi]),
+                    bbox_mm=(float(lo_x[gi]), float(lo_y[gi]), float(hi_x[gi]), float(hi_y[gi])),
+                )
+            )
+
+    def _islands(self, img: np.ndarray, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
+        """Regions (8-connected) of this layer with no material pixel of the layer below.
+
+        Such a region lies wholly in ``new = material & ~below``; a connected part of ``new``
+        is one when none of its pixels is next to a pixel of ``material & below``.
+        """
+        prev = self.prev
+        if prev is None:
+            return None  # the first layer stands on the platform
+        new = (img > 0) & (prev == 0)
+        rows = np.flatnonzero(new.any(axis=1))
+        if not rows.size:
+            return None
+        cols = np.flatnonzero(new.any(axis=0))
+        r0, r1 = max(rows[0] - 1, 0), min(rows[-1] + 2, img.shape[0])
+        c0, c1 = max(cols[0] - 1, 0), min(cols[-1] + 2, img.shape[1])
+        sub_new = np.ascontiguousarray(new[r0:r1, c0:c1])
+        held = np.ascontiguousarray((img[r0:r1, c0:c1] > 0) & (prev[r0:r1, c0:c1] > 0))
+        loose, n_loose = K.loose_pixels(sub_new, held)
+        if n_loose == 0:
+            return None  # every new pixel touches one that stands on the layer below
+        eight = np.ones((3, 3), bool)
+        lab, n = ndimage.label(sub_new, structure=eight)
+        touched = np.zeros(n + 1, bool)
+        touched[lab[sub_new & ~loose]] = True
+        touched[0] = True
+        if touched.all():
+            return None
+        bad = np.flatnonzero(~touched)
+        g = self.grid
+        px_area = g.pitch_x_mm * g.pitch_y_mm
+        areas = np.bincount(lab.ravel(), minlength=n + 1)
+        slices = ndimage.find_objects(lab)
+        out = np.zeros(img.shape, bool)
+        for b in bad:
+            sl = slices[b - 1]
+            part = lab[sl] == b
+            rr, cc = np.nonzero(part)
+            cr = rr.mean() + sl[0].start + r0
+            ccn = cc.mean() + sl[1].start + c0
+            x, y = _affine_apply(self.p2m, ccn, cr)
+            corners_c = np.array([sl[1].start - 0.5, sl[1].stop - 0.5]) + c0
+            corners_r = np.array([sl[0].start - 0.5, sl[0].stop - 0.5]) + r0
+            X, Y = _affine_apply(self.p2m, np.repeat(corners_c, 2), np.tile(corners_r, 2))
+            findings.append(
+                Finding(
+                    kind="island",
+                    layer=index,
+                    z_mm=z,
+                    x_mm=float(x),
+                    y_mm=float(y),
+                    col=float(ccn),
+                    row=float(cr),
+                    area_mm2=float(areas[b] * px_area),
+                    bbox_mm=(float(X.min()), float(Y.min()), float(X.max()), float(Y.max())),
+                )
+            )
+            out[r0 + sl[0].start : r0 + sl[0].stop, c0 + sl[1].start : c0 + sl[1].stop] |= part
+        return out
+
+
+# ----------------------------------------------------------------------------- public API
+
+
+def _as_job(job_or_mesh, device, *, layer_height_mm, fibre_angle_deg, slice_options):
+    from ..slicing import SliceJob, slice_mesh
+
+    if isinstance(job_or_mesh, SliceJob):
+        if layer_height_mm is not None or fibre_angle_deg is not None or slice_options:
+            raise ConfigError("layer_height_mm, fibre_angle_deg and slicing options apply to a mesh; this is a sliced job already")
+        return job_or_mesh
+    if isinstance(job_or_mesh, Mesh):
+        if layer_height_mm is None:
+            raise ConfigError("layer_height_mm is needed to check a mesh")
+        return slice_mesh(job_or_mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=fibre_angle_deg, **slice_options)
+    raise ConfigError(f"expected a Mesh or a SliceJob, got {type(job_or_mesh).__name__}")
+
+
+def _settings(device, *, min_wall_mm, min_gap_mm, mask_fn, mask_name, cure_threshold, islands, measure_up_to_mm):
+    default, source = default_minimum_mm(device)
+    wall = _positive("min_wall_mm", min_wall_mm)
+    gap = _positive("min_gap_mm", min_gap_mm)
+    thr = None
+    if mask_fn is not None:
+        if cure_threshold is None:
+            cure_threshold = device.projector.cure_threshold if device.kind == "projector" else 0.5
+        thr = float(cure_threshold)
+        if not (math.isfinite(thr) and 0.0 < thr <= 1.0):
+            raise ConfigError(f"cure threshold must be in (0, 1], got {cure_threshold!r}")
+    elif cure_threshold is not None:
+        raise ConfigError("a cure threshold needs an exposure model (mask_fn)")
+    if not isinstance(islands, bool):
+        raise ConfigError(f"islands must be True or False, got {islands!r}")
+    w = default if wall is None else wall
+    g = default if gap is None else gap
+    pmax = max(device.pitch_x_mm, device.pitch_y_mm)
+    cap = _positive("measure_up_to_mm", measure_up_to_mm)
+    cap = max(4.0 * max(w, g), 8.0 * pmax) if cap is None else max(cap, w, g, _RASTER_TEST_PX * pmax, _EXPOSURE_TEST_PX * pmax)
+    return {
+        "min_wall_mm": w,
+        "min_gap_mm": g,
+        "min_wall_source": source if wall is None else "given",
+        "min_gap_source": source if gap is None else "given",
+        "exposure_model": mask_name if mask_fn is not None else None,
+        "cure_threshold": thr,
+        "islands": islands,
+        "measured_up_to_mm": cap,
+    }
+
+
+def check_layers(
+    job_or_mesh,
+    device,
+    *,
+    min_wall_mm: float | None = None,
+    min_gap_mm: float | None = None,
+    layer_height_mm: float | None = None,
+    fibre_angle_deg: float | None = None,
+    mask_fn: Callable[[np.ndarray], np.ndarray] | None = None,
+    cure_threshold: float | None = None,
+    islands: bool = True,
+    measure_up_to_mm: float | None = None,
+    slice_options: dict | None = None,
+) -> Iterator[LayerCheck]:
+    """Check layer after layer; yields one :class:`LayerCheck` each (see
+    :func:`check_printability` for the parameters). Memory does not grow with the layers."""
+    job = _as_job(job_or_mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=fibre_angle_deg, slice_options=slice_options or {})
+    st = _settings(
+        device, min_wall_mm=min_wall_mm, min_gap_mm=min_gap_mm, mask_fn=mask_fn, mask_name="", cure_threshold=cure_threshold,
+        islands=islands, measure_up_to_mm=measure_up_to_mm,
+    )
+    yield from _iter(job, st, mask_fn)
+
+
+def _iter(job, st, mask_fn) -> Iterator[LayerCheck]:
+    grey_fn = None if mask_fn is None else (lambda i, img: mask_fn(img))
+    checker = _LayerChecker(
+        job,
+        min_wall_mm=st["min_wall_mm"],
+        min_gap_mm=st["min_gap_mm"],
+        grey_fn=grey_fn,
+        cure_threshold=st["cure_threshold"],
+        islands=st["islands"],
+        measure_up_to_mm=st["measured_up_to_mm"],
+    )
+    for i in range(len(job)):
+        yield checker.run(i)
+
+
+def check_printability(
+    job_or_mesh,
+    device,
+    *,
+    min_wall_mm: float | None = None,
+    min_gap_mm: float | None = None,
+    layer_height_mm: float | None = None,
+    fibre_angle_deg: float | None = None,
+    mask_fn: Callable[[np.ndarray], np.ndarray] | None = None,
+    mask_name: str = "custom",
+    cure_threshold: float | None = None,
+    islands: bool = True,
+    measure_up_to_mm: float | None = None,
+    slice_options: dict | None = None,
+    tilt_deg: float | None = None,
+    radius_mm: float | None = None,
+    on_layer: Callable[[LayerCheck], None] | None = None,
+) -> CheckReport:
+    """Check a part for walls and gaps below the device's minimum, features the raster loses,
+    unsupported islands and (with an exposure model) features that do not cure.
+
+    Parameters
+    ----------
+    job_or_mesh : SliceJob or Mesh
+        A sliced job, or a mesh to slice for ``device`` at ``layer_height_mm``.
+    device : InkjetDevice or ProjectorDevice
+    min_wall_mm, min_gap_mm : float, optional
+        Thresholds; default :func:`~rotoprint.check.limits.default_minimum_mm` (the pitch, or
+        an inkjet's drop diameter when larger).
+    layer_height_mm, fibre_angle_deg : float, optional
+        Slicing of a mesh (see :func:`rotoprint.slicing.slice_mesh`); ``slice_options`` passes
+        the others (``fill``, ``offset_mm``, ``gap_radius_mm``, ...).
+    mask_fn : callable, optional
+        Exposure model: ``(H, W) uint8`` binary image to the ``(H, W) uint8`` grey mask the
+        projector shows. Without it no exposure check is made.
+    mask_name : str
+        Its name, for the report.
+    cure_threshold : float, optional
+        Fraction of full exposure a pixel needs to cure; default the projector's (0.5).
+    islands : bool
+        Look for regions with nothing below them.
+    measure_up_to_mm : float, optional
+        Widths are measured up to this; the thinnest wall and gap are reported when below it.
+        Default ``max(4 * threshold, 8 pixels)``.
+    tilt_deg, radius_mm : float, optional
+        Inkjet on the rotary platform: adds the track figures to ``limits``.
+    on_layer : callable, optional
+        Called with every :class:`LayerCheck` (e.g. to write overlays).
+
+    Returns
+    -------
+    CheckReport
+
+    Examples
+    --------
+    >>> from rotoprint.testing import box_mesh
+    >>> from rotoprint.devices import load_device
+    >>> part = box_mesh((2.0, 0.05, 0.2))                  # a 50 um wall
+    >>> rep = check_printability(part, load_device("omnidot760"), layer_height_mm=0.1)
+    >>> rep.counts()["thin_wall"], round(rep.thinnest_wall["width_mm"], 3)
+    (2, 0.05)
+    """
+    if on_layer is not None and not callable(on_layer):
+        raise ConfigError("on_layer must be callable")
+    job = _as_job(job_or_mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=fibre_angle_deg, slice_options=slice_options or {})
+    st = _settings(
+        device, min_wall_mm=min_wall_mm, min_gap_mm=min_gap_mm, mask_fn=mask_fn, mask_name=mask_name,
+        cure_threshold=cure_threshold, islands=islands, measure_up_to_mm=measure_up_to_mm,
+    )
+    st["layer_height_mm"] = float(job.plan.layer_height_mm)
+    st["fibre_angle_deg"] = fibre_angle_deg
+    st["fill"] = job.fill
+    limits = device_limits(
+        device,
+        mask_fn=mask_fn if device.kind == "projector" else None,
+        cure_threshold=st["cure_threshold"],
+        tilt_deg=tilt_deg,
+        radius_mm=radius_mm,
+    )
+    rep = CheckReport(device=device.name, settings=st, grid=job.grid.to_json(), n_layers=len(job), limits=limits)
+    for lc in _iter(job, st, mask_fn):
+        if lc.findings:
+            rep.findings.extend(lc.findings)
+            rep.layers_with_findings.append(lc.index)
+        for attr in ("thinnest_wall", "narrowest_gap"):
+            cur, new = getattr(rep, attr), getattr(lc, attr)
+            if new is not None and (cur is None or new["width_mm"] < cur["width_mm"]):
+                setattr(rep, attr, new)
+        if on_layer is not None:
+            on_layer(lc)
+    return rep
+
+
+def compare_orientations(
+    mesh: Mesh,
+    device,
+    *,
+    angles_deg: Sequence[float],
+    layer_height_mm: float,
+    **options,
+) -> dict:
+    """Check ``mesh`` at every fibre angle (the part rotated in the device plane) and say which
+    loses least.
+
+    The loss is the boundary length (mm) of walls that vanish, gaps that close and (with an
+    exposure model) walls that do not cure and gaps that do: the problems the raster's
+    direction decides. Widths measured on the exact section do not depend on the angle.
+
+    Returns
+    -------
+    dict
+        ``rows`` (one per angle: ``angle_deg``, ``loss_mm``, ``counts``, ``island_area_mm2``)
+        and ``best_angle_deg`` (least loss, then least island area, then the first given).
+    """
+    angles = [float(a) for a in angles_deg]
+    if not angles or not all(math.isfinite(a) for a in angles):
+        raise ConfigError(f"angles must be finite numbers of degrees, got {list(angles_deg)!r}")
+    rows = []
+    for a in angles:
+        rep = check_printability(mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=a, **options)
+        j = rep.to_json()
+        rows.append(
+            {
+                "angle_deg": a,
+                "loss_mm": rep.loss_mm(),
+                "island_area_mm2": j["island_area_mm2"],
+                "counts": j["counts"],
+                "lengths_mm": j["lengths_mm"],
+            }
+        )
+    best = min(range(len(rows)), key=lambda i: (round(rows[i]["loss_mm"], 9), round(rows[i]["island_area_mm2"], 12), i))
+    return {"rows": rows, "best_angle_deg": rows[best]["angle_deg"]}
