@@ -17,7 +17,6 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import numpy as np
 
 TITLE = "Direct rotary slicing vs slice-to-bitmap + exact transform (omnidot760, per layer)"
 

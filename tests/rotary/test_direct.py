@@ -11,7 +11,7 @@ import pytest
 import shapely
 from shapely.geometry import Point, box
 
-from _direct_checks import compare_sites, iou_pair, lattice, section_geom, shapely_mismatches, two_step
+from _direct_checks import compare_sites, iou_pair, section_geom, shapely_mismatches, two_step
 from rotoprint import ConfigError, GeometryError, load_device, load_mesh
 from rotoprint.rotary import exact_maps, place_drops, plan_swathes
 from rotoprint.rotary import _direct_kernels as K

@@ -326,7 +326,7 @@ class DirectSliceJob:
     def reference_image(self, index: int, *, oversample: int = 1) -> np.ndarray:
         """``(H, W) uint8`` Cartesian image of layer ``index`` on the design grid (for checks)."""
         seg, _ = self.slice_job.segments(index)
-        pl = self.design if oversample == 1 else self.part.design_placement(self.design.pitch_x_mm * 1.0, self.design.pitch_y_mm, oversample=oversample)
+        pl = self.part.design_placement(self.design.pitch_x_mm, self.design.pitch_y_mm, oversample=oversample)
         return rasterize_section(seg, self.part, pl, fill=self.fill)
 
     def __iter__(self) -> Iterator[RotaryPrint]:
