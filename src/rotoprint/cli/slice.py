@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from ..constants import DEFAULT_GAP_RADIUS_MM
+from ..errors import ConfigError
 from ._common import (
     DeviceOpt,
     LayerHeightOpt,
@@ -42,16 +43,40 @@ def slice_command(
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified layers, make the rest.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log what happens (resume, workers) on stderr.")] = False,
+    rotary: Annotated[bool, typer.Option("--rotary", help="Direct rotary slicing: per-nozzle firing images straight from the mesh (inkjet heads).")] = False,
+    tilt: Annotated[float | None, typer.Option("--tilt", help="--rotary: head tilt, degrees (counter-clockwise positive).")] = None,
+    radius: Annotated[float | None, typer.Option("--radius", help="--rotary: radius of the part's inner edge (smallest model X), mm.")] = None,
+    angle: Annotated[float, typer.Option("--angle", help="--rotary: angle of the part's centre line on the platform, degrees.")] = 0.0,
+    direction: Annotated[int, typer.Option("--direction", help="--rotary: +1 platform turns counter-clockwise seen from above, -1 clockwise.")] = 1,
+    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="--rotary: reference radius of the clock, mm (default: each swathe's outermost track).")] = None,
+    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.")] = None,
+    equalise: Annotated[bool, typer.Option("--equalise", help="--rotary: thin inner tracks so drops per unit area are uniform.")] = False,
+    reference_images: Annotated[bool, typer.Option("--reference-images", help="--rotary: also write each layer's Cartesian cross-section (for 'rotoprint simulate').")] = False,
 ) -> None:
-    """Slice MESH into DIR/layer_00000.png ... (255 = material) and DIR/manifest.json."""
+    """Slice MESH into DIR/layer_00000.png ... (255 = material) and DIR/manifest.json.
+
+    With --rotary: DIR/layer_00000.png (or -s1.png, -s2.png ... per swathe), rows = firings,
+    columns = nozzles, a sidecar layer_00000.json per layer and DIR/manifest.json.
+    """
     from ..devices import load_device
     from ..io.layers import write_layer_folder
     from ..slicing import slice_mesh
 
     setup_logging(verbose)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
+    if rotary:
+        _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,
+                              fibre_angle=fibre_angle, offset=offset)
+    elif any(v is not None for v in (tilt, radius, ref_radius, max_swathes)) or equalise or reference_images or angle != 0.0 or direction != 1:
+        raise ConfigError("--tilt, --radius, --angle, --direction, --ref-radius, --max-swathes, --equalise and --reference-images need --rotary")
     dev = load_device(device, **overrides)
     m = load_mesh_from_options(mesh, units, scale, rotate, translate)
+    if rotary:
+        _slice_rotary(m, mesh, dev, out, layer_height=layer_height, tilt=tilt, radius=radius, angle=angle, direction=direction,
+                      ref_radius=ref_radius, max_swathes=max_swathes, equalise=equalise, reference_images=reference_images,
+                      fill=fill, gap_radius=gap_radius, quiet=quiet,
+                      options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate})
+        return
     job = slice_mesh(
         m,
         dev,
@@ -98,3 +123,48 @@ def slice_command(
                 f"[yellow]open mesh:[/yellow] {closed} gap(s) closed within {gap_radius} mm; "
                 f"{left_open} layer(s) had chains left open and closed by a chord (see manifest 'gaps')"
             )
+
+
+def _check_rotary_options(*, tilt, radius, workers, scheduler, resume, fibre_angle, offset) -> None:
+    if tilt is None or radius is None:
+        raise ConfigError("--rotary needs --tilt DEG and --radius MM (the radius of the part's inner edge)")
+    refused = [name for name, bad in (("--workers", workers != 1), ("--scheduler", scheduler is not None), ("--resume", resume),
+                                      ("--fibre-angle", fibre_angle is not None), ("--offset", offset is not None)) if bad]
+    if refused:
+        raise ConfigError(f"{', '.join(refused)} cannot be used with --rotary (place the part with --radius/--angle and --rotate; "
+                          "layers are made in this process)")
+
+
+def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, radius, angle, direction, ref_radius, max_swathes,
+                  equalise, reference_images, fill, gap_radius, quiet, options) -> None:
+    from ..devices import InkjetDevice
+    from ..rotary.direct import slice_rotary, write_rotary_slices
+
+    if not isinstance(dev, InkjetDevice):
+        raise ConfigError(f"device {dev.name!r} is a projector; --rotary needs an inkjet device")
+    job = slice_rotary(m, dev, layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius, angle_deg=angle,
+                       direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes, equalise=equalise,
+                       fill=fill, gap_radius_mm=gap_radius)
+    opts = {"layer_height_mm": layer_height, "tilt_deg": tilt, "radius_mm": radius, "angle_deg": angle, "direction": direction,
+            "ref_radius_mm": ref_radius, "max_swathes": max_swathes, "equalise": equalise, "fill": fill,
+            "gap_radius_mm": gap_radius, "reference_images": reference_images, **options}
+    mesh_info = {"path": str(mesh_path), "triangles": int(m.faces.shape[0]), "bounds_mm": [list(map(float, b)) for b in m.bounds]}
+    with progress(quiet) as bar:
+        task = bar.add_task("slicing (rotary)", total=len(job))
+        manifest = write_rotary_slices(job, out, device_name=dev.name, options=opts, mesh_info=mesh_info,
+                                       reference_images=reference_images, on_layer=lambda i: bar.advance(task))
+    if not quiet:
+        ds = manifest["density_spread"]
+        console.print(
+            f"{len(job)} layers, {len(job.tracks)} swathe(s) at tilt {tilt:g} deg, part inner edge at {radius:g} mm, "
+            f"centre line at {angle:g} deg -> {out}/ (manifest.json)"
+        )
+        for s in manifest["swathes"]:
+            console.print(
+                f"  swathe {s['index'] + 1}: pivot {s['pivot_radius_mm']:.4f} mm, band {s['band_mm'][0]:.3f}-{s['band_mm'][1]:.3f} mm, "
+                f"{s['tracks']} tracks, {s['firings']} firings from index {s['first_firing_index']}, {s['angle_per_firing_deg']:.5f} deg/firing"
+            )
+        console.print(
+            f"  drops per unit area across the part: spread {100 * ds['without_equalisation']:.1f} % without equalisation, "
+            f"{100 * ds['with_equalisation']:.1f} % with it ({'on' if equalise else 'off: --equalise'})"
+        )

@@ -1,0 +1,267 @@
+"""Circular-fibre fill for the direct rotary slicer: the numba kernel and its numpy reference.
+
+Inputs are in the part's *local* frame (mm): the platform frame rotated so that the part's
+centre line is +X; the whole cross-section lies at ``x > 0``. A nozzle's track is the circle
+``x^2 + y^2 = r^2``; the drop of firing ``i`` lands at local angle ``psi0 - direction * i * dphi``
+(``psi0 = phi_k - angle``, unwrapped, as :func:`rotoprint.rotary.exact.firing_range` uses).
+
+Rules (exact, no tolerance decides a case):
+
+- *Radial half-open rule*: a point ``p`` counts as outside the track when ``|p|^2 >= r^2``
+  (as if the track were shrunk by an infinitesimal amount). A segment crosses the track at
+  every change of that predicate along it: once when its end points differ, twice when both
+  are outside and the segment dips inside (``|p|`` is convex along a segment), never when
+  both are inside. Shared end points of two segments are bit-identical, so a vertex on a track
+  is counted consistently by the two segments meeting there.
+- *Winding along the arc*: since the part lies in ``x > 0``, the winding number on the ray at
+  angle ``pi`` is zero, so the winding number of a drop is the signed count of crossings on the
+  arc between that ray and the drop. In firing order it is a prefix sum: a crossing at the
+  continuous firing index ``u_c`` counts for every firing ``i >= u_c`` (a drop exactly on the
+  boundary takes the state just after it in firing order), with sign ``-direction`` for a
+  crossing that leaves the circle and ``+direction`` for one that enters it.
+- Crossings before the image count for every firing, those after it for none.
+
+Optional thinning (density equalisation): firing ``i`` of track ``m`` is kept when
+``floor((i + 1) * frac[m] + offset[m]) > floor(i * frac[m] + offset[m])`` (an ordered, even
+pattern on the absolute firing index: exactly ``frac`` of the firings over any run).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["direct_fill_jit", "direct_fill_numpy", "KERNELS", "QMIN_WIDEN"]
+
+#: Relative widening of a segment's smallest squared radius when picking candidate tracks (the
+#: exact predicate then decides; this only has to keep every track that may cross).
+QMIN_WIDEN = 1e-9
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _seg_setup(x0, y0, x1, y1):  # pragma: no cover - jit
+    dx = x1 - x0
+    dy = y1 - y0
+    A = dx * dx + dy * dy
+    B = x0 * dx + y0 * dy
+    qa = x0 * x0 + y0 * y0
+    qb = x1 * x1 + y1 * y1
+    if B < 0.0 and B + A > 0.0:
+        cr = x0 * dy - y0 * dx
+        qmin = cr * cr / A
+    else:
+        qmin = qa if qa < qb else qb
+    qmax = qa if qa > qb else qb
+    return dx, dy, A, B, qa, qb, qmin, qmax
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _firing_pos(x0, y0, dx, dy, t, psi0, dphi, direction, i0, n_f):  # pragma: no cover - jit
+    if t < 0.0:
+        t = 0.0
+    elif t > 1.0:
+        t = 1.0
+    px = x0 + t * dx
+    py = y0 + t * dy
+    psi = math.atan2(py, px)
+    u = direction * (psi0 - psi) / dphi - i0
+    if u <= 0.0:
+        return 0
+    if u >= n_f:
+        return n_f
+    return int(math.ceil(u))
+
+
+@njit(cache=True, nogil=True)
+def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction, i0, n_f, evenodd, level, out):  # pragma: no cover - jit
+    n_seg = sx0.shape[0]
+    n_tr = r2.shape[0]
+    lo_idx = np.empty(n_seg, np.int64)
+    hi_idx = np.empty(n_seg, np.int64)
+    per = np.zeros(n_tr + 1, np.int64)
+    # pass 1: candidate tracks per segment (2 crossings at most each), by a difference array
+    for s in range(n_seg):
+        dx, dy, A, B, qa, qb, qmin, qmax = _seg_setup(sx0[s], sy0[s], sx1[s], sy1[s])
+        if A == 0.0:
+            lo_idx[s] = 0
+            hi_idx[s] = 0
+            continue
+        j0 = np.searchsorted(r2, qmin * (1.0 - QMIN_WIDEN), side="right")
+        j1 = np.searchsorted(r2, qmax, side="right")
+        if j1 < j0:
+            j1 = j0
+        lo_idx[s] = j0
+        hi_idx[s] = j1
+        if j0 < j1:
+            per[j0] += 2
+            per[j1] -= 2
+    start = np.empty(n_tr + 1, np.int64)
+    acc = 0
+    run = 0
+    for m in range(n_tr):
+        run += per[m]
+        start[m] = acc
+        acc += run
+    start[n_tr] = acc
+    pos = np.empty(acc, np.int64)
+    sgn = np.empty(acc, np.int8)
+    cur = start[:n_tr].copy()
+    leave = -direction
+    enter = direction
+    # pass 2: the crossings, as the first firing they count for, and their signs
+    for s in range(n_seg):
+        j0 = lo_idx[s]
+        j1 = hi_idx[s]
+        if j0 >= j1:
+            continue
+        x0 = sx0[s]
+        y0 = sy0[s]
+        dx, dy, A, B, qa, qb, qmin, qmax = _seg_setup(x0, y0, sx1[s], sy1[s])
+        dip = B < 0.0 and B + A > 0.0
+        for m in range(j0, j1):
+            rr = r2[m]
+            ia = qa < rr
+            ib = qb < rr
+            if ia and ib:
+                continue
+            if not ia and not ib and not (dip and qmin < rr):
+                continue
+            C = qa - rr
+            D = B * B - A * C
+            if D < 0.0:
+                D = 0.0
+            sq = math.sqrt(D)
+            k = cur[m]
+            if not ib:  # an exit: the larger root
+                tp = (-B + sq) / A if B <= 0.0 else C / (-B - sq)
+                pos[k] = _firing_pos(x0, y0, dx, dy, tp, psi0[m], dphi, direction, i0, n_f)
+                sgn[k] = leave
+                k += 1
+            if not ia:  # an entry: the smaller root
+                tm = (-B - sq) / A if B >= 0.0 else C / (-B + sq)
+                pos[k] = _firing_pos(x0, y0, dx, dy, tm, psi0[m], dphi, direction, i0, n_f)
+                sgn[k] = enter
+                k += 1
+            cur[m] = k
+    # pass 3: per track, sort its crossings and write the inside spans
+    for m in range(n_tr):
+        a = start[m]
+        b = cur[m]
+        if a == b:
+            continue
+        for q in range(a + 1, b):  # insertion sort: tracks hold few crossings
+            p = pos[q]
+            g = sgn[q]
+            z = q - 1
+            while z >= a and pos[z] > p:
+                pos[z + 1] = pos[z]
+                sgn[z + 1] = sgn[z]
+                z -= 1
+            pos[z + 1] = p
+            sgn[z + 1] = g
+        col = cols[m]
+        f = frac[m]
+        o = offs[m]
+        w = 0
+        prev = 0
+        for q in range(a, b + 1):
+            i = pos[q] if q < b else n_f
+            inside = (w & 1) != 0 if evenodd else w != 0
+            if inside and i > prev:
+                if f >= 1.0:
+                    for row in range(prev, i):
+                        out[row, col] = level
+                else:
+                    for row in range(prev, i):
+                        fi = row + i0
+                        if math.floor((fi + 1) * f + o) > math.floor(fi * f + o):
+                            out[row, col] = level
+            if q < b:
+                w += sgn[q]
+                prev = i
+    return out
+
+
+def _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs):
+    f64 = [np.ascontiguousarray(a, dtype=np.float64) for a in (sx0, sy0, sx1, sy1, r2, psi0, frac, offs)]
+    return (*f64[:6], np.ascontiguousarray(cols, dtype=np.int64), f64[6], f64[7])
+
+
+def direct_fill_jit(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, direction, i0, n_f, n_cols, fill, level):
+    """``(n_f, n_cols) uint8`` print image of one swathe (see the module doc for the rules).
+
+    ``sx0..sy1``: ``(S,) float64`` segment ends in the local frame; ``r2``: ``(M,) float64``
+    squared track radii, ascending; ``psi0``: ``(M,)`` local angle of each track's nozzle at
+    firing 0; ``cols``: ``(M,) int64`` the image column (nozzle) of each track; ``frac``,
+    ``offs``: ``(M,)`` thinning (1.0 keeps every drop). Row ``b`` is firing ``i0 + b``.
+    """
+    out = np.zeros((n_f, n_cols), np.uint8)
+    args = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
+    return _direct_fill(*args, float(dphi), int(direction), int(i0), int(n_f), fill == "evenodd", np.uint8(level), out)
+
+
+def direct_fill_numpy(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, direction, i0, n_f, n_cols, fill, level):
+    """The pure-numpy reference of :func:`direct_fill_jit` (same contract, same result)."""
+    sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
+    n_tr = r2.shape[0]
+    out = np.zeros((n_f, n_cols), np.uint8)
+    dx = sx1 - sx0
+    dy = sy1 - sy0
+    A = dx * dx + dy * dy
+    B = sx0 * dx + sy0 * dy
+    qa = sx0 * sx0 + sy0 * sy0
+    qb = sx1 * sx1 + sy1 * sy1
+    dip = (B < 0.0) & (B + A > 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cr = sx0 * dy - sy0 * dx
+        qmin = np.where(dip, cr * cr / A, np.minimum(qa, qb))
+    qmax = np.maximum(qa, qb)
+    ok = A != 0.0
+    j0 = np.searchsorted(r2, qmin * (1.0 - QMIN_WIDEN), side="right")
+    j1 = np.maximum(np.searchsorted(r2, qmax, side="right"), j0)
+    cnt = np.where(ok, j1 - j0, 0)
+    total = int(cnt.sum())
+    diff = np.zeros((n_tr, n_f + 1), np.int32)
+    if total:
+        s = np.repeat(np.arange(cnt.size), cnt)
+        first = np.repeat(np.cumsum(cnt) - cnt, cnt)
+        m = j0[s] + (np.arange(total) - first)
+        rr = r2[m]
+        ia = qa[s] < rr
+        ib = qb[s] < rr
+        live = ~(ia & ib) & ~(~ia & ~ib & ~(dip[s] & (qmin[s] < rr)))
+        s, m, rr, ia, ib = s[live], m[live], rr[live], ia[live], ib[live]
+        As, Bs = A[s], B[s]
+        C = qa[s] - rr
+        D = np.maximum(Bs * Bs - As * C, 0.0)
+        sq = np.sqrt(D)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            tp = np.where(Bs <= 0.0, (-Bs + sq) / As, C / (-Bs - sq))
+            tm = np.where(Bs >= 0.0, (-Bs - sq) / As, C / (-Bs + sq))
+
+        def firing(t, sel):
+            t = np.clip(t[sel], 0.0, 1.0)
+            ss = s[sel]
+            px = sx0[ss] + t * dx[ss]
+            py = sy0[ss] + t * dy[ss]
+            u = direction * (psi0[m[sel]] - np.arctan2(py, px)) / dphi - i0
+            return np.where(u <= 0.0, 0, np.where(u >= n_f, n_f, np.ceil(np.clip(u, 0.0, n_f)))).astype(np.int64)
+
+        exits = ~ib
+        entries = ~ia
+        np.add.at(diff, (m[exits], firing(tp, exits)), -direction)
+        np.add.at(diff, (m[entries], firing(tm, entries)), direction)
+    w = np.cumsum(diff[:, :n_f], axis=1)
+    inside = (w & 1).astype(bool) if fill == "evenodd" else w != 0
+    ia_abs = np.arange(n_f, dtype=np.float64)[None, :] + i0
+    keep = np.floor((ia_abs + 1) * frac[:, None] + offs[:, None]) > np.floor(ia_abs * frac[:, None] + offs[:, None])
+    keep |= frac[:, None] >= 1.0
+    val = np.where(inside & keep, np.uint8(level), np.uint8(0)).astype(np.uint8)
+    if n_tr:  # tracks of one image column (never two in practice) are combined by maximum
+        np.maximum.at(out.T, cols, val)
+    return out
+
+
+KERNELS = {"numba": direct_fill_jit, "numpy": direct_fill_numpy}

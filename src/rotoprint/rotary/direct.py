@@ -1,0 +1,552 @@
+"""Direct rotary slicing (issue 4): from a mesh to per-nozzle firing data in one step.
+
+For every layer, every swathe and every enabled nozzle ``k``, the nozzle's track is the circle
+of radius ``r_k`` in the platform frame. The layer's exact cross-section (oriented segments
+from :mod:`rotoprint.slicing`) is intersected with that circle and filled by winding along the
+arc, at the firing angles ``phi_k - direction * i * dphi``; so ``B[i, k]`` comes straight
+from the mesh, with no Cartesian bitmap and no resampling. The rule: a drop is printed
+exactly when its landing point is inside the cross-section. Ties (a landing point exactly on
+the boundary) follow two half-open rules, documented in :mod:`._direct_kernels`: radially a
+point with ``|p| >= r_k`` counts as outside the track, and along the track a drop exactly on a
+crossing takes the state just after it in firing order.
+
+Placement (:class:`PartPlacement`), the same as slicing to a Cartesian image and running
+``rotoprint transform --radius R --angle A`` on it: model +X points radially outwards and
+model +Y counter-clockwise along the platform; the part's footprint (its XY bounding box over
+all layers) has its inner edge (smallest X) at radius ``R`` on the centre line at angle ``A``,
+and the centre line runs through the middle of the footprint's Y range. The model is not
+rotated (use ``--rotate`` when loading it).
+
+Swathes come from :func:`rotoprint.rotary.plan_swathes` (shared with the bitmap transforms),
+and each swathe's clock from the same rule as the exact transform (default reference radius:
+the swathe's outermost track). Output is a :class:`~rotoprint.rotary.RotaryPrint` per layer,
+readable by the simulator unchanged; its ``placement`` is a bitmap grid at the head's native
+pitch covering the footprint (:meth:`PartPlacement.design_placement`), used only to place the
+simulator's reference image.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from .._resources import check_raster_fits
+from ..constants import DEFAULT_GAP_RADIUS_MM
+from ..errors import ConfigError, GeometryError
+from ..mesh import Mesh
+from ..slicing import FILL_RULES, slice_mesh
+from ..slicing._sections import Segments
+from . import _direct_kernels as _k
+from .exact import firing_range, swathe_clock
+from .head import DIRECTIONS, check_tilt, nozzle_layout
+from .placement import Placement
+from .printdata import RotaryPrint, SwatheImage
+from .swathes import SwathePlan, plan_swathes
+
+__all__ = [
+    "PartPlacement",
+    "TrackSet",
+    "DirectSliceJob",
+    "slice_rotary",
+    "rasterize_section",
+    "write_rotary_slices",
+    "KERNEL_NAMES",
+    "MANIFEST_FORMAT",
+]
+
+log = logging.getLogger(__name__)
+
+KERNEL_NAMES = tuple(_k.KERNELS)
+MANIFEST_FORMAT = "rotoprint-rotary-slice"
+#: Tracks on each side averaged for the local radial pitch used by density equalisation.
+EQUALISE_PITCH_WINDOW = 8
+_GOLDEN = 0.6180339887498949
+_PLASTIC = 0.7548776662466927
+
+
+@dataclass(frozen=True)
+class PartPlacement:
+    """Where a part's cross-sections sit on the platform (see the module doc).
+
+    Parameters
+    ----------
+    inner_radius_mm : float
+        Radius of the footprint's inner edge (smallest model X), on the centre line.
+    angle_deg : float
+        Angle of the centre line in the platform frame (0: head 0's radial line).
+    footprint_mm : (float, float, float, float)
+        ``(x_min, y_min, x_max, y_max)`` of the part in model XY.
+
+    Examples
+    --------
+    >>> pl = PartPlacement(60.0, 90.0, (-5.0, -2.0, 5.0, 2.0))
+    >>> [round(float(v[0]), 9) for v in pl.model_to_platform(np.array([-5.0]), np.array([0.0]))]
+    [0.0, 60.0]
+    """
+
+    inner_radius_mm: float
+    angle_deg: float
+    footprint_mm: tuple[float, float, float, float]
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.inner_radius_mm) and self.inner_radius_mm > 0):
+            raise GeometryError(f"radius of the part's inner edge must be > 0 mm, got {self.inner_radius_mm}")
+        if not math.isfinite(self.angle_deg):
+            raise ConfigError(f"angle must be a finite number of degrees, got {self.angle_deg}")
+        x0, y0, x1, y1 = self.footprint_mm
+        if not all(math.isfinite(v) for v in self.footprint_mm) or not (x1 > x0 and y1 > y0):
+            raise GeometryError(f"the part's footprint must have a positive area, got {self.footprint_mm}")
+
+    @classmethod
+    def for_mesh(cls, mesh: Mesh, *, inner_radius_mm: float, angle_deg: float = 0.0) -> PartPlacement:
+        """Placement of ``mesh``'s whole footprint (the same for every layer)."""
+        lo, hi = mesh.bounds
+        return cls(float(inner_radius_mm), float(angle_deg), (float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])))
+
+    @property
+    def y_centre_mm(self) -> float:
+        return 0.5 * (self.footprint_mm[1] + self.footprint_mm[3])
+
+    @property
+    def width_mm(self) -> float:
+        return self.footprint_mm[2] - self.footprint_mm[0]
+
+    @property
+    def height_mm(self) -> float:
+        return self.footprint_mm[3] - self.footprint_mm[1]
+
+    def model_to_local(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Model XY to the local frame (platform frame turned so the centre line is +X).
+
+        Elementwise (a translation only), so equal inputs give bit-identical outputs.
+        """
+        return (np.asarray(x, np.float64) - self.footprint_mm[0]) + self.inner_radius_mm, np.asarray(y, np.float64) - self.y_centre_mm
+
+    def model_to_platform(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        xl, yl = self.model_to_local(x, y)
+        a = math.radians(self.angle_deg)
+        c, s = math.cos(a), math.sin(a)
+        return c * xl - s * yl, s * xl + c * yl
+
+    def platform_to_model(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a = math.radians(self.angle_deg)
+        c, s = math.cos(a), math.sin(a)
+        x = np.asarray(x, np.float64)
+        y = np.asarray(y, np.float64)
+        xl = c * x + s * y
+        yl = -s * x + c * y
+        return xl - self.inner_radius_mm + self.footprint_mm[0], yl + self.y_centre_mm
+
+    def design_placement(self, pitch_x_mm: float, pitch_y_mm: float, *, oversample: int = 1) -> Placement:
+        """A bitmap grid covering the footprint: first column's inner edge at the inner radius,
+        rows centred on the centre line. ``oversample`` divides the pitch and multiplies the
+        size, so every oversampled grid covers exactly the same rectangle."""
+        if oversample < 1:
+            raise ConfigError(f"oversample must be >= 1, got {oversample}")
+        w = max(1, math.ceil(self.width_mm / pitch_x_mm - 1e-9))
+        h = max(1, math.ceil(self.height_mm / pitch_y_mm - 1e-9))
+        return Placement(
+            w * oversample, h * oversample, pitch_x_mm / oversample, pitch_y_mm / oversample,
+            inner_radius_mm=self.inner_radius_mm, angle_deg=self.angle_deg,
+        )
+
+    def to_json(self) -> dict:
+        return {
+            "inner_radius_mm": self.inner_radius_mm,
+            "angle_deg": self.angle_deg,
+            "footprint_mm": list(self.footprint_mm),
+            "convention": "model +X radially outwards, +Y counter-clockwise; platform = rotate(angle_deg) @ "
+            "(X - x_min + inner_radius_mm, Y - (y_min + y_max) / 2)",
+        }
+
+
+def rasterize_section(seg: Segments, part: PartPlacement, design: Placement, *, fill: str = "nonzero", backend: str = "jit") -> np.ndarray:
+    """``(H, W) uint8`` image of a cross-section on a :class:`Placement` grid (255 inside).
+
+    Pixel centres are sampled with the slicer's exact fibre rules; this is the first step of
+    the two-step path (Cartesian bitmap, then transform) and the simulator's reference image.
+    """
+    xl0, yl0 = part.model_to_local(seg.start[:, 0], seg.start[:, 1])
+    xl1, yl1 = part.model_to_local(seg.end[:, 0], seg.end[:, 1])
+    # local (x, y) -> pixel (u = col, v = row) of the pixel centres (elementwise arithmetic)
+    px, py = design.pitch_x_mm, design.pitch_y_mm
+    ox = design.inner_radius_mm
+    oy = design.height_px / 2.0
+
+    def u(x):
+        return (x - ox) / px - 0.5
+
+    def v(y):
+        return (oy - 0.5) - y / py
+
+    check_raster_fits(design.width_px, design.height_px, 5, what="reference image")
+    args = (u(xl0), v(yl0), u(xl1), v(yl1), design.height_px, design.width_px, fill)
+    if backend == "numpy":
+        from ..slicing._fill import fill_numpy
+
+        return fill_numpy(*args)
+    from ..slicing._kernels import fill_jit
+
+    return fill_jit(*args)
+
+
+@dataclass(frozen=True, eq=False)
+class TrackSet:
+    """The tracks of one swathe, sorted by radius.
+
+    Attributes
+    ----------
+    nozzle : (M,) int64
+        Nozzle (image column) of each track: enabled in the swathe and not dead.
+    r_mm : (M,) float64
+        Track radius, ascending.
+    psi0_rad : (M,) float64
+        Angle of the nozzle at firing 0 relative to the centre line, ``phi_k - angle``.
+    pitch_mm : (M,) float64
+        Local radial track pitch (averaged over ``EQUALISE_PITCH_WINDOW`` tracks each side).
+    """
+
+    index: int
+    pivot_radius_mm: float
+    dphi_rad: float
+    ref_radius_mm: float
+    first_firing: int
+    firings: int
+    band_mm: tuple[float, float]
+    enabled: np.ndarray
+    nozzle: np.ndarray
+    r_mm: np.ndarray
+    psi0_rad: np.ndarray
+    pitch_mm: np.ndarray
+
+    @property
+    def area_per_drop_mm2(self) -> np.ndarray:
+        """``(M,) float64``: drop spacing along the track times the local track pitch."""
+        return self.r_mm * self.dphi_rad * self.pitch_mm
+
+
+def _local_pitch(r_sorted: np.ndarray, h: int) -> np.ndarray:
+    n = r_sorted.size
+    if n < 2:
+        return np.ones(n)
+    q = np.arange(n)
+    a = np.clip(q - h, 0, n - 1)
+    b = np.clip(q + h, 0, n - 1)
+    return (r_sorted[b] - r_sorted[a]) / (b - a)
+
+
+class DirectSliceJob:
+    """A planned direct rotary slicing run; :meth:`layer` (or iteration) gives one
+    :class:`RotaryPrint` per layer. Build one with :func:`slice_rotary`."""
+
+    def __init__(self, job, head, part: PartPlacement, design: Placement, plan: SwathePlan, tracks: tuple[TrackSet, ...], *,
+                 dpi_y: float, fill: str, equalise: bool, kernel: str) -> None:
+        self.slice_job = job
+        self.head = head
+        self.part = part
+        self.design = design
+        self.plan = plan
+        self.tracks = tracks
+        self.dpi_y = dpi_y
+        self.fill = fill
+        self.equalise = equalise
+        self.kernel = kernel
+        # density equalisation: keep the fraction area_per_drop / largest area_per_drop
+        apd = [t.area_per_drop_mm2 for t in tracks]
+        top = max((float(a.max()) for a in apd if a.size), default=1.0)
+        self._frac = tuple((a / top) if equalise else np.ones_like(a) for a in apd)
+
+    @property
+    def layers(self):
+        return self.slice_job.plan
+
+    def __len__(self) -> int:
+        return len(self.slice_job)
+
+    def density_spread(self, *, equalised: bool | None = None) -> float:
+        """Expected spread of drops per unit area over the tracks, ``max / min - 1``."""
+        eq = self.equalise if equalised is None else equalised
+        dens = []
+        apd_top = max((float(t.area_per_drop_mm2.max()) for t in self.tracks if t.r_mm.size), default=1.0)
+        for t in self.tracks:
+            a = t.area_per_drop_mm2
+            f = a / apd_top if eq else np.ones_like(a)
+            dens.append(f / a)
+        d = np.concatenate(dens) if dens else np.ones(1)
+        return float(d.max() / d.min() - 1.0)
+
+    def segments(self, index: int):
+        return self.slice_job.segments(index)
+
+    def print_from_segments(self, seg: Segments, *, layer_index: int = 0) -> RotaryPrint:
+        """The print of one cross-section (model-XY segments)."""
+        xl0, yl0 = self.part.model_to_local(seg.start[:, 0], seg.start[:, 1])
+        xl1, yl1 = self.part.model_to_local(seg.end[:, 0], seg.end[:, 1])
+        if xl0.size and (min(xl0.min(), xl1.min()) <= 0.0):
+            raise GeometryError("the cross-section reaches the axis of rotation; use a larger --radius")
+        fn = _k.KERNELS[self.kernel]
+        dead = np.array(self.head.dead_nozzles, dtype=np.int64)
+        out = []
+        for ts, frac in zip(self.tracks, self._frac):
+            offs = np.mod(ts.nozzle * _GOLDEN + layer_index * _PLASTIC, 1.0)
+            lev = fn(
+                xl0, yl0, xl1, yl1, ts.r_mm * ts.r_mm, ts.psi0_rad, ts.nozzle, frac, offs,
+                dphi=ts.dphi_rad, direction=self.plan.direction, i0=ts.first_firing, n_f=ts.firings,
+                n_cols=self.head.nozzles, fill=self.fill, level=self.head.grey_levels,
+            )
+            if dead.size:
+                lev[:, dead] = 0
+            out.append(
+                SwatheImage(
+                    index=ts.index, levels=lev, pivot_radius_mm=ts.pivot_radius_mm, first_firing=ts.first_firing,
+                    dphi_rad=ts.dphi_rad, ref_radius_mm=ts.ref_radius_mm, band_mm=ts.band_mm,
+                    enabled_nozzles=int(ts.enabled.sum()), enabled=ts.enabled,
+                )
+            )
+        return RotaryPrint(
+            method="direct", head=self.head, tilt_deg=self.plan.tilt_deg, mount_angle_deg=self.plan.mount_angle_deg,
+            direction=self.plan.direction, dpi_y=self.dpi_y, placement=self.design, swathes=tuple(out), design_kind="binary",
+        )
+
+    def layer(self, index: int) -> RotaryPrint:
+        """Layer ``index``'s print (one swathe image per radial swathe)."""
+        if not 0 <= index < len(self):
+            raise IndexError(f"layer {index} out of range 0..{len(self) - 1}")
+        seg, _ = self.slice_job.segments(index)
+        return self.print_from_segments(seg, layer_index=index)
+
+    def reference_image(self, index: int, *, oversample: int = 1) -> np.ndarray:
+        """``(H, W) uint8`` Cartesian image of layer ``index`` on the design grid (for checks)."""
+        seg, _ = self.slice_job.segments(index)
+        pl = self.part.design_placement(self.design.pitch_x_mm, self.design.pitch_y_mm, oversample=oversample)
+        return rasterize_section(seg, self.part, pl, fill=self.fill)
+
+    def __iter__(self) -> Iterator[RotaryPrint]:
+        for i in range(len(self)):
+            yield self.layer(i)
+
+    def to_json(self) -> dict:
+        return {
+            "tilt_deg": self.plan.tilt_deg,
+            "mount_angle_deg": self.plan.mount_angle_deg,
+            "direction": self.plan.direction,
+            "dpi_y": self.dpi_y,
+            "fill": self.fill,
+            "placement": self.part.to_json(),
+            "design_grid": self.design.to_json(),
+            "equalise": self.equalise,
+            "density_spread": {"without_equalisation": self.density_spread(equalised=False),
+                               "with_equalisation": self.density_spread(equalised=True)},
+            "swathes": [
+                {
+                    **sw.to_json(),
+                    "first_firing_index": ts.first_firing,
+                    "firings": ts.firings,
+                    "dphi_rad": ts.dphi_rad,
+                    "angle_per_firing_deg": math.degrees(ts.dphi_rad),
+                    "ref_radius_mm": ts.ref_radius_mm,
+                    "tracks": int(ts.r_mm.size),
+                }
+                for sw, ts in zip(self.plan.swathes, self.tracks)
+            ],
+        }
+
+
+def slice_rotary(
+    mesh: Mesh,
+    device,
+    *,
+    layer_height_mm: float,
+    tilt_deg: float,
+    inner_radius_mm: float,
+    angle_deg: float = 0.0,
+    dpi_y: float | None = None,
+    ref_radius_mm: float | None = None,
+    direction: int = 1,
+    max_swathes: int | None = None,
+    equalise: bool = False,
+    fill: str = "nonzero",
+    gap_radius_mm: float = DEFAULT_GAP_RADIUS_MM,
+    kernel: str = "numba",
+) -> DirectSliceJob:
+    """Plan direct rotary slicing of ``mesh`` for an inkjet ``device``.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    device : InkjetDevice
+    layer_height_mm : float
+    tilt_deg : float
+        Head tilt, |tilt| below the head's maximum.
+    inner_radius_mm : float
+        Radius of the part's inner edge (see :class:`PartPlacement`).
+    angle_deg : float
+        Angle of the part's centre line on the platform.
+    dpi_y : float, optional
+        Circumferential density at each swathe's reference radius (default: the head's).
+    ref_radius_mm : float, optional
+        One reference radius for every swathe (default: each swathe's outermost track).
+    direction : {1, -1}
+    max_swathes : int, optional
+    equalise : bool
+        Thin inner tracks (ordered pattern along each track) so that drops per unit area are
+        the same on every track: the fraction kept is the track's area per drop over the
+        largest one (area per drop = ``r_k * dphi * local radial pitch``).
+    fill : {'nonzero', 'evenodd'}
+    gap_radius_mm : float
+        Open meshes: see :func:`rotoprint.slice_mesh`.
+    kernel : {'numba', 'numpy'}
+        The jit kernel or the pure-numpy reference; their output is identical.
+
+    Returns
+    -------
+    DirectSliceJob
+
+    Examples
+    --------
+    >>> from rotoprint import load_device
+    >>> from rotoprint.testing import box_mesh
+    >>> job = slice_rotary(box_mesh((10, 6, 1)), load_device("omnidot760"), layer_height_mm=0.5,
+    ...                    tilt_deg=20.0, inner_radius_mm=60.0)
+    >>> pr = job.layer(0)
+    >>> len(job), len(pr.swathes), pr.swathes[0].levels.shape[1], pr.swathes[0].levels.dtype
+    (2, 1, 764, dtype('uint8'))
+    """
+    from ..devices import InkjetDevice
+
+    if not isinstance(device, InkjetDevice):
+        raise ConfigError(f"device {getattr(device, 'name', device)!r} is not an inkjet device; direct rotary slicing needs a print head")
+    if kernel not in _k.KERNELS:
+        raise ConfigError(f"kernel must be one of {', '.join(_k.KERNELS)}; got {kernel!r}")
+    if fill not in FILL_RULES:
+        raise ConfigError(f"fill must be one of {', '.join(FILL_RULES)}, got {fill!r}")
+    if direction not in DIRECTIONS:
+        raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
+    head = device.head
+    check_tilt(head, float(tilt_deg))
+    dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
+    if not (math.isfinite(dpi_y) and dpi_y > 0):
+        raise ConfigError(f"dpi_y must be a positive number, got {dpi_y}")
+    part = PartPlacement.for_mesh(mesh, inner_radius_mm=inner_radius_mm, angle_deg=angle_deg)
+    design = part.design_placement(head.pitch_mm, 25.4 / dpi_y)
+    job = slice_mesh(mesh, device, layer_height_mm=layer_height_mm, fill=fill, gap_radius_mm=gap_radius_mm,
+                     backend="numpy" if kernel == "numpy" else "jit")
+    r_in, r_out = design.radial_range_mm()
+    plan = plan_swathes(head, tilt_deg=float(tilt_deg), inner_radius_mm=r_in, outer_radius_mm=r_out,
+                        mount_angle_deg=0.0, direction=int(direction), max_swathes=max_swathes)
+    a_lo, a_hi = design.angular_range_rad()
+    alpha = math.radians(part.angle_deg)
+    live = np.ones(head.nozzles, bool)
+    live[list(head.dead_nozzles)] = False
+    tracks = []
+    for j, sw in enumerate(plan.swathes):
+        lay = nozzle_layout(head, plan.mount(j))
+        dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
+        en = sw.enabled
+        i0, i1 = firing_range(lay.phi_rad[en], a_lo, a_hi, dphi, int(direction))
+        n_f = i1 - i0 + 1
+        check_raster_fits(head.nozzles, n_f, 2, what=f"print image of swathe {j}")
+        k = np.flatnonzero(en & live)
+        order = np.argsort(lay.r_mm[k], kind="stable")
+        k = k[order]
+        r = lay.r_mm[k]
+        tracks.append(
+            TrackSet(
+                index=j, pivot_radius_mm=sw.pivot_radius_mm, dphi_rad=dphi, ref_radius_mm=r_ref, first_firing=i0,
+                firings=n_f, band_mm=sw.band_mm, enabled=en, nozzle=k.astype(np.int64), r_mm=r,
+                psi0_rad=lay.phi_rad[k] - alpha, pitch_mm=_local_pitch(r, EQUALISE_PITCH_WINDOW),
+            )
+        )
+    log.debug("direct rotary slicing: %d layers, %d swathe(s)", len(job), len(tracks))
+    return DirectSliceJob(job, head, part, design, plan, tuple(tracks), dpi_y=dpi_y, fill=fill, equalise=bool(equalise), kernel=kernel)
+
+
+def write_rotary_slices(
+    job: DirectSliceJob,
+    out_dir: str | Path,
+    *,
+    device_name: str,
+    options: dict,
+    mesh_info: dict | None = None,
+    reference_images: bool = False,
+    on_layer: Callable[[int], None] | None = None,
+) -> dict:
+    """Write every layer of ``job`` into ``out_dir``; returns the manifest.
+
+    Per layer ``layer_00000.png`` (one swathe) or ``layer_00000-s1.png``, ... (several), each
+    with the sidecar ``layer_00000.json`` that ``rotoprint simulate`` reads; with
+    ``reference_images`` also ``layer_00000-design.png``, the Cartesian cross-section on the
+    sidecar's design grid (named in the sidecar, so ``rotoprint simulate`` finds it).
+    ``manifest.json`` lists every image with its head, tilt, placement, swathe, angle per
+    firing and first firing index. The folder is built under a temporary name and renamed when
+    complete; nothing partial is left on error.
+    """
+    from ..io.atomic import atomic_dir
+    from ..io.images import png_bytes
+    from .files import write_print
+
+    out = Path(out_dir)
+    layers = []
+    final = out.resolve()
+    with atomic_dir(out) as tmp:
+        for i in range(len(job)):
+            seg, rep = job.slice_job.segments(i)
+            pr = job.print_from_segments(seg, layer_index=i)
+            stem = f"layer_{i:05d}"
+            design = {"source": "mesh cross-section (direct rotary slicing)", "layer": i, "invert": False,
+                      "design_dpi_x": 25.4 / job.design.pitch_x_mm, "design_dpi_y": 25.4 / job.design.pitch_y_mm}
+            if reference_images:
+                ref = png_bytes(rasterize_section(seg, job.part, job.design, fill=job.fill))
+                (tmp / f"{stem}-design.png").write_bytes(ref)
+                design.update(path=str(final / f"{stem}-design.png"), sha256=hashlib.sha256(ref).hexdigest())
+            side = write_print(pr, tmp / f"{stem}.png", device_name=device_name, design=design)
+            plan_layers = job.layers
+            layers.append({
+                "index": i,
+                "z_mm": float(plan_layers.z_slice_mm[i]),
+                "z_bottom_mm": float(plan_layers.z_bottom_mm[i]),
+                "z_top_mm": float(plan_layers.z_top_mm[i]),
+                "sidecar": f"{stem}.json",
+                "reference_image": f"{stem}-design.png" if reference_images else None,
+                "gaps": rep.to_json(),
+                "images": [
+                    {
+                        "head": 0,
+                        "swathe": s["index"],
+                        "file": s["file"],
+                        "first_firing_index": s["first_firing_index"],
+                        "firings": s["firings"],
+                        "angle_per_firing_deg": s["angle_per_firing_deg"],
+                        "pivot_radius_mm": s["pivot_radius_mm"],
+                        "drops": s["drops"],
+                        "sha256": s["sha256"],
+                    }
+                    for s in side["swathes"]
+                ],
+            })
+            if on_layer is not None:
+                on_layer(i)
+        manifest = {
+            "format": MANIFEST_FORMAT,
+            "version": 1,
+            "rotoprint": __version__,
+            "device": device_name,
+            "head": job.head.model_dump(mode="json"),
+            "heads": [{"index": 0, "mount_angle_deg": job.plan.mount_angle_deg}],
+            **job.to_json(),
+            "mesh": mesh_info or {},
+            "options": options,
+            "landing": "nozzle k at firing i lands at (r_k, phi_k - direction * i * dphi_rad) in the platform frame; "
+            "row b of a swathe image is firing first_firing_index + b (rotary-geometry.md s. 3)",
+            "layers": layers,
+        }
+        (tmp / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    return manifest

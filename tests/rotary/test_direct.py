@@ -1,0 +1,309 @@
+"""Direct rotary slicing (issue 4): exactness against shapely, agreement with the two-step path,
+kernels equal, swathes shared with the transforms, density equalisation, the CLI."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import shapely
+from shapely.geometry import Point, box
+
+from _direct_checks import compare_sites, iou_pair, section_geom, shapely_mismatches, two_step
+from rotoprint import ConfigError, GeometryError, load_device, load_mesh
+from rotoprint.rotary import exact_maps, place_drops, plan_swathes
+from rotoprint.rotary import _direct_kernels as K
+from rotoprint.rotary.direct import PartPlacement, slice_rotary
+from rotoprint.testing import box_mesh, cylinder_mesh, torus_mesh
+
+DEV = load_device("omnidot760")
+HEAD = DEV.head
+
+MESHES = {
+    "box": lambda: box_mesh((20.0, 12.0, 2.0), origin=(3.0, -4.0, 0.0)),
+    "cylinder": lambda: cylinder_mesh(8.0, 2.0, 96),
+    "torus": lambda: torus_mesh(10.0, 3.0, 96, 32),
+}
+
+
+def _job(mesh, tilt, **kw):
+    kw.setdefault("inner_radius_mm", 40.0)
+    kw.setdefault("angle_deg", 15.0)
+    return slice_rotary(mesh, DEV, layer_height_mm=kw.pop("layer_height_mm", 1.0), tilt_deg=tilt, **kw)
+
+
+def _real(shared_meshes, name, scale=1.0):
+    from rotoprint.io.mesh import make_transform
+
+    return load_mesh(shared_meshes / name, transform=make_transform(scale=scale))
+
+
+# ---------------------------------------------------------------------------------- exactness
+
+
+@pytest.mark.parametrize("name", sorted(MESHES))
+@pytest.mark.parametrize("tilt", [0.0, 20.0])
+def test_drop_fired_exactly_when_inside_the_exact_section(name, tilt):
+    job = _job(MESHES[name](), tilt)
+    for L in sorted({0, len(job) // 2, len(job) - 1}):
+        pr = job.layer(L)
+        checked, bad, worst = shapely_mismatches(job, pr, section_geom(job, L), n_random=20000, seed=L)
+        assert checked >= 20000 // len(job.tracks) * len(job.tracks)
+        assert bad == 0 or worst <= 1e-6, (bad, worst)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 20.0])
+def test_real_closed_meshes_exact(shared_meshes, tilt):
+    # half_donut at full size; the 100 mm sphere (3-4 swathes) on two layers
+    job = _job(_real(shared_meshes, "half_donut_ascii.stl"), tilt, layer_height_mm=0.5, inner_radius_mm=30.0)
+    for L in range(len(job)):
+        checked, bad, worst = shapely_mismatches(job, job.layer(L), section_geom(job, L), n_random=10000, seed=L)
+        assert bad == 0 or worst <= 1e-6
+    job = _job(_real(shared_meshes, "sphere_openscad.stl"), tilt, layer_height_mm=20.0, inner_radius_mm=30.0)
+    assert len(job.tracks) >= 2
+    for L in (0, len(job) // 2):
+        checked, bad, worst = shapely_mismatches(job, job.layer(L), section_geom(job, L), n_random=40000, seed=L)
+        assert bad == 0 or worst <= 1e-6
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+@pytest.mark.parametrize("angle", [0.0, 200.0, -75.0])
+def test_direction_and_angle_every_site(direction, angle):
+    mesh = torus_mesh(4.0, 1.5, 48, 24)
+    job = _job(mesh, 33.0, direction=direction, angle_deg=angle, inner_radius_mm=25.0, layer_height_mm=1.5)
+    pr = job.layer(1)
+    checked, bad, worst = shapely_mismatches(job, pr, section_geom(job, 1))
+    assert checked > 50_000 and (bad == 0 or worst <= 1e-6)
+    # the simulator lands every drop where the direct slicer meant it (same forward formula)
+    d = place_drops(pr)
+    X, Y = job.part.platform_to_model(d.x_mm, d.y_mm)
+    g = section_geom(job, 1)
+    inside = shapely.contains_xy(g, X, Y)
+    far = shapely.distance(g.boundary, shapely.points(X, Y)) > 1e-6
+    assert inside[far].all() and len(d) > 1000
+
+
+def test_vertices_on_tracks_and_firing_angles():
+    """A polygon whose vertices lie on track radii at firing angles: kernels agree, fill is
+    the exact set up to boundary ties, and every tie follows the documented rule."""
+    job = _job(box_mesh((12.0, 6.0, 1.0)), 0.0, inner_radius_mm=50.0, angle_deg=0.0)
+    ts = job.tracks[0]
+    rng = np.random.default_rng(3)
+    m = rng.choice(ts.r_mm.size - 20, 40, replace=False) + 10
+    i = rng.integers(ts.first_firing + 5, ts.first_firing + ts.firings - 5, 40)
+    ang = ts.psi0_rad[m] - i * ts.dphi_rad
+    order = np.argsort(ang)
+    # a star-shaped loop around its centroid, vertices exactly on tracks and drop angles
+    x = ts.r_mm[m] * np.cos(ang)
+    y = ts.r_mm[m] * np.sin(ang)
+    c = np.array([x.mean(), y.mean()])
+    order = np.argsort(np.arctan2(y - c[1], x - c[0]))
+    x, y = x[order], y[order]
+    args = (x, y, np.roll(x, -1), np.roll(y, -1), ts.r_mm * ts.r_mm, ts.psi0_rad, ts.nozzle, np.ones(ts.r_mm.size), np.zeros(ts.r_mm.size))
+    kw = dict(dphi=ts.dphi_rad, direction=1, i0=ts.first_firing, n_f=ts.firings, n_cols=HEAD.nozzles, fill="nonzero", level=1)
+    a = K.direct_fill_jit(*args, **kw)
+    b = K.direct_fill_numpy(*args, **kw)
+    np.testing.assert_array_equal(a, b)
+    poly = shapely.Polygon(np.column_stack([x, y]))
+    bb = np.arange(ts.firings)[:, None] + ts.first_firing
+    A = ts.psi0_rad[None, :] - bb * ts.dphi_rad
+    px, py = ts.r_mm[None, :] * np.cos(A), ts.r_mm[None, :] * np.sin(A)
+    inside = shapely.contains_xy(poly, px, py)
+    fired = a[:, ts.nozzle] > 0
+    bad = inside != fired
+    if bad.any():
+        assert shapely.distance(poly.boundary, shapely.points(px[bad], py[bad])).max() <= 1e-9
+    assert fired.sum() > 1000
+
+
+# ------------------------------------------------------------------------------ kernels equal
+
+
+@pytest.mark.parametrize("tilt,fill,direction,equalise", [(0.0, "nonzero", 1, False), (20.0, "evenodd", -1, True), (47.0, "nonzero", 1, True)])
+def test_numba_and_numpy_kernels_identical(tilt, fill, direction, equalise):
+    mesh = torus_mesh(9.0, 3.0, 80, 30)
+    kw = dict(fill=fill, direction=direction, equalise=equalise, inner_radius_mm=35.0, angle_deg=-40.0)
+    a = _job(mesh, tilt, **kw)
+    b = _job(mesh, tilt, kernel="numpy", **kw)
+    for L in range(len(a)):
+        for sa, sb in zip(a.layer(L).swathes, b.layer(L).swathes):
+            np.testing.assert_array_equal(sa.levels, sb.levels)
+            assert sa.first_firing == sb.first_firing
+
+
+def test_kernels_identical_on_random_polygons():
+    rng = np.random.default_rng(11)
+    r = np.sort(rng.uniform(30, 40, 200))
+    psi0 = rng.uniform(-0.05, 0.05, 200)
+    cols = rng.permutation(764)[:200]
+    for trial in range(20):
+        n = rng.integers(3, 60)
+        x = rng.uniform(29, 41, n)
+        y = rng.uniform(-5, 5, n)
+        if trial % 2:  # some vertices exactly on a track radius (as nearly as floats allow)
+            k = rng.integers(0, 200, n // 2)
+            t = np.arctan2(y[: n // 2], x[: n // 2])
+            x[: n // 2], y[: n // 2] = r[k] * np.cos(t), r[k] * np.sin(t)
+        args = (x, y, np.roll(x, -1), np.roll(y, -1), r * r, psi0, cols, rng.uniform(0.2, 1.0, 200), rng.uniform(0, 1, 200))
+        kw = dict(dphi=0.002, direction=int(rng.choice([1, -1])), i0=-150, n_f=300, n_cols=764, fill=["nonzero", "evenodd"][trial % 2], level=1)
+        np.testing.assert_array_equal(K.direct_fill_jit(*args, **kw), K.direct_fill_numpy(*args, **kw))
+
+
+# ---------------------------------------------------------------------- two-step and swathes
+
+
+@pytest.mark.parametrize("name", sorted(MESHES))
+@pytest.mark.parametrize("tilt", [0.0, 20.0])
+def test_agrees_with_two_step_except_at_the_boundary(name, tilt):
+    job = _job(MESHES[name](), tilt)
+    L = len(job) // 2
+    pr = job.layer(L)
+    g = section_geom(job, L)
+    fine, _, _ = two_step(job, L, oversample=4)
+    native, _, _ = two_step(job, L, oversample=1)
+    n4, worst4 = compare_sites(job, pr, fine, g)
+    n1, worst1 = compare_sites(job, pr, native, g)
+    assert worst4 <= 1.0 and worst1 <= 1.0  # in units of max(firing step, track pitch)
+    assert n4 < n1
+    iou_d, iou_1, iou_4 = iou_pair(job, [pr, native, fine], g, oversample=2)
+    assert iou_d >= iou_1  # at equal output resolution the direct path is better
+    assert iou_d >= iou_4 - 2e-3  # and level with a 4x finer bitmap (noise of the cell model)
+
+
+def test_swathes_are_the_shared_planner(shared_meshes):
+    """A part wider than the projected swathe: the direct slicer's swathes, pivots, bands and
+    clocks are those of plan_swathes / the exact transform for the same footprint."""
+    job = _job(_real(shared_meshes, "sphere_openscad.stl"), 20.0, layer_height_mm=25.0, inner_radius_mm=30.0)
+    r_in, r_out = job.design.radial_range_mm()
+    plan = plan_swathes(HEAD, tilt_deg=20.0, inner_radius_mm=r_in, outer_radius_mm=r_out)
+    maps = exact_maps(HEAD, job.design, tilt_deg=20.0)
+    assert len(job.tracks) == len(plan) == len(maps.swathes) >= 3
+    for ts, sw, sm in zip(job.tracks, plan.swathes, maps.swathes):
+        assert ts.pivot_radius_mm == sw.pivot_radius_mm and ts.band_mm == sw.band_mm
+        assert ts.dphi_rad == sm.dphi_rad and np.array_equal(ts.enabled, sm.enabled)
+        assert ts.first_firing <= sm.first_firing and ts.first_firing + ts.firings >= sm.first_firing + sm.index.shape[0]
+
+
+# ------------------------------------------------------------------------------ equalisation
+
+
+def _density_per_bin(job, pr, geom_platform, n_bins):
+    """Drops per mm2 in annuli whose edges lie midway between tracks (interior of the part)."""
+    d = place_drops(pr)
+    rho = np.hypot(d.x_mm, d.y_mm)
+    radii = np.sort(np.concatenate([t.r_mm for t in job.tracks]))
+    lo, hi = job.part.inner_radius_mm + 1.0, job.part.inner_radius_mm + job.part.width_mm - 1.0
+    targets = np.linspace(lo, hi, n_bins + 1)
+    q = np.searchsorted(radii, targets)
+    edges = 0.5 * (radii[q - 1] + radii[q])
+    out = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        ring = Point(0, 0).buffer(b, quad_segs=2048).difference(Point(0, 0).buffer(a, quad_segs=2048))
+        area = ring.intersection(geom_platform).area
+        out.append(((rho >= a) & (rho < b)).sum() / area)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 20.0])
+def test_equalisation_uniform_over_3_to_1(tilt):
+    mesh = box_mesh((40.0, 10.0, 0.5))  # radii 20 .. 60 mm
+    res = {}
+    for eq in (False, True):
+        job = _job(mesh, tilt, inner_radius_mm=20.0, angle_deg=0.0, layer_height_mm=0.5, equalise=eq)
+        pr = job.layer(0)
+        x0, y0 = job.part.model_to_platform(np.array([0.0, 40.0]), np.array([0.0, 10.0]))
+        geom = box(x0[0], y0[0], x0[1], y0[1])
+        dens = _density_per_bin(job, pr, geom, 8)
+        res[eq] = dens.max() / dens.min() - 1.0
+        assert job.density_spread(equalised=eq) >= res[eq] - 0.01  # the manifest's figure is over every track
+    print(f"tilt {tilt}: density spread without {res[False]:.4f}, with {res[True]:.4f}")
+    assert res[False] > 1.0  # inner tracks much denser without
+    assert res[True] <= 0.05, res
+
+
+# ------------------------------------------------------------------------------------ the CLI
+
+
+def test_cli_rotary_then_simulate(run_cli, tmp_path, shared_meshes):
+    out = tmp_path / "layers"
+    code, _, err = run_cli("slice", shared_meshes / "half_donut_ascii.stl", "--device", "omnidot760", "--rotary", "--tilt", "20",
+                           "--radius", "40", "--angle", "30", "--layer-height", "0.5", "--out", out, "--reference-images", "-q")
+    assert code == 0, err
+    man = json.loads((out / "manifest.json").read_text())
+    assert man["format"] == "rotoprint-rotary-slice" and man["tilt_deg"] == 20.0
+    assert man["placement"]["inner_radius_mm"] == 40.0 and man["placement"]["angle_deg"] == 30.0
+    L = man["layers"][2]
+    img = L["images"][0]
+    assert {"head", "swathe", "file", "first_firing_index", "angle_per_firing_deg", "pivot_radius_mm", "sha256"} <= set(img)
+    assert (out / img["file"]).exists() and (out / L["sidecar"]).exists()
+    side = json.loads((out / L["sidecar"]).read_text())
+    assert side["format"] == "rotoprint-rotary-print" and side["method"] == "direct"
+    code, stdout, err = run_cli("simulate", out / img["file"], "--out", tmp_path / "ov.png", "--json")
+    assert code == 0, err
+    rep = json.loads(stdout)
+    assert rep["method"] == "direct" and rep["drops"] == img["drops"] > 50 and rep["mean_error_px"] < 0.75
+
+
+def test_cli_several_swathes_and_equalise(run_cli, tmp_path):
+    mesh_path = tmp_path / "wide.stl"
+    from rotoprint.testing import box_triangles
+
+    _write_stl(mesh_path, box_triangles((60.0, 8.0, 0.4)))
+    out = tmp_path / "o"
+    code, _, err = run_cli("slice", mesh_path, "--device", "omnidot760", "--rotary", "--tilt", "0", "--radius", "30",
+                           "--layer-height", "0.2", "--out", out, "--equalise")
+    assert code == 0, err
+    man = json.loads((out / "manifest.json").read_text())
+    assert len(man["swathes"]) == 2 and man["equalise"] is True
+    assert [i["file"] for i in man["layers"][0]["images"]] == ["layer_00000-s1.png", "layer_00000-s2.png"]
+    assert man["density_spread"]["with_equalisation"] < 0.05 < man["density_spread"]["without_equalisation"]
+    assert "spread" in err
+
+
+def _write_stl(path, tri):
+    import struct
+
+    with open(path, "wb") as fh:
+        fh.write(b"\0" * 80 + struct.pack("<I", len(tri)))
+        for t in tri:
+            fh.write(struct.pack("<12fH", 0, 0, 0, *t.ravel().tolist(), 0))
+
+
+@pytest.mark.parametrize(
+    "extra,pattern",
+    [
+        (["--rotary", "--radius", "40"], "--tilt"),
+        (["--rotary", "--tilt", "20", "--radius", "40", "--workers", "2"], "--workers"),
+        (["--rotary", "--tilt", "20", "--radius", "40", "--resume"], "--resume"),
+        (["--tilt", "20"], "need --rotary"),
+        (["--rotary", "--tilt", "86", "--radius", "40"], "maximum tilt"),
+        (["--rotary", "--tilt", "0", "--radius", "-3"], "radius"),
+        (["--rotary", "--tilt", "0", "--radius", "40", "--max-swathes", "0"], "max_swathes"),
+        (["--rotary", "--tilt", "0", "--radius", "40", "--device", "perfactory-sxga"], "projector"),
+    ],
+)
+def test_cli_bad_input_one_line_exit_2_nothing_written(run_cli, tmp_path, shared_meshes, extra, pattern):
+    out = tmp_path / "o"
+    dev = [] if "--device" in extra else ["--device", "omnidot760"]
+    code, _, err = run_cli("slice", shared_meshes / "half_donut_ascii.stl", *dev, "--layer-height", "0.5", "--out", out, *extra)
+    assert code == 2
+    assert pattern in err and len(err.strip().splitlines()) <= 2
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def test_part_placement_round_trip_and_validation():
+    pl = PartPlacement(50.0, 33.0, (-3.0, 1.0, 7.0, 5.0))
+    X, Y = np.array([-3.0, 7.0, 2.0]), np.array([3.0, 5.0, 1.0])
+    x, y = pl.model_to_platform(X, Y)
+    assert math.hypot(x[0], y[0]) == pytest.approx(50.0) and math.degrees(math.atan2(y[0], x[0])) == pytest.approx(33.0)
+    np.testing.assert_allclose(np.column_stack(pl.platform_to_model(x, y)), np.column_stack([X, Y]), atol=1e-12)
+    d = pl.design_placement(0.07, 0.07)
+    np.testing.assert_allclose(d.to_platform(np.array([0.0]), np.array([d.height_px / 2.0])), pl.model_to_platform(np.array([-3.0]), np.array([3.0])))
+    with pytest.raises(GeometryError):
+        PartPlacement(0.0, 0.0, (0, 0, 1, 1))
+    with pytest.raises(ConfigError):
+        slice_rotary(box_mesh(), load_device("perfactory-sxga"), layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0)
+    with pytest.raises(ConfigError):
+        slice_rotary(box_mesh(), DEV, layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0, kernel="cuda")
