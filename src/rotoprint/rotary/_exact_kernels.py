@@ -150,59 +150,257 @@ KERNELS = {
 }
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _index_nb(A, B, C, D, E, F, ks, cos_i, sin_i, width, height, idx_out, hit_out):  # pragma: no cover - jit
-    n_f = cos_i.shape[0]
-    n_k = idx_out.shape[1]
-    sentinel = width * height
-    for i in prange(n_f):
-        for k in range(n_k):
-            idx_out[i, k] = sentinel
-        c = cos_i[i]
-        s = sin_i[i]
-        hit = False
-        for q in range(ks.shape[0]):
-            k = ks[q]
-            u = A[k] * c + B[k] * s + C
-            v = D[k] * c + E[k] * s + F
-            if u >= 0.0 and v >= 0.0 and u < width and v < height:
-                idx_out[i, k] = int(v) * width + int(u)
-                hit = True
-        hit_out[i] = hit
+def index_dense_numpy(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height):
+    """Brute force over every firing and nozzle: ``(F, N)`` index map and per-firing hit flags.
 
-
-def index_numba(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height):
-    """Nearest-pixel index map ``(F, N) int32`` and per-firing hit flags ``(F,) bool``."""
-    n_f, n_k = cos_i.shape[0], A.shape[0]
-    idx = np.empty((n_f, n_k), np.int32)
-    hit = np.empty(n_f, np.bool_)
-    _index_nb(A, B, C, D, E, F, np.flatnonzero(enabled).astype(np.int64), cos_i, sin_i, width, height, idx, hit)
-    return idx, hit
-
-
-def index_numpy(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height):
+    The reference the windowed kernels are tested against (it evaluates every drop).
+    """
     _, _, idx = coords_numpy(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height)
     return idx, (idx != width * height).any(axis=1)
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _gather_nb(flat, lut, idx, out):  # pragma: no cover - jit
-    n_f, n_k = idx.shape
-    for i in prange(n_f):
-        for k in range(n_k):
-            out[i, k] = lut[flat[idx[i, k]]]
+# --- output-sensitive maps: per-track firing windows ---------------------------------------------
+#
+# Nozzle k draws a circle of radius r_k; its drops can land in the design only where that circle
+# crosses the design's rectangle, which is at most two arcs. `track_windows` finds those arcs
+# analytically (with a safety margin) as firing windows; the index kernels evaluate the exact
+# landing formula (the same float operations as `coords_numpy`) only inside them; every other
+# nozzle-firing is "no drop" without being computed. Work scales with the design's size.
 
 
-def gather_numba(flat, lut, idx):
-    """``out[i, k] = lut[flat[idx[i, k]]]``, ``(F, N) uint8``; ``flat`` ends with a 0 sentinel."""
-    out = np.empty(idx.shape, np.uint8)
-    _gather_nb(flat, lut, idx, out)
+def index_dtype(width, height):
+    return np.int32 if width * height < 2**31 - 1 else np.int64
+
+
+@njit(cache=True, nogil=True)
+def _track_windows_nb(r, phi, enabled, direction, angle_rad, x0_mm, x1_mm, yh_mm, dphi, i0, i1, margin, wk, wlo, whi):  # pragma: no cover - jit
+    e = 1e-6
+    x0 = x0_mm - e
+    x1 = x1_mm + e
+    yh = yh_mm + e
+    m = margin * dphi
+    n = 0
+    for k in range(r.shape[0]):
+        rk = r[k]
+        if not enabled[k] or rk < x0 or rk <= 0.0:
+            continue
+        hi = min(math.acos(min(max(x0 / rk, -1.0), 1.0)), math.asin(min(max(yh / rk, -1.0), 1.0)))
+        lo = math.acos(min(max(x1 / rk, -1.0), 1.0))
+        if lo > hi:
+            continue
+        lo -= m
+        hi += m
+        base = phi[k] - angle_rad
+        # local angle alpha = phi_k - direction * i * dphi - angle  <=>  i = direction * (phi_k - angle - alpha) / dphi
+        n0 = n
+        for arc in range(2):
+            if lo > 0.0:  # two arcs, below and above the design's axis
+                a1, a2 = (-hi, -lo) if arc == 0 else (lo, hi)
+            elif arc == 0:
+                a1, a2 = -hi, hi
+            else:
+                break
+            ia = direction * (base - a2) / dphi
+            ib = direction * (base - a1) / dphi
+            f_lo = min(max(math.floor(min(ia, ib)) - margin, i0), i1 + 1)
+            f_hi = min(max(math.ceil(max(ia, ib)) + margin + 1, i0), i1 + 1)
+            if f_hi > f_lo:
+                wk[n] = k
+                wlo[n] = int(f_lo) - i0
+                whi[n] = int(f_hi) - i0
+                n += 1
+        if n - n0 == 2 and wlo[n0] > wlo[n0 + 1]:  # in firing order
+            wlo[n0], wlo[n0 + 1] = wlo[n0 + 1], wlo[n0]
+            whi[n0], whi[n0 + 1] = whi[n0 + 1], whi[n0]
+    return n
+
+
+def track_windows(r, phi, enabled, direction, angle_rad, x0_mm, x1_mm, yh_mm, dphi, i0, i1, margin=2):
+    """Firing windows ``(k, lo, hi)`` per track, as offsets from firing ``i0`` (``hi`` exclusive).
+
+    Outside its windows no drop of nozzle ``k`` can land in the rectangle
+    ``x0 <= xl <= x1, |yl| <= yh`` (mm) of the design frame, which is the platform frame turned
+    by ``angle_rad``. A circle of radius ``r`` meets the rectangle (``x0 > 0``) where
+    ``acos(min(1, x1/r)) <= |alpha| <= min(acos(x0/r), asin(min(1, yh/r)))``: one arc, or two
+    when ``r > x1``. The windows are conservative (rectangle grown by 1 nm, arcs by ``margin``
+    firings) and clipped to ``[i0, i1]``; the exact test is done per drop by the index kernels.
+    Returns three ``int64`` arrays sorted by nozzle then firing. Shared by both kernels.
+
+    Nozzle 0 at 1 mm never reaches the design; nozzle 1 at 50 mm crosses it in one arc; a track
+    at 62 mm, beyond the design's outer edge (60 mm), crosses only its two corners:
+
+    >>> k, lo, hi = track_windows(np.array([1.0, 50.0]), np.zeros(2), np.ones(2, bool), 1, 0.0, 10.0, 60.0, 5.0, 0.01, -20, 20)
+    >>> k.tolist(), lo.tolist(), hi.tolist()
+    ([1], [5], [36])
+    >>> k, lo, hi = track_windows(np.array([62.0]), np.zeros(1), np.ones(1, bool), 1, 0.0, 10.0, 60.0, 20.0, 0.01, -50, 50)
+    >>> k.tolist(), lo.tolist(), hi.tolist()
+    ([0, 0], [13, 71], [30, 88])
+    """
+    r = np.ascontiguousarray(r, np.float64)
+    nmax = 2 * r.shape[0]
+    wk = np.empty(nmax, np.int64)
+    wlo = np.empty(nmax, np.int64)
+    whi = np.empty(nmax, np.int64)
+    n = _track_windows_nb(r, np.ascontiguousarray(phi, np.float64), np.ascontiguousarray(enabled, np.bool_), float(direction),
+                          float(angle_rad), float(x0_mm), float(x1_mm), float(yh_mm), float(dphi), int(i0), int(i1), int(margin),
+                          wk, wlo, whi)
+    return wk[:n], wlo[:n], whi[:n]
+
+
+def _window_offsets(wlo, whi):
+    n = whi - wlo
+    off = np.zeros(n.shape[0], np.int64)
+    if n.shape[0] > 1:
+        np.cumsum(n[:-1], out=off[1:])
+    return n, off
+
+
+@njit(cache=True, nogil=True)
+def _windows_index_nb(A, B, C, D, E, F, wk, wlo, whi, off, cos_i, sin_i, width, height, idx_out, first, last):  # pragma: no cover - jit
+    # Single-threaded on purpose: the inner loop vectorises (SIMD), and no OpenMP runtime is
+    # involved (numba's OpenMP threads slowed ~6x when cv2 was loaded in the same process).
+    sentinel = width * height
+    for q in range(wk.shape[0]):
+        k = wk[q]
+        a = A[k]
+        b = B[k]
+        d = D[k]
+        e = E[k]
+        lo = wlo[q]
+        n = whi[q] - lo
+        cs = cos_i[lo:lo + n]  # slices: zero-based loop, no negative-index checks, so it vectorises
+        ss = sin_i[lo:lo + n]
+        dst = idx_out[off[q]:off[q] + n]
+        for t in range(n):
+            c = cs[t]
+            s = ss[t]
+            u = a * c + b * s + C
+            v = d * c + e * s + F
+            ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
+            dst[t] = (np.int64(v) * width + np.int64(u)) if ok else sentinel
+        f = 0
+        while f < n and dst[f] == sentinel:
+            f += 1
+        l = n
+        while l > f and dst[l - 1] == sentinel:
+            l -= 1
+        first[q] = lo + f
+        last[q] = lo + l
+
+
+def windows_index_numba(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height):
+    """Design pixel index of every drop inside the windows, packed window after window.
+
+    Returns ``(idx, off, first, last)``: window ``q`` (firings ``wlo[q]..whi[q]-1``, offsets
+    into ``cos_i``) is ``idx[off[q]:off[q] + whi[q] - wlo[q]]``; its drops that land in the design
+    lie in firings ``[first[q], last[q])`` (``first == last`` when none does). Misses hold
+    ``width * height``.
+    """
+    n, off = _window_offsets(wlo, whi)
+    idx = np.empty(int(n.sum()), index_dtype(width, height))
+    first = np.empty(wk.shape[0], np.int64)
+    last = np.empty(wk.shape[0], np.int64)
+    _windows_index_nb(A, B, C, D, E, F, wk, wlo, whi, off, cos_i, sin_i, width, height, idx, first, last)
+    return idx, off, first, last
+
+
+def windows_index_numpy(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height):
+    n, off = _window_offsets(wlo, whi)
+    m = int(n.sum())
+    q = np.repeat(np.arange(wk.shape[0]), n)
+    t = np.arange(m) - off[q]
+    i = wlo[q] + t
+    k = wk[q]
+    c = cos_i[i]
+    s = sin_i[i]
+    u = A[k] * c + B[k] * s + C
+    v = D[k] * c + E[k] * s + F
+    ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
+    idx = np.where(ok, np.floor(v) * width + np.floor(u), width * height).astype(index_dtype(width, height))
+    if m:
+        f = np.minimum.reduceat(np.where(ok, t, m), off)
+        l = np.maximum.reduceat(np.where(ok, t + 1, 0), off)
+    else:
+        f = l = np.zeros(0, np.int64)
+    f = np.minimum(f, n)
+    l = np.maximum(l, f)
+    return idx, off, wlo + f, wlo + l
+
+
+@njit(cache=True, nogil=True)
+def _windows_gather_nb(flat, nozzle, row, count, start, idx, out, tile):  # pragma: no cover - jit
+    # Tiles of `tile` firing rows: the (tile, N) block of the output stays in L1 while every
+    # window writes its column piece into it (a column walk over all rows would miss L1 each write).
+    n_rows = out.shape[0]
+    for r0 in range(0, n_rows, tile):
+        r1 = min(r0 + tile, n_rows)
+        for q in range(nozzle.shape[0]):
+            a = max(row[q], r0)
+            b = min(row[q] + count[q], r1)
+            if b <= a:
+                continue
+            s = idx[start[q] + a - row[q]:start[q] + b - row[q]]
+            col = out[a:b, nozzle[q]]
+            for t in range(b - a):
+                col[t] = flat[s[t]]
+
+
+GATHER_TILE = 64
+
+
+def windows_gather_numba(flat, nozzle, row, count, start, idx, out):
+    """``out[row[q] + t, nozzle[q]] = flat[idx[start[q] + t]]`` for ``t < count[q]``.
+
+    ``out`` is a zeroed ``(F, N) uint8``; ``flat`` holds the drop level of every design pixel
+    and ends with a 0 sentinel (index ``width * height``).
+    """
+    _windows_gather_nb(flat, nozzle, row, count, start, idx, out, GATHER_TILE)
     return out
 
 
-def gather_numpy(flat, lut, idx):
-    return lut[flat[idx]]
+def windows_gather_numpy(flat, nozzle, row, count, start, idx, out):
+    q = np.repeat(np.arange(nozzle.shape[0]), count)
+    t = np.arange(q.shape[0]) - np.repeat(np.cumsum(count) - count, count)
+    out[row[q] + t, nozzle[q]] = flat[idx[start[q] + t]]
+    return out
 
 
-INDEX = {"numba": index_numba, "numpy": index_numpy}
-GATHER = {"numba": gather_numba, "numpy": gather_numpy}
+@njit(cache=True, nogil=True)
+def _binary_levels_nb(src, level, dst):  # pragma: no cover - jit
+    n = src.shape[0]
+    v0 = np.uint8(0)
+    for i in range(n):  # first non-zero value (early exit)
+        if src[i] != 0:
+            v0 = src[i]
+            break
+    other = 0
+    for i in range(n):  # vectorises
+        x = src[i]
+        dst[i] = level if x != 0 else np.uint8(0)
+        other += (x != 0) & (x != v0)
+    dst[n] = 0
+    return other == 0
+
+
+def binary_levels_numba(design, level):
+    """``(flat, is_binary)``: ``level`` where the design is non-zero, else 0, plus a 0 sentinel.
+
+    ``is_binary``: the design holds at most one non-zero value (``design_kind`` = "binary").
+    """
+    src = np.ascontiguousarray(design).ravel()
+    flat = np.empty(src.shape[0] + 1, np.uint8)
+    ok = _binary_levels_nb(src, np.uint8(level), flat)
+    return flat, bool(ok)
+
+
+def binary_levels_numpy(design, level):
+    src = np.asarray(design).ravel()
+    nz = src != 0
+    flat = np.concatenate([np.where(nz, np.uint8(level), np.uint8(0)), np.zeros(1, np.uint8)])
+    m = src.max() if src.size else 0
+    return flat, not bool(np.any(nz & (src != m)))
+
+
+WINDOWS_INDEX = {"numba": windows_index_numba, "numpy": windows_index_numpy}
+WINDOWS_GATHER = {"numba": windows_gather_numba, "numpy": windows_gather_numpy}
+BINARY_LEVELS = {"numba": binary_levels_numba, "numpy": binary_levels_numpy}
