@@ -367,19 +367,17 @@ def windows_gather_numpy(flat, nozzle, row, count, start, idx, out):
 
 @njit(cache=True, nogil=True)
 def _binary_levels_nb(src, level, dst):  # pragma: no cover - jit
+    # one vectorised pass: levels, and the largest and the smallest non-zero value
     n = src.shape[0]
-    v0 = np.uint8(0)
-    for i in range(n):  # first non-zero value (early exit)
-        if src[i] != 0:
-            v0 = src[i]
-            break
-    other = 0
-    for i in range(n):  # vectorises
+    hi = np.uint8(0)
+    lo = np.uint8(255)
+    for i in range(n):
         x = src[i]
         dst[i] = level if x != 0 else np.uint8(0)
-        other += (x != 0) & (x != v0)
+        hi = max(hi, x)
+        lo = min(lo, x if x != 0 else np.uint8(255))
     dst[n] = 0
-    return other == 0
+    return hi == 0 or lo == hi
 
 
 def binary_levels_numba(design, level):

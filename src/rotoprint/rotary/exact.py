@@ -265,15 +265,18 @@ def exact_maps(
     width, height = placement.width_px, placement.height_px
     # the design's rectangle in its own frame (mm): x0 <= xl <= x1, |yl| <= yh
     x0, x1, yh = placement.inner_radius_mm, placement.inner_radius_mm + placement.width_mm, placement.height_mm / 2.0
-    maps = []
+    setup = []
     for j, sw in enumerate(plan.swathes):
         mount = plan.mount(j)
         lay = nozzle_layout(head, mount)
         dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
+        i0, i1 = firing_range(lay.phi_rad[sw.enabled], a_lo, a_hi, dphi, direction)
+        setup.append((sw, mount, lay, dphi, r_ref, i0, i1))
+    # at most the whole firing range of every swathe (dense index for grey designs: 12 bytes each)
+    check_raster_fits(head.nozzles, sum(i1 - i0 + 1 for *_, i0, i1 in setup), 12, what="exact maps")
+    maps = []
+    for sw, mount, lay, dphi, r_ref, i0, i1 in setup:
         en = sw.enabled
-        i0, i1 = firing_range(lay.phi_rad[en], a_lo, a_hi, dphi, direction)
-        n_f = i1 - i0 + 1
-        check_raster_fits(head.nozzles, n_f, 12, what=f"exact map of swathe {j}")
         ii = np.arange(i0, i1 + 1, dtype=np.float64) * dphi
         A, B, C, D, E, F = _k.coefficients(
             lay.r_mm, lay.phi_rad, direction, angle,
