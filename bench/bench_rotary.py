@@ -131,8 +131,9 @@ def run(quick: bool = False) -> list[dict]:
     return [
         row("rotoprint exact, cold: plan + maps built + applied", t_cold,
             f"{len(pr.swathes)} swathes, {samples:,} nozzle-firings, {looked_up:,} looked up; single-threaded numba"),
-        row("rotoprint exact, cached maps (next layer)", t_cached, "transform_exact with the maps in its cache: one gather per swathe"),
-        row("rotoprint exact, maps only (exact_maps)", t_maps, "swathe plan + per-track windows + index; part of the cold row"),
+        row("rotoprint exact, cached maps (next layer)", t_cached, "transform_exact, maps in its cache: one gather per swathe"),
+        row("rotoprint exact, maps only (exact_maps)", t_maps,
+            "swathe plan + per-track windows with exact ends; the index is filled by the first gather (cold row)"),
         row("rotoprint exact, cold, cv2 loaded", t_cold2, "same, measured after the OpenCV rows"),
         row("rotoprint exact, cached, cv2 loaded", t_cached2, "same"),
         row("rotoprint exact, numpy kernel, cold", t_np, "same maps and output, no jit"),

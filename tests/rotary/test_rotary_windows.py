@@ -7,8 +7,6 @@ design is left outside them, and that the gather gives the same print as a dense
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
@@ -120,10 +118,32 @@ def test_binary_levels_agree_with_design_kind(values, binary):
         np.testing.assert_array_equal(flat, np.concatenate([np.where(d.ravel() != 0, 3, 0), [0]]).astype(np.uint8))
 
 
+def test_first_layer_fused_equals_later_layers():
+    # the first gather fills the index in the same pass; later ones read it; a map whose index is
+    # filled on its own (no gather) holds the same index
+    pl = Placement(300, 260, 25.4 / 360, 25.4 / 360, inner_radius_mm=30.0, angle_deg=10.0)
+    d = make_design(300)[:260].copy()
+    for kernel in ("numba", "numpy"):
+        exact_maps.cache_clear()
+        m = exact_maps(HEAD, pl, tilt_deg=45.0, kernel=kernel)
+        first = m.apply(d)
+        second = m.apply(d)
+        exact_maps.cache_clear()
+        fresh = exact_maps(HEAD, pl, tilt_deg=45.0, kernel=kernel)
+        for a, b, sm, sf in zip(first.swathes, second.swathes, m.swathes, fresh.swathes):
+            np.testing.assert_array_equal(a.levels, b.levels)
+            np.testing.assert_array_equal(sm.windows.flat_index, sf.windows.flat_index)
+            np.testing.assert_array_equal(sm.index, sf.index)
+
+
 def test_index_kernel_int64_path():
-    # designs of 2**31 pixels or more need int64 indices; run the kernel on a tiny window with such a size
-    A = np.array([1.0]); B = np.array([0.0]); D = np.array([1.0]); E = np.array([0.0])
+    # designs of 2**31 pixels or more need int64 indices; run the kernel on a one-drop window of such a size
+    coef = (np.array([1.0]), np.array([0.0]), 0.0, np.array([1.0]), np.array([0.0]), 0.0)
     w = h = 50_000
-    idx, off, first, last = K.windows_index_numba(A, B, 0.0, D, E, 0.0, np.array([0]), np.array([0]), np.array([1]),
-                                                  np.array([40_000.5]), np.array([0.0]), w, h)
-    assert idx.dtype == np.int64 and idx[0] == 40_000 * w + 40_000 and math.isclose(first[0], 0) and last[0] == 1
+    assert K.index_dtype(w, h) == np.int64
+    one = np.array([0])
+    idx = np.empty(1, np.int64)
+    K.windows_fill_numba(coef, one, one, np.array([1]), one, np.array([40_000.5]), np.array([0.0]), w, h, idx)
+    assert idx[0] == 40_000 * w + 40_000
+    first, last = K.window_bounds_numba(*coef, one, one, np.array([1]), np.array([40_000.5]), np.array([0.0]), w, h)
+    assert first[0] == 0 and last[0] == 1

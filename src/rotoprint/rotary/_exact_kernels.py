@@ -247,84 +247,117 @@ def track_windows(r, phi, enabled, direction, angle_rad, x0_mm, x1_mm, yh_mm, dp
     return wk[:n], wlo[:n], whi[:n]
 
 
-def _window_offsets(wlo, whi):
+@njit(cache=True, nogil=True, inline="always")
+def _landing_index(a, b, d, e, C, F, c, s, width, height):  # pragma: no cover - jit
+    # the same float operations as coords_numpy: col = A c + B s + C, row = D c + E s + F
+    u = a * c + b * s + C
+    v = d * c + e * s + F
+    ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
+    return (np.int64(v) * width + np.int64(u)) if ok else width * height
+
+
+@njit(cache=True, nogil=True)
+def _window_bounds_nb(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height, first, last):  # pragma: no cover - jit
+    sentinel = width * height
+    for q in range(wk.shape[0]):
+        k = wk[q]
+        f = wlo[q]
+        while f < whi[q] and _landing_index(A[k], B[k], D[k], E[k], C, F, cos_i[f], sin_i[f], width, height) == sentinel:
+            f += 1
+        l = whi[q]
+        while l > f and _landing_index(A[k], B[k], D[k], E[k], C, F, cos_i[l - 1], sin_i[l - 1], width, height) == sentinel:
+            l -= 1
+        first[q] = f
+        last[q] = l
+
+
+def window_bounds_numba(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height):
+    """First and last+1 firing (offsets into ``cos_i``) of each window whose drop lands in the design.
+
+    Scans inwards from both ends of each window (a few drops each: the windows are tight).
+    ``first == last`` when no drop of the window lands in the design.
+    """
+    first = np.empty(wk.shape[0], np.int64)
+    last = np.empty(wk.shape[0], np.int64)
+    _window_bounds_nb(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height, first, last)
+    return first, last
+
+
+def window_bounds_numpy(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height):
     n = whi - wlo
     off = np.zeros(n.shape[0], np.int64)
     if n.shape[0] > 1:
         np.cumsum(n[:-1], out=off[1:])
-    return n, off
+    m = int(n.sum())
+    if not m:
+        return wlo.copy(), wlo.copy()
+    q = np.repeat(np.arange(wk.shape[0]), n)
+    t = np.arange(m) - off[q]
+    i = wlo[q] + t
+    ok = _pointwise_index_numpy(A, B, C, D, E, F, wk[q], cos_i[i], sin_i[i], width, height) != width * height
+    f = np.minimum(np.minimum.reduceat(np.where(ok, t, m), off), n)
+    l = np.maximum(np.maximum.reduceat(np.where(ok, t + 1, 0), off), f)
+    return wlo + f, wlo + l
+
+
+def _pointwise_index_numpy(A, B, C, D, E, F, k, c, s, width, height):
+    """Flat index (``width * height`` = outside) of drops given per drop: nozzle ``k``, cos, sin."""
+    u = A[k] * c + B[k] * s + C
+    v = D[k] * c + E[k] * s + F
+    ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
+    return np.where(ok, np.floor(v) * width + np.floor(u), width * height).astype(index_dtype(width, height))
+
+
+def _window_drops(nozzle, row, count):
+    """Per drop of the packed windows: nozzle and print row."""
+    q = np.repeat(np.arange(nozzle.shape[0]), count)
+    t = np.arange(q.shape[0]) - np.repeat(np.cumsum(count) - count, count)
+    return nozzle[q], row[q] + t
 
 
 @njit(cache=True, nogil=True)
-def _windows_index_nb(A, B, C, D, E, F, wk, wlo, whi, off, cos_i, sin_i, width, height, idx_out, first, last):  # pragma: no cover - jit
+def _windows_fill_nb(A, B, C, D, E, F, nozzle, row, count, start, cos_r, sin_r, width, height, idx):  # pragma: no cover - jit
     # Single-threaded on purpose: the inner loop vectorises (SIMD), and no OpenMP runtime is
     # involved (numba's OpenMP threads slowed ~6x when cv2 was loaded in the same process).
-    sentinel = width * height
-    for q in range(wk.shape[0]):
-        k = wk[q]
+    for q in range(nozzle.shape[0]):
+        k = nozzle[q]
         a = A[k]
         b = B[k]
         d = D[k]
         e = E[k]
-        lo = wlo[q]
-        n = whi[q] - lo
-        cs = cos_i[lo:lo + n]  # slices: zero-based loop, no negative-index checks, so it vectorises
-        ss = sin_i[lo:lo + n]
-        dst = idx_out[off[q]:off[q] + n]
+        r0 = row[q]
+        n = count[q]
+        cs = cos_r[r0:r0 + n]  # slices: zero-based loop, no negative-index checks, so it vectorises
+        ss = sin_r[r0:r0 + n]
+        dst = idx[start[q]:start[q] + n]
         for t in range(n):
-            c = cs[t]
-            s = ss[t]
-            u = a * c + b * s + C
-            v = d * c + e * s + F
-            ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
-            dst[t] = (np.int64(v) * width + np.int64(u)) if ok else sentinel
-        f = 0
-        while f < n and dst[f] == sentinel:
-            f += 1
-        l = n
-        while l > f and dst[l - 1] == sentinel:
-            l -= 1
-        first[q] = lo + f
-        last[q] = lo + l
+            dst[t] = _landing_index(a, b, d, e, C, F, cs[t], ss[t], width, height)
 
 
-def windows_index_numba(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height):
-    """Design pixel index of every drop inside the windows, packed window after window.
-
-    Returns ``(idx, off, first, last)``: window ``q`` (firings ``wlo[q]..whi[q]-1``, offsets
-    into ``cos_i``) is ``idx[off[q]:off[q] + whi[q] - wlo[q]]``; its drops that land in the design
-    lie in firings ``[first[q], last[q])`` (``first == last`` when none does). Misses hold
-    ``width * height``.
-    """
-    n, off = _window_offsets(wlo, whi)
-    idx = np.empty(int(n.sum()), index_dtype(width, height))
-    first = np.empty(wk.shape[0], np.int64)
-    last = np.empty(wk.shape[0], np.int64)
-    _windows_index_nb(A, B, C, D, E, F, wk, wlo, whi, off, cos_i, sin_i, width, height, idx, first, last)
-    return idx, off, first, last
-
-
-def windows_index_numpy(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height):
-    n, off = _window_offsets(wlo, whi)
-    m = int(n.sum())
-    q = np.repeat(np.arange(wk.shape[0]), n)
-    t = np.arange(m) - off[q]
-    i = wlo[q] + t
-    k = wk[q]
-    c = cos_i[i]
-    s = sin_i[i]
-    u = A[k] * c + B[k] * s + C
-    v = D[k] * c + E[k] * s + F
-    ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
-    idx = np.where(ok, np.floor(v) * width + np.floor(u), width * height).astype(index_dtype(width, height))
-    if m:
-        f = np.minimum.reduceat(np.where(ok, t, m), off)
-        l = np.maximum.reduceat(np.where(ok, t + 1, 0), off)
-    else:
-        f = l = np.zeros(0, np.int64)
-    f = np.minimum(f, n)
-    l = np.maximum(l, f)
-    return idx, off, wlo + f, wlo + l
+@njit(cache=True, nogil=True)
+def _windows_fill_gather_nb(A, B, C, D, E, F, nozzle, row, count, start, cos_r, sin_r, width, height, idx, flat, out, tile):  # pragma: no cover - jit
+    # The first layer: fill the index and gather from it while it is in L1, tile by tile.
+    n_rows = out.shape[0]
+    for r0 in range(0, n_rows, tile):
+        r1 = min(r0 + tile, n_rows)
+        for q in range(nozzle.shape[0]):
+            lo = max(row[q], r0)
+            hi = min(row[q] + count[q], r1)
+            if hi <= lo:
+                continue
+            k = nozzle[q]
+            a = A[k]
+            b = B[k]
+            d = D[k]
+            e = E[k]
+            cs = cos_r[lo:hi]
+            ss = sin_r[lo:hi]
+            dst = idx[start[q] + lo - row[q]:start[q] + hi - row[q]]
+            for t in range(hi - lo):
+                dst[t] = _landing_index(a, b, d, e, C, F, cs[t], ss[t], width, height)
+            col = out[lo:hi, k]
+            for t in range(hi - lo):
+                col[t] = flat[dst[t]]
 
 
 @njit(cache=True, nogil=True)
@@ -335,17 +368,28 @@ def _windows_gather_nb(flat, nozzle, row, count, start, idx, out, tile):  # prag
     for r0 in range(0, n_rows, tile):
         r1 = min(r0 + tile, n_rows)
         for q in range(nozzle.shape[0]):
-            a = max(row[q], r0)
-            b = min(row[q] + count[q], r1)
-            if b <= a:
+            lo = max(row[q], r0)
+            hi = min(row[q] + count[q], r1)
+            if hi <= lo:
                 continue
-            s = idx[start[q] + a - row[q]:start[q] + b - row[q]]
-            col = out[a:b, nozzle[q]]
-            for t in range(b - a):
+            s = idx[start[q] + lo - row[q]:start[q] + hi - row[q]]
+            col = out[lo:hi, nozzle[q]]
+            for t in range(hi - lo):
                 col[t] = flat[s[t]]
 
 
 GATHER_TILE = 64
+
+
+def windows_fill_numba(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx):
+    """``idx[start[q] + t]`` = design pixel of the drop of nozzle ``nozzle[q]`` at print row ``row[q] + t``."""
+    _windows_fill_nb(*coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx)
+
+
+def windows_fill_numpy(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx):
+    A, B, C, D, E, F = coef
+    k, r = _window_drops(nozzle, row, count)
+    idx[:] = _pointwise_index_numpy(A, B, C, D, E, F, k, cos_r[r], sin_r[r], width, height)
 
 
 def windows_gather_numba(flat, nozzle, row, count, start, idx, out):
@@ -359,10 +403,20 @@ def windows_gather_numba(flat, nozzle, row, count, start, idx, out):
 
 
 def windows_gather_numpy(flat, nozzle, row, count, start, idx, out):
-    q = np.repeat(np.arange(nozzle.shape[0]), count)
-    t = np.arange(q.shape[0]) - np.repeat(np.cumsum(count) - count, count)
-    out[row[q] + t, nozzle[q]] = flat[idx[start[q] + t]]
+    k, r = _window_drops(nozzle, row, count)
+    out[r, k] = flat[idx]
     return out
+
+
+def windows_fill_gather_numba(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx, flat, out):
+    """:func:`windows_fill_numba` and :func:`windows_gather_numba` in one pass (the first layer)."""
+    _windows_fill_gather_nb(*coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx, flat, out, GATHER_TILE)
+    return out
+
+
+def windows_fill_gather_numpy(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx, flat, out):
+    windows_fill_numpy(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx)
+    return windows_gather_numpy(flat, nozzle, row, count, start, idx, out)
 
 
 @njit(cache=True, nogil=True)
@@ -399,6 +453,8 @@ def binary_levels_numpy(design, level):
     return flat, not bool(np.any(nz & (src != m)))
 
 
-WINDOWS_INDEX = {"numba": windows_index_numba, "numpy": windows_index_numpy}
+WINDOW_BOUNDS = {"numba": window_bounds_numba, "numpy": window_bounds_numpy}
+WINDOWS_FILL = {"numba": windows_fill_numba, "numpy": windows_fill_numpy}
 WINDOWS_GATHER = {"numba": windows_gather_numba, "numpy": windows_gather_numpy}
+WINDOWS_FILL_GATHER = {"numba": windows_fill_gather_numba, "numpy": windows_fill_gather_numpy}
 BINARY_LEVELS = {"numba": binary_levels_numba, "numpy": binary_levels_numpy}

@@ -13,7 +13,8 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from dataclasses import dataclass
+import threading
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -60,25 +61,65 @@ class TrackWindows:
     design pixels ``flat_index[start[q] : start[q] + count[q]]`` (flat ``row * width + col``;
     ``width * height`` = no drop, rare inside a window). Every other nozzle-firing of the print
     image is "no drop". A track has at most two windows (where its circle crosses the design).
+
+    The windows' ends are exact (first and last drop in the design). ``flat_index`` is filled on
+    first use: by the first :meth:`gather`, in the same pass as that gather (the first layer
+    costs one pass, not two), or on first access.
     """
 
     nozzle: np.ndarray
     row: np.ndarray
     count: np.ndarray
     start: np.ndarray
-    flat_index: np.ndarray
+    coefficients: tuple
+    cos_row: np.ndarray
+    sin_row: np.ndarray
+    width: int
+    height: int
+    kernel: str
+    _index: np.ndarray = field(repr=False)
+    _filled: list = field(default_factory=lambda: [False], repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     @property
     def n_drops(self) -> int:
         """Nozzle-firings that are looked up in the design (the per-layer work)."""
         return int(self.count.sum())
 
+    @property
+    def flat_index(self) -> np.ndarray:
+        self._fill()
+        return self._index
+
+    def _args(self) -> tuple:
+        return (self.coefficients, self.nozzle, self.row, self.count, self.start, self.cos_row, self.sin_row, self.width, self.height, self._index)
+
+    def _fill(self, flat: np.ndarray | None = None, out: np.ndarray | None = None) -> bool:
+        """Fill the index once; given ``flat`` and ``out``, gather in the same pass. True if it gathered."""
+        if self._filled[0]:
+            return False
+        with self._lock:
+            if self._filled[0]:
+                return False
+            if flat is None:
+                _k.WINDOWS_FILL[self.kernel](*self._args())
+            else:
+                _k.WINDOWS_FILL_GATHER[self.kernel](*self._args(), flat, out)
+            self._filled[0] = True
+            return flat is not None
+
+    def gather(self, flat: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``out[row + t, nozzle] = flat[flat_index[start + t]]`` for every window; ``out`` zeroed ``(F, N) uint8``."""
+        if not self._fill(flat, out):
+            _k.WINDOWS_GATHER[self.kernel](flat, self.nozzle, self.row, self.count, self.start, self._index, out)
+        return out
+
     def dense(self, n_firings: int, n_nozzles: int, sentinel: int) -> np.ndarray:
         """The ``(F, N)`` index map, ``sentinel`` where no drop lands in the design."""
-        out = np.full((n_firings, n_nozzles), sentinel, self.flat_index.dtype)
-        q = np.repeat(np.arange(self.nozzle.shape[0]), self.count)
-        t = np.arange(q.shape[0]) - np.repeat(np.cumsum(self.count) - self.count, self.count)
-        out[self.row[q] + t, self.nozzle[q]] = self.flat_index[self.start[q] + t]
+        idx = self.flat_index
+        out = np.full((n_firings, n_nozzles), sentinel, idx.dtype)
+        k, r = _k._window_drops(self.nozzle, self.row, self.count)
+        out[r, k] = idx
         return out
 
 
@@ -153,9 +194,7 @@ class ExactMaps:
         out = []
         for j, sm in enumerate(self.swathes):
             if kind == "binary":
-                w = sm.windows
-                lev = np.zeros((sm.n_firings, sm.layout.r_mm.shape[0]), np.uint8)
-                _k.WINDOWS_GATHER[self.kernel](flat, w.nozzle, w.row, w.count, w.start, w.flat_index, lev)
+                lev = sm.windows.gather(flat, np.zeros((sm.n_firings, sm.layout.r_mm.shape[0]), np.uint8))
             else:
                 col, row = sm.coords(self.placement)
                 lev = design_levels(bilinear(design, col, row, sm.index), self.head.grey_levels, kind=kind)
@@ -282,21 +321,33 @@ def exact_maps(
             lay.r_mm, lay.phi_rad, direction, angle,
             placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm, placement.height_px,
         )
-        # only where each track crosses the design (analytic, conservative), then the exact test per drop
+        # only where each track crosses the design (analytic, conservative), trimmed to its first
+        # and last drop in the design by the exact test; the index itself is filled on first use
         wk, wlo, whi = _k.track_windows(lay.r_mm, lay.phi_rad, en, direction, angle, x0, x1, yh, dphi, i0, i1)
-        idx, off, first, last = _k.WINDOWS_INDEX[kernel](A, B, C, D, E, F, wk, wlo, whi, np.cos(ii), np.sin(ii), width, height)
+        cos_i, sin_i = np.cos(ii), np.sin(ii)
+        first, last = _k.WINDOW_BOUNDS[kernel](A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height)
         has = last > first
         if has.any():
             b0 = int(first[has].min())
             b1 = int(last[has].max())
         else:  # this swathe sees nothing of the design: keep one empty firing
             b0, b1 = 0, 1
+        count = (last - first)[has]
+        start = np.zeros(count.shape[0], np.int64)
+        if count.shape[0] > 1:
+            np.cumsum(count[:-1], out=start[1:])
         windows = TrackWindows(
             nozzle=wk[has],
             row=first[has] - b0,
-            count=last[has] - first[has],
-            start=(off + first - wlo)[has],
-            flat_index=idx,
+            count=count,
+            start=start,
+            coefficients=(A, B, C, D, E, F),
+            cos_row=cos_i[b0:b1].copy(),
+            sin_row=sin_i[b0:b1].copy(),
+            width=width,
+            height=height,
+            kernel=kernel,
+            _index=np.empty(int(count.sum()), _k.index_dtype(width, height)),
         )
         maps.append(
             SwatheMap(
