@@ -147,3 +147,14 @@ def test_index_kernel_int64_path():
     assert idx[0] == 40_000 * w + 40_000
     first, last = K.window_bounds_numba(*coef, one, one, np.array([1]), np.array([40_000.5]), np.array([0.0]), w, h)
     assert first[0] == 0 and last[0] == 1
+
+
+def test_track_windows_never_overlap():
+    # tracks just beyond the outer edge: two arcs close together, merged when their margins meet
+    r = 60.0 + np.linspace(0.0, 0.05, 200)
+    for direction in (1, -1):
+        wk, wlo, whi = K.track_windows(r, np.zeros(r.size), np.ones(r.size, bool), direction, 0.0, 10.0, 60.0, 20.0, 0.001, -2000, 2000)
+        for k in np.unique(wk):
+            lo, hi = wlo[wk == k], whi[wk == k]
+            assert np.all(lo[1:] >= hi[:-1])
+        assert np.bincount(wk).max() == 2 and np.bincount(wk).min() == 1  # both cases occur

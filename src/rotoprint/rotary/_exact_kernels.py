@@ -209,9 +209,13 @@ def _track_windows_nb(r, phi, enabled, direction, angle_rad, x0_mm, x1_mm, yh_mm
                 wlo[n] = int(f_lo) - i0
                 whi[n] = int(f_hi) - i0
                 n += 1
-        if n - n0 == 2 and wlo[n0] > wlo[n0 + 1]:  # in firing order
-            wlo[n0], wlo[n0 + 1] = wlo[n0 + 1], wlo[n0]
-            whi[n0], whi[n0 + 1] = whi[n0 + 1], whi[n0]
+        if n - n0 == 2:
+            if wlo[n0] > wlo[n0 + 1]:  # in firing order
+                wlo[n0], wlo[n0 + 1] = wlo[n0 + 1], wlo[n0]
+                whi[n0], whi[n0 + 1] = whi[n0 + 1], whi[n0]
+            if wlo[n0 + 1] <= whi[n0]:  # the margins made them meet: one window, no drop twice
+                whi[n0] = max(whi[n0], whi[n0 + 1])
+                n -= 1
     return n
 
 
