@@ -158,3 +158,18 @@ def test_track_windows_never_overlap():
             lo, hi = wlo[wk == k], whi[wk == k]
             assert np.all(lo[1:] >= hi[:-1])
         assert np.bincount(wk).max() == 2 and np.bincount(wk).min() == 1  # both cases occur
+
+
+def test_maps_pickle_before_and_after_first_layer():
+    import pickle
+
+    pl = Placement(80, 60, 25.4 / 360, 25.4 / 360, inner_radius_mm=60.0)
+    d = make_design(80)[:60].copy()
+    exact_maps.cache_clear()
+    m = exact_maps(HEAD, pl, tilt_deg=20.0)
+    m2 = pickle.loads(pickle.dumps(m))  # index not filled yet
+    ref = m.apply(d)
+    m3 = pickle.loads(pickle.dumps(m))  # filled
+    for a, b, c in zip(ref.swathes, m2.apply(d).swathes, m3.apply(d).swathes):
+        np.testing.assert_array_equal(a.levels, b.levels)
+        np.testing.assert_array_equal(a.levels, c.levels)

@@ -13,7 +13,6 @@ from __future__ import annotations
 import functools
 import logging
 import math
-import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -79,7 +78,6 @@ class TrackWindows:
     kernel: str
     _index: np.ndarray = field(repr=False)
     _filled: list = field(default_factory=lambda: [False], repr=False)
-    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     @property
     def n_drops(self) -> int:
@@ -96,17 +94,16 @@ class TrackWindows:
 
     def _fill(self, flat: np.ndarray | None = None, out: np.ndarray | None = None) -> bool:
         """Fill the index once; given ``flat`` and ``out``, gather in the same pass. True if it gathered."""
+        # No lock (the maps stay picklable): two threads filling at once write the same values,
+        # and the flag is set only after a complete fill.
         if self._filled[0]:
             return False
-        with self._lock:
-            if self._filled[0]:
-                return False
-            if flat is None:
-                _k.WINDOWS_FILL[self.kernel](*self._args())
-            else:
-                _k.WINDOWS_FILL_GATHER[self.kernel](*self._args(), flat, out)
-            self._filled[0] = True
-            return flat is not None
+        if flat is None:
+            _k.WINDOWS_FILL[self.kernel](*self._args())
+        else:
+            _k.WINDOWS_FILL_GATHER[self.kernel](*self._args(), flat, out)
+        self._filled[0] = True
+        return flat is not None
 
     def gather(self, flat: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out[row + t, nozzle] = flat[flat_index[start + t]]`` for every window; ``out`` zeroed ``(F, N) uint8``."""
