@@ -150,59 +150,315 @@ KERNELS = {
 }
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _index_nb(A, B, C, D, E, F, ks, cos_i, sin_i, width, height, idx_out, hit_out):  # pragma: no cover - jit
-    n_f = cos_i.shape[0]
-    n_k = idx_out.shape[1]
-    sentinel = width * height
-    for i in prange(n_f):
-        for k in range(n_k):
-            idx_out[i, k] = sentinel
-        c = cos_i[i]
-        s = sin_i[i]
-        hit = False
-        for q in range(ks.shape[0]):
-            k = ks[q]
-            u = A[k] * c + B[k] * s + C
-            v = D[k] * c + E[k] * s + F
-            if u >= 0.0 and v >= 0.0 and u < width and v < height:
-                idx_out[i, k] = int(v) * width + int(u)
-                hit = True
-        hit_out[i] = hit
+def index_dense_numpy(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height):
+    """Brute force over every firing and nozzle: ``(F, N)`` index map and per-firing hit flags.
 
-
-def index_numba(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height):
-    """Nearest-pixel index map ``(F, N) int32`` and per-firing hit flags ``(F,) bool``."""
-    n_f, n_k = cos_i.shape[0], A.shape[0]
-    idx = np.empty((n_f, n_k), np.int32)
-    hit = np.empty(n_f, np.bool_)
-    _index_nb(A, B, C, D, E, F, np.flatnonzero(enabled).astype(np.int64), cos_i, sin_i, width, height, idx, hit)
-    return idx, hit
-
-
-def index_numpy(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height):
+    The reference the windowed kernels are tested against (it evaluates every drop).
+    """
     _, _, idx = coords_numpy(A, B, C, D, E, F, enabled, cos_i, sin_i, width, height)
     return idx, (idx != width * height).any(axis=1)
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _gather_nb(flat, lut, idx, out):  # pragma: no cover - jit
-    n_f, n_k = idx.shape
-    for i in prange(n_f):
-        for k in range(n_k):
-            out[i, k] = lut[flat[idx[i, k]]]
+# --- output-sensitive maps: per-track firing windows ---------------------------------------------
+#
+# Nozzle k draws a circle of radius r_k; its drops can land in the design only where that circle
+# crosses the design's rectangle, which is at most two arcs. `track_windows` finds those arcs
+# analytically (with a safety margin) as firing windows; the index kernels evaluate the exact
+# landing formula (the same float operations as `coords_numpy`) only inside them; every other
+# nozzle-firing is "no drop" without being computed. Work scales with the design's size.
 
 
-def gather_numba(flat, lut, idx):
-    """``out[i, k] = lut[flat[idx[i, k]]]``, ``(F, N) uint8``; ``flat`` ends with a 0 sentinel."""
-    out = np.empty(idx.shape, np.uint8)
-    _gather_nb(flat, lut, idx, out)
+def index_dtype(width, height):
+    return np.int32 if width * height < 2**31 - 1 else np.int64
+
+
+@njit(cache=True, nogil=True)
+def _track_windows_nb(r, phi, enabled, direction, angle_rad, x0_mm, x1_mm, yh_mm, dphi, i0, i1, margin, wk, wlo, whi):  # pragma: no cover - jit
+    e = 1e-6
+    x0 = x0_mm - e
+    x1 = x1_mm + e
+    yh = yh_mm + e
+    m = margin * dphi
+    n = 0
+    for k in range(r.shape[0]):
+        rk = r[k]
+        if not enabled[k] or rk < x0 or rk <= 0.0:
+            continue
+        hi = min(math.acos(min(max(x0 / rk, -1.0), 1.0)), math.asin(min(max(yh / rk, -1.0), 1.0)))
+        lo = math.acos(min(max(x1 / rk, -1.0), 1.0))
+        if lo > hi:
+            continue
+        lo -= m
+        hi += m
+        base = phi[k] - angle_rad
+        # local angle alpha = phi_k - direction * i * dphi - angle  <=>  i = direction * (phi_k - angle - alpha) / dphi
+        n0 = n
+        for arc in range(2):
+            if lo > 0.0:  # two arcs, below and above the design's axis
+                a1, a2 = (-hi, -lo) if arc == 0 else (lo, hi)
+            elif arc == 0:
+                a1, a2 = -hi, hi
+            else:
+                break
+            ia = direction * (base - a2) / dphi
+            ib = direction * (base - a1) / dphi
+            f_lo = min(max(math.floor(min(ia, ib)) - margin, i0), i1 + 1)
+            f_hi = min(max(math.ceil(max(ia, ib)) + margin + 1, i0), i1 + 1)
+            if f_hi > f_lo:
+                wk[n] = k
+                wlo[n] = int(f_lo) - i0
+                whi[n] = int(f_hi) - i0
+                n += 1
+        if n - n0 == 2:
+            if wlo[n0] > wlo[n0 + 1]:  # in firing order
+                wlo[n0], wlo[n0 + 1] = wlo[n0 + 1], wlo[n0]
+                whi[n0], whi[n0 + 1] = whi[n0 + 1], whi[n0]
+            if wlo[n0 + 1] <= whi[n0]:  # the margins made them meet: one window, no drop twice
+                whi[n0] = max(whi[n0], whi[n0 + 1])
+                n -= 1
+    return n
+
+
+def track_windows(r, phi, enabled, direction, angle_rad, x0_mm, x1_mm, yh_mm, dphi, i0, i1, margin=2):
+    """Firing windows ``(k, lo, hi)`` per track, as offsets from firing ``i0`` (``hi`` exclusive).
+
+    Outside its windows no drop of nozzle ``k`` can land in the rectangle
+    ``x0 <= xl <= x1, |yl| <= yh`` (mm) of the design frame, which is the platform frame turned
+    by ``angle_rad``. A circle of radius ``r`` meets the rectangle (``x0 > 0``) where
+    ``acos(min(1, x1/r)) <= |alpha| <= min(acos(x0/r), asin(min(1, yh/r)))``: one arc, or two
+    when ``r > x1``. The windows are conservative (rectangle grown by 1 nm, arcs by ``margin``
+    firings) and clipped to ``[i0, i1]``; the exact test is done per drop by the index kernels.
+    Returns three ``int64`` arrays sorted by nozzle then firing. Shared by both kernels.
+
+    Nozzle 0 at 1 mm never reaches the design; nozzle 1 at 50 mm crosses it in one arc; a track
+    at 62 mm, beyond the design's outer edge (60 mm), crosses only its two corners:
+
+    >>> k, lo, hi = track_windows(np.array([1.0, 50.0]), np.zeros(2), np.ones(2, bool), 1, 0.0, 10.0, 60.0, 5.0, 0.01, -20, 20)
+    >>> k.tolist(), lo.tolist(), hi.tolist()
+    ([1], [5], [36])
+    >>> k, lo, hi = track_windows(np.array([62.0]), np.zeros(1), np.ones(1, bool), 1, 0.0, 10.0, 60.0, 20.0, 0.01, -50, 50)
+    >>> k.tolist(), lo.tolist(), hi.tolist()
+    ([0, 0], [13, 71], [30, 88])
+    """
+    r = np.ascontiguousarray(r, np.float64)
+    nmax = 2 * r.shape[0]
+    wk = np.empty(nmax, np.int64)
+    wlo = np.empty(nmax, np.int64)
+    whi = np.empty(nmax, np.int64)
+    n = _track_windows_nb(r, np.ascontiguousarray(phi, np.float64), np.ascontiguousarray(enabled, np.bool_), float(direction),
+                          float(angle_rad), float(x0_mm), float(x1_mm), float(yh_mm), float(dphi), int(i0), int(i1), int(margin),
+                          wk, wlo, whi)
+    return wk[:n], wlo[:n], whi[:n]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _landing_index(a, b, d, e, C, F, c, s, width, height):  # pragma: no cover - jit
+    # the same float operations as coords_numpy: col = A c + B s + C, row = D c + E s + F
+    u = a * c + b * s + C
+    v = d * c + e * s + F
+    ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
+    return (np.int64(v) * width + np.int64(u)) if ok else width * height
+
+
+@njit(cache=True, nogil=True)
+def _window_bounds_nb(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height, first, last):  # pragma: no cover - jit
+    sentinel = width * height
+    for q in range(wk.shape[0]):
+        k = wk[q]
+        f = wlo[q]
+        while f < whi[q] and _landing_index(A[k], B[k], D[k], E[k], C, F, cos_i[f], sin_i[f], width, height) == sentinel:
+            f += 1
+        l = whi[q]
+        while l > f and _landing_index(A[k], B[k], D[k], E[k], C, F, cos_i[l - 1], sin_i[l - 1], width, height) == sentinel:
+            l -= 1
+        first[q] = f
+        last[q] = l
+
+
+def window_bounds_numba(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height):
+    """First and last+1 firing (offsets into ``cos_i``) of each window whose drop lands in the design.
+
+    Scans inwards from both ends of each window (a few drops each: the windows are tight).
+    ``first == last`` when no drop of the window lands in the design.
+    """
+    first = np.empty(wk.shape[0], np.int64)
+    last = np.empty(wk.shape[0], np.int64)
+    _window_bounds_nb(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height, first, last)
+    return first, last
+
+
+def window_bounds_numpy(A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height):
+    n = whi - wlo
+    off = np.zeros(n.shape[0], np.int64)
+    if n.shape[0] > 1:
+        np.cumsum(n[:-1], out=off[1:])
+    m = int(n.sum())
+    if not m:
+        return wlo.copy(), wlo.copy()
+    q = np.repeat(np.arange(wk.shape[0]), n)
+    t = np.arange(m) - off[q]
+    i = wlo[q] + t
+    ok = _pointwise_index_numpy(A, B, C, D, E, F, wk[q], cos_i[i], sin_i[i], width, height) != width * height
+    f = np.minimum(np.minimum.reduceat(np.where(ok, t, m), off), n)
+    l = np.maximum(np.maximum.reduceat(np.where(ok, t + 1, 0), off), f)
+    return wlo + f, wlo + l
+
+
+def _pointwise_index_numpy(A, B, C, D, E, F, k, c, s, width, height):
+    """Flat index (``width * height`` = outside) of drops given per drop: nozzle ``k``, cos, sin."""
+    u = A[k] * c + B[k] * s + C
+    v = D[k] * c + E[k] * s + F
+    ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
+    return np.where(ok, np.floor(v) * width + np.floor(u), width * height).astype(index_dtype(width, height))
+
+
+def _window_drops(nozzle, row, count):
+    """Per drop of the packed windows: nozzle and print row."""
+    q = np.repeat(np.arange(nozzle.shape[0]), count)
+    t = np.arange(q.shape[0]) - np.repeat(np.cumsum(count) - count, count)
+    return nozzle[q], row[q] + t
+
+
+@njit(cache=True, nogil=True)
+def _windows_fill_nb(A, B, C, D, E, F, nozzle, row, count, start, cos_r, sin_r, width, height, idx):  # pragma: no cover - jit
+    # Single-threaded on purpose: the inner loop vectorises (SIMD), and no OpenMP runtime is
+    # involved (numba's OpenMP threads slowed ~6x when cv2 was loaded in the same process).
+    for q in range(nozzle.shape[0]):
+        k = nozzle[q]
+        a = A[k]
+        b = B[k]
+        d = D[k]
+        e = E[k]
+        r0 = row[q]
+        n = count[q]
+        cs = cos_r[r0:r0 + n]  # slices: zero-based loop, no negative-index checks, so it vectorises
+        ss = sin_r[r0:r0 + n]
+        dst = idx[start[q]:start[q] + n]
+        for t in range(n):
+            dst[t] = _landing_index(a, b, d, e, C, F, cs[t], ss[t], width, height)
+
+
+@njit(cache=True, nogil=True)
+def _windows_fill_gather_nb(A, B, C, D, E, F, nozzle, row, count, start, cos_r, sin_r, width, height, idx, flat, out, tile):  # pragma: no cover - jit
+    # The first layer: fill the index and gather from it while it is in L1, tile by tile.
+    n_rows = out.shape[0]
+    for r0 in range(0, n_rows, tile):
+        r1 = min(r0 + tile, n_rows)
+        for q in range(nozzle.shape[0]):
+            lo = max(row[q], r0)
+            hi = min(row[q] + count[q], r1)
+            if hi <= lo:
+                continue
+            k = nozzle[q]
+            a = A[k]
+            b = B[k]
+            d = D[k]
+            e = E[k]
+            cs = cos_r[lo:hi]
+            ss = sin_r[lo:hi]
+            dst = idx[start[q] + lo - row[q]:start[q] + hi - row[q]]
+            for t in range(hi - lo):
+                dst[t] = _landing_index(a, b, d, e, C, F, cs[t], ss[t], width, height)
+            col = out[lo:hi, k]
+            for t in range(hi - lo):
+                col[t] = flat[dst[t]]
+
+
+@njit(cache=True, nogil=True)
+def _windows_gather_nb(flat, nozzle, row, count, start, idx, out, tile):  # pragma: no cover - jit
+    # Tiles of `tile` firing rows: the (tile, N) block of the output stays in L1 while every
+    # window writes its column piece into it (a column walk over all rows would miss L1 each write).
+    n_rows = out.shape[0]
+    for r0 in range(0, n_rows, tile):
+        r1 = min(r0 + tile, n_rows)
+        for q in range(nozzle.shape[0]):
+            lo = max(row[q], r0)
+            hi = min(row[q] + count[q], r1)
+            if hi <= lo:
+                continue
+            s = idx[start[q] + lo - row[q]:start[q] + hi - row[q]]
+            col = out[lo:hi, nozzle[q]]
+            for t in range(hi - lo):
+                col[t] = flat[s[t]]
+
+
+GATHER_TILE = 64
+
+
+def windows_fill_numba(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx):
+    """``idx[start[q] + t]`` = design pixel of the drop of nozzle ``nozzle[q]`` at print row ``row[q] + t``."""
+    _windows_fill_nb(*coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx)
+
+
+def windows_fill_numpy(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx):
+    A, B, C, D, E, F = coef
+    k, r = _window_drops(nozzle, row, count)
+    idx[:] = _pointwise_index_numpy(A, B, C, D, E, F, k, cos_r[r], sin_r[r], width, height)
+
+
+def windows_gather_numba(flat, nozzle, row, count, start, idx, out):
+    """``out[row[q] + t, nozzle[q]] = flat[idx[start[q] + t]]`` for ``t < count[q]``.
+
+    ``out`` is a zeroed ``(F, N) uint8``; ``flat`` holds the drop level of every design pixel
+    and ends with a 0 sentinel (index ``width * height``).
+    """
+    _windows_gather_nb(flat, nozzle, row, count, start, idx, out, GATHER_TILE)
     return out
 
 
-def gather_numpy(flat, lut, idx):
-    return lut[flat[idx]]
+def windows_gather_numpy(flat, nozzle, row, count, start, idx, out):
+    k, r = _window_drops(nozzle, row, count)
+    out[r, k] = flat[idx]
+    return out
 
 
-INDEX = {"numba": index_numba, "numpy": index_numpy}
-GATHER = {"numba": gather_numba, "numpy": gather_numpy}
+def windows_fill_gather_numba(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx, flat, out):
+    """:func:`windows_fill_numba` and :func:`windows_gather_numba` in one pass (the first layer)."""
+    _windows_fill_gather_nb(*coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx, flat, out, GATHER_TILE)
+    return out
+
+
+def windows_fill_gather_numpy(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx, flat, out):
+    windows_fill_numpy(coef, nozzle, row, count, start, cos_r, sin_r, width, height, idx)
+    return windows_gather_numpy(flat, nozzle, row, count, start, idx, out)
+
+
+@njit(cache=True, nogil=True)
+def _binary_levels_nb(src, level, dst):  # pragma: no cover - jit
+    # one vectorised pass: levels, and the largest and the smallest non-zero value
+    n = src.shape[0]
+    hi = np.uint8(0)
+    lo = np.uint8(255)
+    for i in range(n):
+        x = src[i]
+        dst[i] = level if x != 0 else np.uint8(0)
+        hi = max(hi, x)
+        lo = min(lo, x if x != 0 else np.uint8(255))
+    dst[n] = 0
+    return hi == 0 or lo == hi
+
+
+def binary_levels_numba(design, level):
+    """``(flat, is_binary)``: ``level`` where the design is non-zero, else 0, plus a 0 sentinel.
+
+    ``is_binary``: the design holds at most one non-zero value (``design_kind`` = "binary").
+    """
+    src = np.ascontiguousarray(design).ravel()
+    flat = np.empty(src.shape[0] + 1, np.uint8)
+    ok = _binary_levels_nb(src, np.uint8(level), flat)
+    return flat, bool(ok)
+
+
+def binary_levels_numpy(design, level):
+    src = np.asarray(design).ravel()
+    nz = src != 0
+    flat = np.concatenate([np.where(nz, np.uint8(level), np.uint8(0)), np.zeros(1, np.uint8)])
+    m = src.max() if src.size else 0
+    return flat, not bool(np.any(nz & (src != m)))
+
+
+WINDOW_BOUNDS = {"numba": window_bounds_numba, "numpy": window_bounds_numpy}
+WINDOWS_FILL = {"numba": windows_fill_numba, "numpy": windows_fill_numpy}
+WINDOWS_GATHER = {"numba": windows_gather_numba, "numpy": windows_gather_numpy}
+WINDOWS_FILL_GATHER = {"numba": windows_fill_gather_numba, "numpy": windows_fill_gather_numpy}
+BINARY_LEVELS = {"numba": binary_levels_numba, "numpy": binary_levels_numpy}

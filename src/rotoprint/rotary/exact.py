@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,10 +23,10 @@ from ..errors import ConfigError, ImageError
 from . import _exact_kernels as _k
 from .head import Mount, NozzleLayout, nozzle_layout
 from .placement import Placement
-from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_kind, design_levels
+from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_levels
 from .swathes import SwathePlan, plan_swathes
 
-__all__ = ["SwatheMap", "ExactMaps", "exact_maps", "transform_exact", "firing_range", "KERNEL_NAMES"]
+__all__ = ["SwatheMap", "TrackWindows", "ExactMaps", "exact_maps", "transform_exact", "firing_range", "KERNEL_NAMES"]
 
 log = logging.getLogger(__name__)
 
@@ -53,14 +53,87 @@ def firing_range(phi_rad: np.ndarray, angle_lo_rad: float, angle_hi_rad: float, 
 
 
 @dataclass(frozen=True, eq=False)
+class TrackWindows:
+    """Where the drops of a swathe land in the design, track by track (output-sensitive map).
+
+    Window ``q``: nozzle ``nozzle[q]`` at print rows ``row[q] .. row[q] + count[q] - 1`` samples
+    design pixels ``flat_index[start[q] : start[q] + count[q]]`` (flat ``row * width + col``;
+    ``width * height`` = no drop, rare inside a window). Every other nozzle-firing of the print
+    image is "no drop". A track has at most two windows (where its circle crosses the design).
+
+    The windows' ends are exact (first and last drop in the design). ``flat_index`` is filled on
+    first use: by the first :meth:`gather`, in the same pass as that gather (the first layer
+    costs one pass, not two), or on first access.
+    """
+
+    nozzle: np.ndarray
+    row: np.ndarray
+    count: np.ndarray
+    start: np.ndarray
+    coefficients: tuple
+    cos_row: np.ndarray
+    sin_row: np.ndarray
+    width: int
+    height: int
+    kernel: str
+    _index: np.ndarray = field(repr=False)
+    _filled: list = field(default_factory=lambda: [False], repr=False)
+
+    @property
+    def n_drops(self) -> int:
+        """Nozzle-firings that are looked up in the design (the per-layer work)."""
+        return int(self.count.sum())
+
+    @property
+    def flat_index(self) -> np.ndarray:
+        self._fill()
+        return self._index
+
+    def _args(self) -> tuple:
+        return (self.coefficients, self.nozzle, self.row, self.count, self.start, self.cos_row, self.sin_row, self.width, self.height, self._index)
+
+    def _fill(self, flat: np.ndarray | None = None, out: np.ndarray | None = None) -> bool:
+        """Fill the index once; given ``flat`` and ``out``, gather in the same pass. True if it gathered."""
+        # No lock (the maps stay picklable): two threads filling at once write the same values,
+        # and the flag is set only after a complete fill.
+        if self._filled[0]:
+            return False
+        if flat is None:
+            _k.WINDOWS_FILL[self.kernel](*self._args())
+        else:
+            _k.WINDOWS_FILL_GATHER[self.kernel](*self._args(), flat, out)
+        self._filled[0] = True
+        return flat is not None
+
+    def gather(self, flat: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``out[row + t, nozzle] = flat[flat_index[start + t]]`` for every window; ``out`` zeroed ``(F, N) uint8``."""
+        if not self._fill(flat, out):
+            _k.WINDOWS_GATHER[self.kernel](flat, self.nozzle, self.row, self.count, self.start, self._index, out)
+        return out
+
+    def dense(self, n_firings: int, n_nozzles: int, sentinel: int) -> np.ndarray:
+        """The ``(F, N)`` index map, ``sentinel`` where no drop lands in the design."""
+        idx = self.flat_index
+        out = np.full((n_firings, n_nozzles), sentinel, idx.dtype)
+        k, r = _k._window_drops(self.nozzle, self.row, self.count)
+        out[r, k] = idx
+        return out
+
+
+@dataclass(frozen=True, eq=False)
 class SwatheMap:
     """Sampling maps of one swathe.
 
     Attributes
     ----------
+    windows : TrackWindows
+        Per track, the print rows whose drops land in the design and the pixels they sample.
+    n_firings : int
+        Rows of the print image (firings ``first_firing .. first_firing + n_firings - 1``).
     index : (F, N) int32
-        Flat index of the design pixel it lands in; ``width * height`` (one past the end)
-        when it lands outside the design or the nozzle is disabled in this swathe.
+        Dense form, built on first use (grey sampling, tests): flat index of the design pixel
+        each drop lands in; ``width * height`` (one past the end) when it lands outside the
+        design or the nozzle is disabled in this swathe.
     """
 
     mount: Mount
@@ -71,11 +144,17 @@ class SwatheMap:
     first_firing: int
     band_mm: tuple[float, float]
     coefficients: tuple
-    index: np.ndarray
+    windows: TrackWindows
+    n_firings: int
+    sentinel: int
+
+    @functools.cached_property
+    def index(self) -> np.ndarray:
+        return self.windows.dense(self.n_firings, self.layout.r_mm.shape[0], self.sentinel)
 
     def coords(self, placement: Placement) -> tuple[np.ndarray, np.ndarray]:
         """Continuous design coordinates ``(col, row)``, each ``(F, N) float32`` (for grey sampling)."""
-        ii = np.arange(self.first_firing, self.first_firing + self.index.shape[0], dtype=np.float64) * self.dphi_rad
+        ii = np.arange(self.first_firing, self.first_firing + self.n_firings, dtype=np.float64) * self.dphi_rad
         col, row, _ = _k.coords_numba(*self.coefficients, np.ascontiguousarray(self.enabled), np.cos(ii), np.sin(ii),
                                       placement.width_px, placement.height_px)
         return col, row
@@ -98,18 +177,21 @@ class ExactMaps:
     def apply(self, design: np.ndarray, *, kind: str | None = None) -> RotaryPrint:
         """Sample ``design`` ``(H, W) uint8`` through the maps; returns a :class:`RotaryPrint`."""
         design = _check_design(design, self.placement)
-        kind = kind or design_kind(design)
+        flat = None
+        if kind in (None, "binary"):
+            # one pass: the drop level of every design pixel (+ the 0 "no drop" sentinel the maps
+            # point at), and whether the design is binary (the same answer as design_kind)
+            level = design_levels(np.array([255], np.uint8), self.head.grey_levels, kind="binary")[0]
+            flat, binary = _k.BINARY_LEVELS[self.kernel](design, level)
+            kind = kind or ("binary" if binary else "grey")
         if kind not in ("binary", "grey"):
             raise ConfigError(f"kind must be one of binary, grey; got {kind!r}")
         dead = np.array(self.head.dead_nozzles, dtype=np.int64)
-        flat = np.concatenate([design.ravel(), np.zeros(1, np.uint8)])
         _, bilinear = _k.KERNELS[self.kernel]
-        lut = design_levels(np.arange(256, dtype=np.uint8), self.head.grey_levels, kind=kind)
-        lut[0] = 0
         out = []
         for j, sm in enumerate(self.swathes):
             if kind == "binary":
-                lev = _k.GATHER[self.kernel](flat, lut, sm.index)
+                lev = sm.windows.gather(flat, np.zeros((sm.n_firings, sm.layout.r_mm.shape[0]), np.uint8))
             else:
                 col, row = sm.coords(self.placement)
                 lev = design_levels(bilinear(design, col, row, sm.index), self.head.grey_levels, kind=kind)
@@ -215,27 +297,55 @@ def exact_maps(
         max_swathes=max_swathes,
     )
     a_lo, a_hi = placement.angular_range_rad()
-    maps = []
+    angle = math.radians(placement.angle_deg)
+    width, height = placement.width_px, placement.height_px
+    # the design's rectangle in its own frame (mm): x0 <= xl <= x1, |yl| <= yh
+    x0, x1, yh = placement.inner_radius_mm, placement.inner_radius_mm + placement.width_mm, placement.height_mm / 2.0
+    setup = []
     for j, sw in enumerate(plan.swathes):
         mount = plan.mount(j)
         lay = nozzle_layout(head, mount)
         dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
+        i0, i1 = firing_range(lay.phi_rad[sw.enabled], a_lo, a_hi, dphi, direction)
+        setup.append((sw, mount, lay, dphi, r_ref, i0, i1))
+    # at most the whole firing range of every swathe (dense index for grey designs: 12 bytes each)
+    check_raster_fits(head.nozzles, sum(i1 - i0 + 1 for *_, i0, i1 in setup), 12, what="exact maps")
+    maps = []
+    for sw, mount, lay, dphi, r_ref, i0, i1 in setup:
         en = sw.enabled
-        i0, i1 = firing_range(lay.phi_rad[en], a_lo, a_hi, dphi, direction)
-        n_f = i1 - i0 + 1
-        check_raster_fits(head.nozzles, n_f, 12, what=f"exact map of swathe {j}")
         ii = np.arange(i0, i1 + 1, dtype=np.float64) * dphi
         A, B, C, D, E, F = _k.coefficients(
-            lay.r_mm, lay.phi_rad, direction, math.radians(placement.angle_deg),
+            lay.r_mm, lay.phi_rad, direction, angle,
             placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm, placement.height_px,
         )
-        idx, hit = _k.INDEX[kernel](A, B, C, D, E, F, np.ascontiguousarray(en), np.cos(ii), np.sin(ii), placement.width_px, placement.height_px)
-        if hit.any():
-            b0 = int(np.argmax(hit))
-            b1 = int(n_f - np.argmax(hit[::-1]))
+        # only where each track crosses the design (analytic, conservative), trimmed to its first
+        # and last drop in the design by the exact test; the index itself is filled on first use
+        wk, wlo, whi = _k.track_windows(lay.r_mm, lay.phi_rad, en, direction, angle, x0, x1, yh, dphi, i0, i1)
+        cos_i, sin_i = np.cos(ii), np.sin(ii)
+        first, last = _k.WINDOW_BOUNDS[kernel](A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height)
+        has = last > first
+        if has.any():
+            b0 = int(first[has].min())
+            b1 = int(last[has].max())
         else:  # this swathe sees nothing of the design: keep one empty firing
             b0, b1 = 0, 1
-        coef = (A, B, C, D, E, F)
+        count = (last - first)[has]
+        start = np.zeros(count.shape[0], np.int64)
+        if count.shape[0] > 1:
+            np.cumsum(count[:-1], out=start[1:])
+        windows = TrackWindows(
+            nozzle=wk[has],
+            row=first[has] - b0,
+            count=count,
+            start=start,
+            coefficients=(A, B, C, D, E, F),
+            cos_row=cos_i[b0:b1].copy(),
+            sin_row=sin_i[b0:b1].copy(),
+            width=width,
+            height=height,
+            kernel=kernel,
+            _index=np.empty(int(count.sum()), _k.index_dtype(width, height)),
+        )
         maps.append(
             SwatheMap(
                 mount=mount,
@@ -245,8 +355,10 @@ def exact_maps(
                 ref_radius_mm=r_ref,
                 first_firing=i0 + b0,
                 band_mm=sw.band_mm,
-                coefficients=coef,
-                index=idx[b0:b1],
+                coefficients=(A, B, C, D, E, F),
+                windows=windows,
+                n_firings=b1 - b0,
+                sentinel=width * height,
             )
         )
     log.debug("exact maps: %d swathe(s) for %s", len(maps), placement)
