@@ -43,3 +43,16 @@ def check_raster_fits(width: int, height: int, bytes_per_pixel: int, *, what: st
             f"{what} of {width} x {height} px would need {format_bytes(need)}, "
             f"more than the {format_bytes(limit)} this machine can spare"
         )
+
+
+def release_free_memory() -> None:
+    """Hand freed heap memory back to the operating system (glibc ``malloc_trim``), after
+    the large temporaries of mesh loading; a no-op where that call does not exist."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        libc.malloc_trim(0)
+    except (OSError, AttributeError):  # pragma: no cover - not glibc
+        pass

@@ -82,7 +82,11 @@ class LayerTask:
 
             object.__setattr__(mesh, "_topology", PrebuiltTopology(self.face_edges, self.suspect_edges))
         device = _validate(self.device, "task device")
-        return slice_mesh(mesh, device, **self.slice_options)
+        job = slice_mesh(mesh, device, **self.slice_options)
+        from ._resources import release_free_memory
+
+        release_free_memory()
+        return job
 
 
 def task_fingerprint(task: LayerTask, extra: dict | None = None) -> str:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._resources import release_free_memory
 from ..constants import UNITS_TO_MM
 from ..errors import ConfigError, InputFileError, MeshError
 from ..mesh import Mesh
@@ -138,4 +139,7 @@ def load_mesh(
             tri = tri @ T[:3, :3].T + T[:3, 3]
             if np.linalg.det(T[:3, :3]) < 0:  # a mirroring transform reverses every face
                 tri = tri[:, ::-1, :]
-    return Mesh.from_triangles(tri, source=str(path), _owned=True)
+    mesh = Mesh.from_triangles(tri, source=str(path), _owned=True)
+    del tri
+    release_free_memory()
+    return mesh
