@@ -194,3 +194,18 @@ def test_sl1_resume_after_a_kill(tmp_path):
     subprocess.run(cmd[:-2] + [str(clean), "-q"], check=True, env=env)
     assert out.read_bytes() == clean.read_bytes()
     assert not partial_path(out).exists()
+
+
+def test_a_new_task_never_gets_an_old_tasks_job():
+    """Regression: the worker-side job cache once keyed tasks by id(), which Python reuses."""
+    from rotoprint import runner
+    from rotoprint.io.layers import task_from_job
+
+    mesh = torus_mesh(6.0, 2.0, 24, 12)
+    dev = load_device("perfactory-sxga")
+    for lh, n in ((1.0, 4), (0.5, 8), (0.25, 16)):
+        task = task_from_job(slice_mesh(mesh, dev, layer_height_mm=lh))
+        bare = runner.LayerTask(task.vertices, task.faces, None, task.device, task.slice_options)
+        for t in (task, bare):
+            assert runner.render_layer(t, n - 1).index == n - 1  # the last layer exists for this job
+        del task, bare

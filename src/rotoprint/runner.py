@@ -107,14 +107,15 @@ _LOCAL = threading.local()  # one job per thread: a job's face sweep has state
 
 
 def _job_for(task: LayerTask):
-    key = task._key or id(task)
-    cache = getattr(_LOCAL, "jobs", None)
-    if cache is None:
-        cache = _LOCAL.jobs = {}
-    job = cache.get(key)
-    if job is None:
-        cache.clear()
-        job = cache[key] = task.build_job()
+    """The thread's job for ``task``, built once. Keyed by the task's fingerprint when it has
+    one, else by the task object itself (held, so that its id cannot be reused meanwhile)."""
+    cached = getattr(_LOCAL, "job", None)
+    if cached is not None:
+        key, held, job = cached
+        if (task._key and key == task._key) or held is task:
+            return job
+    job = task.build_job()
+    _LOCAL.job = (task._key, task, job)
     return job
 
 

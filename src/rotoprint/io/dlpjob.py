@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from ..runner import MaskLayerResult, task_fingerprint
+from ..runner import MaskLayerResult
 from ..slicing.fibres import SliceJob
 from .archives import JobInfo, _Encoded, format_from_path, write_encoded
 from .layers import run_layers, task_from_job
@@ -44,7 +44,7 @@ def write_dlp_job(
     out = Path(out)
     check_target(out, is_dir=fmt not in ("sl1", "sl1s"))
     task = task_from_job(job, mask_options=options.to_json())
-    partial = PartialOutput(out, task_fingerprint(task), len(job), resume=resume)
+    partial = PartialOutput(out, task._key, len(job), resume=resume)
     copies = options.copies
     footprint = np.zeros((job.grid.height, job.grid.width), np.uint8)
     try:

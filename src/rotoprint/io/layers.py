@@ -8,6 +8,7 @@ the folder is renamed onto ``<out>``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 from collections.abc import Callable, Iterator
@@ -29,7 +30,8 @@ def layer_filename(index: int) -> str:
 
 
 def task_from_job(job: SliceJob, *, mask_options: dict | None = None) -> LayerTask:
-    return LayerTask(
+    """The picklable task for ``job``, keyed by its fingerprint."""
+    task = LayerTask(
         vertices=job.mesh.vertices,
         faces=job.mesh.faces,
         source=job.mesh.source,
@@ -39,6 +41,7 @@ def task_from_job(job: SliceJob, *, mask_options: dict | None = None) -> LayerTa
         face_edges=job.mesh.topology.face_edges,
         suspect_edges=job.mesh.topology.suspect_edges,
     )
+    return dataclasses.replace(task, _key=task_fingerprint(task))
 
 
 def run_layers(job: SliceJob, task: LayerTask, partial: PartialOutput, *, workers: int, scheduler: str | None,
@@ -90,7 +93,7 @@ def write_layer_folder(
     out = Path(out_dir)
     check_target(out, is_dir=True)
     task = task_from_job(job)
-    partial = PartialOutput(out, task_fingerprint(task), len(job), resume=resume)
+    partial = PartialOutput(out, task._key, len(job), resume=resume)
     try:
         for i in partial.done:
             if on_layer is not None:
