@@ -244,8 +244,13 @@ class BuildPlan:
     def _higher(self, part) -> list[str]:
         return [q.name for q in self.job.spec.parts if q.material != part.material and q.priority > part.priority]
 
-    def material_print(self, material: str, head: HeadSetup, sections: dict[str, Segments], index: int) -> RotaryPrint:
-        """The print of ``material`` on ``head`` in layer ``index``, overlaps resolved."""
+    def material_print(self, material: str, head: HeadSetup, sections: dict[str, Segments], index: int, *,
+                       thinned: bool = True) -> RotaryPrint:
+        """The print of ``material`` on ``head`` in layer ``index``, overlaps resolved.
+
+        ``thinned=False`` gives every lattice site inside the region (no density
+        equalisation): the coverage the drops' film makes, for the simulator's cell model."""
+        lat = head.lattice if thinned else head.inside
         A = self.job.spec.placement.angle_deg
         levels = None
         pr0 = None
@@ -253,7 +258,7 @@ class BuildPlan:
             if part.material != material:
                 continue
             seg = sections[part.name]
-            pr = head.lattice.print_from_segments(seg, layer_index=index)
+            pr = lat.print_from_segments(seg, layer_index=index)
             blocks = [sections[q] for q in self._higher(part) if len(sections[q])]
             lv = [s.levels.copy() for s in pr.swathes]
             for q in blocks:
