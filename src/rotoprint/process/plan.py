@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..devices import InkjetDevice, load_device
-from ..errors import ConfigError
+from ..errors import ConfigError, RotoprintError
 from ..mesh import Mesh
 from ..rotary.direct import DirectSliceJob, PartPlacement, rasterize_section, slice_rotary
 from ..rotary.placement import Placement
@@ -419,7 +419,13 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
     if not isinstance(device, InkjetDevice):
         raise ConfigError(f"printer.device: {device.name!r} is not an inkjet head; a multi-material job needs print heads",
                           path=job.source)
-    meshes = {p.name: load_part_mesh(job, p) for p in sp.parts}
+    meshes = {}
+    for i, p in enumerate(sp.parts):
+        try:
+            meshes[p.name] = load_part_mesh(job, p)
+        except RotoprintError as exc:
+            raise type(exc)(f"parts[{i}].{'mesh' if p.mesh else 'shape'} (part {p.name!r}, referenced by {job.source or 'the job'}): "
+                            f"{exc.problem}", path=exc.path) from None
     union = Mesh.from_triangles(np.concatenate([m.triangles for m in meshes.values()]), source="assembly")
     used_inks = {ink.name for m in job.materials.values() for ink in m.inks}
     clk = sp.printer.clock
@@ -435,8 +441,11 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
                 dpi_y=clk.dpi_y, ref_radius_mm=clk.ref_radius_mm, direction=sp.printer.direction,
                 max_swathes=sp.printer.max_swathes, equalise=sp.printer.equalise, kernel=kernel,
             )
-        except ConfigError as exc:
-            raise ConfigError(f"printer.heads[{j}] ({hs.name}): {exc.problem}", path=job.source) from None
+        except RotoprintError as exc:
+            fld = "printer.tilt_deg" if hs.tilt_deg is None else f"printer.heads[{j}].tilt_deg"
+            if "tilt" not in exc.problem:
+                fld = f"printer.heads[{j}] ({hs.name})"
+            raise ConfigError(f"{fld}: {exc.problem}", path=job.source) from None
         inside = DirectSliceJob(lat.slice_job, lat.head, lat.part, lat.design, lat.plan, lat.tracks, dpi_y=lat.dpi_y,
                                 fill=lat.fill, equalise=False, kernel=lat.kernel)
         r, dens = track_density_per_mm2(lat.tracks, equalised=sp.printer.equalise)
