@@ -81,7 +81,7 @@ def coil_centreline(outer_mm: float, pitch_mm: float, turns: int, lead_mm: float
     >>> coil_centreline(10.0, 1.0, 1, 0.0).tolist()
     [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 1.0]]
     """
-    pts = [np.array([-lead_mm, 0.0])]
+    pts = [np.array([0.0 - lead_mm, 0.0])]
     dirs = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
     for k in range(4 * turns):
         length = outer_mm + (lead_mm if k == 0 else 0.0) if k <= 2 else outer_mm - pitch_mm * ((k - 1) // 2)
