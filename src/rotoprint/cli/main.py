@@ -33,6 +33,9 @@ def _register() -> None:
     app.command("transform")(transform.transform_command)
     app.command("simulate")(simulate.simulate_command)
     app.command("check")(check_cmd.check_command)
+    from . import build as build_cmd
+
+    app.command("build")(build_cmd.build_command)
 
 
 _register()

@@ -207,7 +207,10 @@ def _cell_mask(pr: RotaryPrint, shape: tuple[int, int], dead_nozzles, drops: Dro
         for off in (-2, -1, 0, 1):
             q = np.clip(pos + off, 0, ks.size - 1)
             k = ks[q]
-            dphi = np.mod(lay.phi_rad[k] - phi_s + np.pi, 2 * np.pi) - np.pi
+            # the angle turned since firing 0, taken within half a turn of the swathe's middle
+            # firing (not of firing 0: a design half a turn from the head has i near pi / dphi)
+            mid = sig * (sw.first_firing + 0.5 * n_f) * sw.dphi_rad
+            dphi = np.mod(lay.phi_rad[k] - phi_s - mid + np.pi, 2 * np.pi) - np.pi + mid
             i = np.rint(sig * dphi / sw.dphi_rad).astype(np.int64)
             ang = lay.phi_rad[k] - sig * i * sw.dphi_rad
             sx = lay.r_mm[k] * np.cos(ang)

@@ -1,0 +1,84 @@
+"""`rotoprint build JOB.toml --out DIR`: the whole multi-material pipeline for one job.
+
+Exit codes: 0 built; 3 built, but the printability check found features that fall short
+(everything is written first); 2 bad input (one line on stderr naming the file and the
+problem, nothing written).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from ._common import JsonOpt, console, out_console, print_json, progress
+
+EXIT_SHORT = 3
+
+
+def _fmt_time(s: float) -> str:
+    h, rem = divmod(int(round(s)), 3600)
+    return f"{h} h {rem // 60:02d} min" if h else f"{rem // 60} min {rem % 60:02d} s"
+
+
+def report_summary(res, *, label: str = "") -> None:
+    """Print a build's summary on the terminal (stderr) and where the report is (stdout)."""
+    from rich.table import Table
+
+    s = res.summary
+    console.print(f"{label}{s['layers']} layers, {s['heads']} heads, estimated printing time {_fmt_time(s['estimated_print_time_s'])}")
+    for w in s["warnings"]:
+        console.print(f"[yellow]warning:[/yellow] {w}", soft_wrap=True)
+    if s["resistance"]:
+        t = Table(title="Resistance estimates", title_justify="left")
+        for c in ("part", "terminals", "exact region", "printed pixels", "hand check"):
+            t.add_column(c)
+        for r in s["resistance"]:
+            if "error" in r:
+                t.add_row(r["part"], " - ".join(r["between"]), r["error"], "", "")
+                continue
+
+            def ohm(v):
+                return "open" if v is None else f"{v:.4g} ohm"
+
+            hc = r.get("hand_check")
+            t.add_row(r["part"], " - ".join(r["between"]), ohm(r["design"]["resistance_ohm"]), ohm(r["printed"]["resistance_ohm"]),
+                      ohm(hc["resistance_ohm"]) if hc else "-")
+        console.print(t)
+    if s["printability_ok"] is False:
+        console.print("[red]printability: some features fall short[/red] (see the report)")
+    out_console.print(f"report: {res.report_path}")
+    out_console.print(f"plan:   {res.plan_path}")
+
+
+def build_command(
+    job: Annotated[Path, typer.Argument(help="Job file (.toml): parts, materials, printer, placement.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (replaced only if it holds an earlier plan.json).")],
+    no_check: Annotated[bool, typer.Option("--no-check", help="Skip the printability check.")] = False,
+    no_report: Annotated[bool, typer.Option("--no-report", help="Do not write report.html.")] = False,
+    json_out: JsonOpt = False,
+) -> int:
+    """Plan a multi-material job: print-ready images per layer, head and ink, the ordered passes,
+    thickness and resistance estimates, printability, and a self-contained report.html."""
+    from ..process import load_job
+    from ..process.build import run_build
+
+    spec = load_job(job)
+    with progress() as bar:
+        tasks = {}
+
+        def on_step(stage: str, done: int, total: int) -> None:
+            if stage not in tasks:
+                tasks[stage] = bar.add_task(stage, total=total)
+            bar.update(tasks[stage], completed=done)
+
+        res = run_build(spec, out, on_step=on_step, check=False if no_check else None, report=not no_report)
+    if json_out:
+        print_json({"out": str(res.out_dir), "report": str(res.report_path) if not no_report else None,
+                    "plan": str(res.plan_path), **res.summary})
+    else:
+        report_summary(res)
+    if res.summary["printability_ok"] is False:
+        raise typer.Exit(EXIT_SHORT)
+    return 0

@@ -1,0 +1,285 @@
+"""The whole pipeline behind ``rotoprint build``: job -> plan -> print-ready images,
+printability, estimates, simulator overlays, ``plan.json`` and ``report.html``.
+
+Output folder (written under a temporary name and renamed when complete; nothing partial is
+left on error; an existing folder is replaced only when it holds an earlier ``plan.json``)::
+
+    plan.json                      format "rotoprint-build-plan": heads, materials, estimates,
+                                   warnings, printability, resistance, and per layer the
+                                   ordered passes with their image files and SHA-256
+    report.html                    self-contained report (no network)
+    layers/layer_00000/MATERIAL-INK.png (+ .json sidecar; -s1, -s2 for several swathes)
+    overlays/layer_00000-MATERIAL.png   simulator overlays of a few layers
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+from ..errors import RotoprintError
+from .conductance import coil_hand_check, resistance_from_masks
+from .job import ResolvedJob
+from .plan import BuildPlan, plan_job
+
+__all__ = ["BuildResult", "run_build", "PLAN_FORMAT", "MATERIAL_COLOURS", "composite_image"]
+
+log = logging.getLogger(__name__)
+
+PLAN_FORMAT = "rotoprint-build-plan"
+#: Oversampling of the design grid for the "design" resistance estimate.
+RESISTANCE_OVERSAMPLE = 2
+#: RGB per material in composites (others get a colour from a fixed cycle).
+MATERIAL_COLOURS = {"plaster": (214, 200, 170), "silver": (90, 96, 110), "epoxy": (230, 160, 40), "polyamide": (60, 160, 90)}
+_CYCLE = [(200, 80, 80), (80, 120, 200), (150, 90, 180), (40, 170, 170)]
+
+
+def material_colour(name: str, order: list[str]) -> tuple[int, int, int]:
+    return MATERIAL_COLOURS.get(name, _CYCLE[order.index(name) % len(_CYCLE)] if name in order else (128, 128, 128))
+
+
+def composite_image(masks: dict[str, np.ndarray], order: list[str]) -> np.ndarray:
+    """``(H, W, 3) uint8``: each material's pixels in its colour on white (later on top)."""
+    shape = next(iter(masks.values())).shape
+    img = np.full(shape + (3,), 255, np.uint8)
+    for m in order:
+        if m in masks:
+            img[masks[m]] = material_colour(m, order)
+    return img
+
+
+@dataclass(frozen=True)
+class BuildResult:
+    out_dir: Path
+    report_path: Path
+    plan_path: Path
+    summary: dict
+
+
+def _png_rgb(img: np.ndarray) -> bytes:
+    import io
+
+    from PIL import Image
+
+    buf = io.BytesIO()
+    Image.fromarray(img).save(buf, format="PNG", compress_level=6)
+    return buf.getvalue()
+
+
+def _simulate_layers(n_layers: int, present: dict[str, list[int]], k: int) -> dict[str, list[int]]:
+    """Up to ``k`` layers per material to simulate: first, last and evenly between."""
+    out = {}
+    for m, idx in present.items():
+        if not idx or k <= 0:
+            out[m] = []
+            continue
+        sel = np.unique(np.round(np.linspace(0, len(idx) - 1, min(k, len(idx)))).astype(int))
+        out[m] = [idx[i] for i in sel]
+    return out
+
+
+def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, int, int], None] | None = None,
+              check: bool | None = None, report: bool = True) -> BuildResult:
+    """Run the whole pipeline for ``job`` and write ``out_dir``.
+
+    Parameters
+    ----------
+    job : ResolvedJob
+    out_dir : str or Path
+    on_step : callable, optional
+        ``on_step(stage, done, total)`` for progress display.
+    check : bool, optional
+        Run the printability check on every part (default: the job's ``process.check``).
+    report : bool
+        Write ``report.html``.
+
+    Returns
+    -------
+    BuildResult
+    """
+    from ..check import check_printability
+    from ..check.overlay import overlay_image
+    from ..io.atomic import atomic_dir
+    from ..rotary.files import write_print
+    from ..rotary.simulate import render_overlay, simulate
+
+    t0 = time.perf_counter()
+    step = on_step or (lambda *a: None)
+    plan: BuildPlan = plan_job(job)
+    sp = job.spec
+    do_check = sp.process.check if check is None else bool(check)
+    n = len(plan)
+    order = plan.material_order
+    grid1 = plan.design_grid()
+    gridr = plan.design_grid(oversample=RESISTANCE_OVERSAMPLE)
+    res_materials = {job.part(r.part).material for r in sp.resistance}
+    design_masks: dict[str, list[np.ndarray]] = {m: [] for m in res_materials}
+    printed_masks: dict[str, list[np.ndarray]] = {m: [] for m in res_materials}
+    present: dict[str, list[int]] = {m: [] for m in order}
+    composites: list[bytes] = []
+    layers_json = []
+    timings = {}
+    out = Path(out_dir)
+    final = out.resolve()
+    with atomic_dir(out, owned_marker="plan.json") as tmp:
+        (tmp / "layers").mkdir()
+        (tmp / "overlays").mkdir()
+        # printability of every part (exact cross-sections, Cartesian grid at the head's pitch)
+        checks = []
+        tc = time.perf_counter()
+        if do_check:
+            for j, part in enumerate(sp.parts):
+                step("check", j, len(sp.parts))
+                rep = check_printability(plan.meshes[part.name], plan.device, layer_height_mm=sp.job.layer_height_mm,
+                                         tilt_deg=plan.heads[0].tilt_deg, radius_mm=sp.placement.inner_radius_mm)
+                worst_layer = None
+                if rep.findings:
+                    worst_layer = rep.findings[0].layer
+                entry = {"part": part.name, "material": part.material, "ok": rep.ok, "counts": rep.counts(),
+                         "lengths_mm": rep.lengths_mm(), "thinnest_wall": rep.thinnest_wall,
+                         "narrowest_gap": rep.narrowest_gap, "limits": rep.limits,
+                         "findings": [f.to_json() for f in rep.findings[:50]], "findings_total": len(rep.findings),
+                         "overlay": None}
+                if worst_layer is not None:
+                    from ..check import check_layers
+
+                    for lc in check_layers(plan.meshes[part.name], plan.device, layer_height_mm=sp.job.layer_height_mm):
+                        if lc.index == worst_layer:
+                            name = f"overlays/check-{part.name}-layer_{worst_layer:05d}.png"
+                            (tmp / name).write_bytes(_png_rgb(overlay_image(lc)))
+                            entry["overlay"] = name
+                            break
+                checks.append(entry)
+        timings["check_s"] = time.perf_counter() - tc
+        # layers: print-ready images, composites, resistance masks
+        tl = time.perf_counter()
+        total_time_s = 0.0
+        for i in range(n):
+            step("layers", i, n)
+            sched = plan.layer(i)
+            total_time_s += sched.time_s
+            ldir = tmp / "layers" / f"layer_{i:05d}"
+            ldir.mkdir()
+            images = []
+            for (mname, ink), pr in sched.images.items():
+                h = plan.head(ink)
+                side = write_print(pr, ldir / f"{mname}-{ink}.png", device_name=plan.device.name,
+                                   design={"source": f"{mname} in layer {i} (overlaps resolved by priority)", "layer": i})
+                images.append({"material": mname, "ink": ink, "head": h.name, "head_index": h.index,
+                               "mount_angle_deg": h.mount_angle_deg,
+                               "sidecar": f"layers/layer_{i:05d}/{mname}-{ink}.json",
+                               "swathes": [{"file": f"layers/layer_{i:05d}/{s['file']}", "sha256": s["sha256"],
+                                            "drops": s["drops"], "firings": s["firings"]} for s in side["swathes"]]})
+            sections = plan.sections(i)
+            masks = {}
+            for b in sched.blocks:
+                present[b.material].append(i)
+                masks[b.material] = plan.reference_image(b.material, sections)
+            if masks:
+                composites.append(_png_rgb(composite_image(masks, order)))
+            else:
+                composites.append(_png_rgb(np.full((grid1.height_px, grid1.width_px, 3), 255, np.uint8)))
+            for m in res_materials:
+                if m in masks:
+                    design_masks[m].append(plan.reference_image(m, sections, oversample=RESISTANCE_OVERSAMPLE))
+                    cov = None
+                    for ink in job.materials[m].inks:
+                        pr = plan.material_print(m, plan.head(ink.name), sections, i, thinned=False)
+                        ref = masks[m].astype(np.uint8) * 255
+                        p = simulate(pr, ref).printed
+                        cov = p if cov is None else (cov & p)
+                    printed_masks[m].append(cov)
+            layers_json.append({
+                "index": i, "z_bottom_mm": sched.z_bottom_mm, "z_top_mm": sched.z_top_mm, "time_s": sched.time_s,
+                "blocks": [b.to_json() for b in sched.blocks], "images": images,
+            })
+        timings["layers_s"] = time.perf_counter() - tl
+        # simulator overlays of a few layers per material (coverage before density thinning)
+        ts = time.perf_counter()
+        overlays = []
+        pick = _simulate_layers(n, present, sp.process.simulate_layers)
+        for mname, idx in pick.items():
+            ink0 = job.materials[mname].inks[0].name
+            for i in idx:
+                sections = plan.sections(i)
+                pr = plan.material_print(mname, plan.head(ink0), sections, i, thinned=False)
+                ref = plan.reference_image(mname, sections).astype(np.uint8) * 255
+                sim = simulate(pr, ref)
+                name = f"overlays/layer_{i:05d}-{mname}.png"
+                (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))
+                overlays.append({"layer": i, "material": mname, "ink": ink0, "head": plan.head(ink0).name, "file": name,
+                                 "iou": sim.report.iou, "uncovered_fraction": sim.report.uncovered_fraction,
+                                 "drops_outside": sim.report.drops_outside, "mean_error_um": sim.report.mean_error_um})
+        timings["simulate_s"] = time.perf_counter() - ts
+        # resistance estimates
+        tr = time.perf_counter()
+        resistance = []
+        for r in sp.resistance:
+            m = job.part(r.part).material
+            try:
+                d, _ = resistance_from_masks(plan, r, design_masks[m], gridr)
+                p, _ = resistance_from_masks(plan, r, printed_masks[m], grid1)
+            except RotoprintError as exc:
+                resistance.append({"part": r.part, "between": list(r.between), "error": exc.problem})
+                continue
+            track_layers = len([mm for mm in design_masks[m] if mm.any()])
+            sh = job.part(r.part).shape
+            if sh is not None and sh.kind == "square_coil":
+                lh = sp.job.layer_height_mm
+                track_layers = max(1, round(sh.height_mm / lh))
+            hand = coil_hand_check(plan, r, track_layers=track_layers)
+            resistance.append({"part": r.part, "material": m, "between": list(r.between),
+                               "design": {**d, "oversample": RESISTANCE_OVERSAMPLE}, "printed": p, "hand_check": hand})
+        timings["resistance_s"] = time.perf_counter() - tr
+        ide = {}
+        for part in sp.parts:
+            if part.shape is not None and part.shape.kind == "interdigitated":
+                ide[part.name] = {"cell_constant_per_mm": part.shape.cell_constant_per_mm(),
+                                  "note": "film resistance between the combs = film sheet resistance x gap / (overlap x gaps)"}
+        plan_json = {
+            "format": PLAN_FORMAT, "version": 1, "rotoprint": __version__,
+            "source": job.source, **plan.to_json(),
+            "grid": grid1.to_json(),
+            "estimated_print_time_s": total_time_s,
+            "printability": checks,
+            "resistance": resistance,
+            "interdigitated": ide,
+            "overlays": overlays,
+            "timings_s": timings,
+            "layers_detail": layers_json,
+        }
+        text = json.dumps(plan_json, indent=1, default=_json_default)
+        (tmp / "plan.json").write_text(text, encoding="utf-8")
+        if report:
+            from ..report import render_report
+
+            step("report", 0, 1)
+            html = render_report(plan, plan_json, composites=composites, overlays_dir=tmp)
+            (tmp / "report.html").write_text(html, encoding="utf-8")
+    timings["total_s"] = time.perf_counter() - t0
+    summary = {
+        "layers": n, "heads": len(plan.heads), "warnings": plan.warnings, "resistance": resistance,
+        "printability_ok": all(c["ok"] for c in checks) if checks else None, "estimated_print_time_s": total_time_s,
+        "timings_s": timings, "plan_sha256": hashlib.sha256(text.encode()).hexdigest(),
+    }
+    return BuildResult(out_dir=final, report_path=final / "report.html", plan_path=final / "plan.json", summary=summary)
+
+
+def _json_default(o):
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.integer | np.floating):
+        v = o.item()
+        return v if not (isinstance(v, float) and not math.isfinite(v)) else None
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(f"not JSON serialisable: {type(o).__name__}")

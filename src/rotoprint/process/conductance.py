@@ -1,0 +1,109 @@
+"""Resistance of a printed conductor between two named terminals, from a plan.
+
+The conductor is the material's region in every layer (overlaps resolved), on the assembly's
+Cartesian grid: either the exact cross-section rasterised at pixel centres (``"design"``,
+optionally oversampled) or the pixels the simulator says the drops cover (``"printed"``: the
+cell model of :func:`rotoprint.rotary.simulate`, a pixel printed by every ink of the
+material). Stacked layers touch, so their films add: the sheet conductance of a pixel is
+``sigma * sum over layers of t_layer(r)``, with ``t_layer(r) = cycles * t_cycle(r)`` from the
+heads' drop density at the pixel's radius (the 1/r law unless equalised). Laplace's equation
+is solved on that sheet by :func:`.estimates.solve_resistance`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..rotary.direct import PartPlacement
+from ..rotary.placement import Placement
+from .estimates import cycle_thickness_um, solve_resistance
+
+__all__ = ["pixel_centres_model", "terminal_mask", "thickness_map_um", "resistance_from_masks", "coil_hand_check"]
+
+#: A right-angle corner of a uniform track counts this many squares (conformal mapping; the
+#: centreline counts it as one).
+CORNER_SQUARES = 0.559
+
+
+def pixel_centres_model(grid: Placement, part: PartPlacement) -> tuple[np.ndarray, np.ndarray]:
+    """``(W,)`` model X of the columns' centres and ``(H,)`` model Y of the rows' centres."""
+    x = part.footprint_mm[0] + (np.arange(grid.width_px) + 0.5) * grid.pitch_x_mm
+    y = part.y_centre_mm + (grid.height_px / 2.0 - np.arange(grid.height_px) - 0.5) * grid.pitch_y_mm
+    return x, y
+
+
+def terminal_mask(grid: Placement, part: PartPlacement, rect_mm) -> np.ndarray:
+    """``(H, W) bool``: pixels whose centre lies in the model rectangle ``(x0, y0, x1, y1)``."""
+    x, y = pixel_centres_model(grid, part)
+    x0, y0, x1, y1 = rect_mm
+    return ((y >= y0) & (y <= y1))[:, None] & ((x >= x0) & (x <= x1))[None, :]
+
+
+def thickness_map_um(plan, material: str, grid: Placement) -> np.ndarray:
+    """``(H, W) float64``: the material's planned thickness per layer at every pixel, um."""
+    part = plan.placement
+    x, y = pixel_centres_model(grid, part)
+    xl, yl = part.model_to_local(x, y)
+    r = np.hypot(xl[None, :], yl[:, None])
+    mat = plan.job.materials[material]
+    dens = {ink.name: plan.head(ink.name).density_at(r) for ink in mat.inks}
+    est = plan.estimates[material]
+    return est.cycles * np.asarray(cycle_thickness_um(mat, plan.device.head.drop_volume_pl, dens), np.float64)
+
+
+def resistance_from_masks(plan, spec, masks: list[np.ndarray], grid: Placement) -> dict:
+    """Solve one resistance estimate.
+
+    Parameters
+    ----------
+    plan : BuildPlan
+    spec : ResistanceSpec
+        Part and the two terminals.
+    masks : list of (H, W) bool
+        The material's conductor in each layer (on ``grid``).
+    grid : Placement
+    """
+    part_spec = plan.job.part(spec.part)
+    material = part_spec.material
+    mat = plan.job.materials[material]
+    terms = dict(part_spec.shape.terminals()) if part_spec.shape is not None else {}
+    terms.update(part_spec.terminals)
+    t_um = thickness_map_um(plan, material, grid)
+    layers = [m for m in masks if m.any()]
+    total = np.zeros(grid.height_px * grid.width_px).reshape(grid.height_px, grid.width_px)
+    for m in layers:
+        total += np.where(m, t_um, 0.0)
+    g = mat.conductivity_s_per_m * total * 1e-6
+    cond = total > 0
+    ta = terminal_mask(grid, plan.placement, terms[spec.between[0]])
+    tb = terminal_mask(grid, plan.placement, terms[spec.between[1]])
+    res = solve_resistance(cond, sheet_conductance_s=g, terminal_a=ta, terminal_b=tb,
+                           pitch_x_mm=grid.pitch_x_mm, pitch_y_mm=grid.pitch_y_mm)
+    out = {
+        "part": spec.part, "material": material, "between": list(spec.between),
+        "conductivity_s_per_m": mat.conductivity_s_per_m, "layers": len(layers),
+        "pixel_mm": [grid.pitch_x_mm, grid.pitch_y_mm],
+        **res.to_json(),
+    }
+    return out, res
+
+
+def coil_hand_check(plan, spec, *, track_layers: int) -> dict | None:
+    """``R = R_s (L / w - (1 - 0.559) corners)`` for a built-in square coil, with the sheet
+    thickness of ``track_layers`` layers (the track's own layers; the pads are terminals)."""
+    part_spec = plan.job.part(spec.part)
+    sh = part_spec.shape
+    if sh is None or sh.kind != "square_coil" or set(spec.between) != {"outer", "inner"}:
+        return None
+    mat = plan.job.materials[part_spec.material]
+    est = plan.estimates[part_spec.material]
+    t_um = track_layers * est.per_layer_um[0]
+    rs = 1.0 / (mat.conductivity_s_per_m * t_um * 1e-6)
+    L, w, n = sh.track_length_mm(), sh.track_width_mm, sh.corners()
+    squares = L / w - (1 - CORNER_SQUARES) * n
+    return {"track_length_mm": L, "track_width_mm": w, "corners": n, "squares": squares, "thickness_um": t_um,
+            "sheet_resistance_ohm": rs, "resistance_ohm": rs * squares,
+            "formula": "R_s * (L / w - 0.441 * corners), R_s = 1 / (sigma * t)",
+            "straight_ohm": rs * L / w if math.isfinite(rs) else None}

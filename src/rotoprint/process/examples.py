@@ -1,0 +1,193 @@
+"""The bundled sensor examples, written as job files (so ``rotoprint demo`` works after
+``pip install``; ``examples/make_sensors.py`` writes the same files into the repository).
+
+- ``coil-sensor``: a planar square-spiral induction coil (silver, 5 turns, 0.5 mm track and
+  gap) in the top of a plaster body (a mesh file), its pads rising through an epoxy cover.
+  Priorities: silver 3 > epoxy 2 > plaster 1, so the coil displaces the plaster where they
+  overlap and the pads stay open through the cover.
+- ``gas-sensor``: an interdigitated silver electrode (2 x 8 fingers, 0.3 mm wide, 0.3 mm
+  gaps) on a plaster substrate, inside a polyamide well that holds the sensing film.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..examples import write_binary_stl
+from ..testing import box_triangles
+
+__all__ = ["EXAMPLES", "write_example"]
+
+_HEADS = """
+[[printer.heads]]
+name = "H1"
+ink = "ammonium_sulphate"
+mount_angle_deg = 0.0
+
+[[printer.heads]]
+name = "H2"
+ink = "calcium_chloride"
+mount_angle_deg = 60.0
+
+[[printer.heads]]
+name = "H3"
+ink = "silver_nitrate"
+mount_angle_deg = 120.0
+
+[[printer.heads]]
+name = "H4"
+ink = "ascorbate"
+mount_angle_deg = 180.0
+
+[[printer.heads]]
+name = "H5"
+ink = "{ink5}"
+mount_angle_deg = 240.0
+
+[[printer.heads]]
+name = "H6"
+ink = "{ink6}"
+mount_angle_deg = 300.0
+"""
+
+COIL_JOB = """# Planar induction coil sensor: silver coil in a plaster body under an epoxy cover.
+# Made by rotoprint.process.examples (examples/make_sensors.py). Build it with
+#   rotoprint build coil-sensor.toml --out coil-build
+[job]
+name = "coil sensor"
+description = "5-turn square silver coil (0.5 mm track, 0.5 mm gap) in a plaster body, epoxy cover, pads open"
+layer_height_mm = 0.02
+
+[printer]
+device = "omnidot760"
+tilt_deg = 20.0
+direction = 1
+equalise = true          # the same drops per mm2 at every radius (inner tracks thinned)
+
+[printer.clock]
+dpi_y = 360.0            # drops per inch along each swathe's outermost track
+""" + _HEADS.format(ink5="polyepoxide", ink6="diamine") + """
+[placement]
+inner_radius_mm = 60.0   # the assembly's inner edge (smallest X) on the platform
+angle_deg = 0.0
+
+[[parts]]
+name = "body"
+material = "plaster"
+priority = 1
+mesh = "coil-body.stl"   # 22 x 22 x 0.2 mm, min corner at (-3, -3, 0)
+
+[[parts]]
+name = "coil"
+material = "silver"
+priority = 3
+shape = { kind = "square_coil", outer_mm = 16.0, track_width_mm = 0.5, gap_mm = 0.5, turns = 5, height_mm = 0.04, z0_mm = 0.16, pad_mm = 1.2, lead_mm = 0.6, pad_height_mm = 0.14 }
+
+[[parts]]
+name = "cover"
+material = "epoxy"
+priority = 2
+shape = { kind = "box", size_mm = [22.0, 22.0, 0.1], origin_mm = [-3.0, -3.0, 0.2] }
+
+[process]
+order = ["plaster", "silver", "epoxy"]
+max_passes_per_layer = 200
+# silver forms about 17 nm per cycle: a full 20 um layer would need over 1000 cycles, so the
+# coil is a thin film of 30 cycles per layer (the plan warns how far short of the layer it is)
+cycles_per_layer = { silver = 30 }
+simulate_layers = 3
+
+[[resistance]]
+part = "coil"
+between = ["outer", "inner"]
+"""
+
+GAS_JOB = """# Gas sensor: interdigitated silver electrode on plaster, in a polyamide well.
+# Made by rotoprint.process.examples (examples/make_sensors.py). Build it with
+#   rotoprint build gas-sensor.toml --out gas-build
+[job]
+name = "gas sensor"
+description = "interdigitated electrode, 2 x 8 fingers of 0.3 mm with 0.3 mm gaps, 8 mm overlap, in a polyamide well"
+layer_height_mm = 0.02
+
+[printer]
+device = "omnidot760"
+tilt_deg = 20.0
+equalise = true
+
+[printer.clock]
+dpi_y = 360.0
+""" + _HEADS.format(ink5="acyl_thiol", ink6="polyamine") + """
+[placement]
+inner_radius_mm = 70.0
+angle_deg = 0.0
+
+[[parts]]
+name = "substrate"
+material = "plaster"
+priority = 1
+shape = { kind = "box", size_mm = [14.0, 14.0, 0.1], origin_mm = [-2.0, -2.0, 0.0] }
+
+[[parts]]
+name = "electrode"
+material = "silver"
+priority = 3
+shape = { kind = "interdigitated", fingers = 8, finger_width_mm = 0.3, gap_mm = 0.3, overlap_mm = 8.0, bus_width_mm = 1.0, pad_mm = 1.5, height_mm = 0.04, z0_mm = 0.1 }
+
+[[parts]]
+name = "well"
+material = "polyamide"
+priority = 2
+mesh = "gas-well.stl"    # a 14 x 14 mm frame, 1 mm wall, 0.1 mm high, on the substrate
+
+[process]
+order = ["plaster", "silver", "polyamide"]
+cycles_per_layer = { silver = 30 }
+simulate_layers = 2
+
+[[resistance]]
+part = "electrode"
+between = ["A", "B"]     # must be open: the combs do not touch
+
+[[resistance]]
+part = "electrode"
+between = ["A", "A_tip"] # comb A from its pad to its farthest finger tip
+"""
+
+
+def _coil_body() -> bytes:
+    return box_triangles((22.0, 22.0, 0.2), (-3.0, -3.0, 0.0))
+
+
+def _gas_well():
+    import numpy as np
+
+    z0, h = 0.1, 0.1
+    return np.concatenate([
+        box_triangles((14.0, 1.0, h), (-2.0, -2.0, z0)),
+        box_triangles((14.0, 1.0, h), (-2.0, 11.0, z0)),
+        box_triangles((1.0, 14.0, h), (-2.0, -2.0, z0)),
+        box_triangles((1.0, 14.0, h), (11.0, -2.0, z0)),
+    ])
+
+
+#: name -> (job file name, job text, {mesh file: triangle maker})
+EXAMPLES = {
+    "coil-sensor": ("coil-sensor.toml", COIL_JOB, {"coil-body.stl": _coil_body}),
+    "gas-sensor": ("gas-sensor.toml", GAS_JOB, {"gas-well.stl": _gas_well}),
+}
+
+
+def write_example(name: str, folder: str | Path) -> Path:
+    """Write example ``name`` (job file and its meshes) into ``folder``; returns the job path."""
+    from ..errors import ConfigError
+
+    if name not in EXAMPLES:
+        raise ConfigError(f"unknown example {name!r}; examples: {', '.join(EXAMPLES)}")
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    job_name, text, meshes = EXAMPLES[name]
+    for fname, make in meshes.items():
+        write_binary_stl(folder / fname, make())
+    (folder / job_name).write_text(text, encoding="utf-8")
+    return folder / job_name

@@ -1,0 +1,325 @@
+"""The job file: one TOML file describes a multi-material print (see ``docs/build.md``).
+
+::
+
+    [job]
+    name = "coil sensor"
+    layer_height_mm = 0.02
+
+    [printer]
+    device = "omnidot760"      # preset or device .toml
+    tilt_deg = 20.0
+    equalise = true            # thin inner tracks: the same drops per mm2 at every radius
+    [printer.clock]
+    dpi_y = 360.0              # drops per inch along the track at the reference radius
+    [[printer.heads]]
+    name = "H1"
+    ink = "ammonium_sulphate"
+    mount_angle_deg = 0.0
+
+    [placement]
+    inner_radius_mm = 60.0
+    angle_deg = 0.0
+
+    [[parts]]
+    name = "body"
+    material = "plaster"
+    priority = 1
+    mesh = "body.stl"          # or: shape = { kind = "box", size_mm = [20, 20, 0.2] }
+
+    [[resistance]]
+    part = "coil"
+    between = ["outer", "inner"]
+
+Validation errors name the field (``parts[1].material: unknown material 'silvr' ...``) and the
+file, and are :class:`~rotoprint.errors.ConfigError` (exit code 2 on the command line).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from ..errors import ConfigError, InputFileError
+from .materials import Material, MaterialLibrary, builtin_library, load_materials, validation_message
+from .shapes import Shape
+
+__all__ = ["JobSpec", "JobInfo", "PrinterSpec", "HeadSpec", "ClockSpec", "PlacementSpec", "PartSpec", "ResistanceSpec",
+           "ProcessSpec", "load_job", "parse_job", "ResolvedJob"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class JobInfo(_Strict):
+    name: str = "job"
+    layer_height_mm: float = Field(gt=0, le=10)
+    materials_file: str | None = None
+    description: str = ""
+
+
+class ClockSpec(_Strict):
+    """The angular clock: ``dpi_y`` drops per inch along the track at the reference radius
+    (default: each swathe's outermost track), fired at most at ``frequency_hz`` (default: the
+    head's maximum)."""
+
+    dpi_y: float | None = Field(default=None, gt=0, le=100_000)
+    ref_radius_mm: float | None = Field(default=None, gt=0)
+    frequency_hz: float | None = Field(default=None, gt=0)
+
+
+class HeadSpec(_Strict):
+    """One head on the machine, carrying one ink."""
+
+    name: str = Field(min_length=1)
+    ink: str = Field(min_length=1)
+    mount_angle_deg: float = 0.0
+    tilt_deg: float | None = None
+
+    @field_validator("mount_angle_deg")
+    @classmethod
+    def _finite(cls, v: float) -> float:
+        if not math.isfinite(v):
+            raise ValueError("must be a finite number of degrees")
+        return v
+
+
+class PrinterSpec(_Strict):
+    device: str = "omnidot760"
+    tilt_deg: float = 0.0
+    direction: int = 1
+    equalise: bool = True
+    max_swathes: int | None = Field(default=None, ge=1)
+    clock: ClockSpec = ClockSpec()
+    heads: tuple[HeadSpec, ...] = Field(min_length=1)
+
+    @field_validator("direction")
+    @classmethod
+    def _dir(cls, v: int) -> int:
+        if v not in (1, -1):
+            raise ValueError("must be 1 (counter-clockwise) or -1 (clockwise)")
+        return v
+
+    @model_validator(mode="after")
+    def _unique(self) -> PrinterSpec:
+        for attr in ("name", "ink"):
+            vals = [getattr(h, attr) for h in self.heads]
+            dup = sorted({v for v in vals if vals.count(v) > 1})
+            if dup:
+                raise ValueError(f"two heads have the {attr} {dup[0]!r}; each head carries one ink and each ink one head")
+        return self
+
+
+class PlacementSpec(_Strict):
+    """Where the assembly's footprint sits: its inner edge (smallest model X) at
+    ``inner_radius_mm`` on the centre line at ``angle_deg`` (see ``docs/rotary.md``)."""
+
+    inner_radius_mm: float = Field(gt=0)
+    angle_deg: float = 0.0
+
+
+class PartSpec(_Strict):
+    """A part: a mesh file or a built-in shape, made of one material.
+
+    Where parts of different materials overlap, the pixel (drop) belongs to the part with the
+    highest ``priority``. ``cycles_per_layer`` overrides the planner's number of cycles."""
+
+    name: str = Field(min_length=1)
+    material: str = Field(min_length=1)
+    priority: int = 0
+    mesh: str | None = None
+    shape: Shape | None = None
+    units: str = "mm"
+    rotate_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    translate_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    terminals: dict[str, tuple[float, float, float, float]] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _one_source(self) -> PartSpec:
+        if (self.mesh is None) == (self.shape is None):
+            raise ValueError("give exactly one of 'mesh' (a file) or 'shape' (a built-in shape)")
+        for k, (x0, y0, x1, y1) in self.terminals.items():
+            if not (x1 > x0 and y1 > y0):
+                raise ValueError(f"terminal {k!r} must be [x0, y0, x1, y1] with x1 > x0 and y1 > y0")
+        return self
+
+
+class ResistanceSpec(_Strict):
+    part: str
+    between: tuple[str, str]
+
+
+class ProcessSpec(_Strict):
+    """Planner settings: material order in a layer, the most passes per layer before a
+    warning, and per-material overrides of the cycles per layer."""
+
+    order: tuple[str, ...] | None = None
+    max_passes_per_layer: int = Field(default=200, ge=1)
+    cycles_per_layer: dict[str, int] = Field(default_factory=dict)
+    check: bool = True
+    simulate_layers: int = Field(default=4, ge=0, le=1000)
+
+    @field_validator("cycles_per_layer")
+    @classmethod
+    def _pos(cls, v: dict[str, int]) -> dict[str, int]:
+        bad = {k: n for k, n in v.items() if n < 1}
+        if bad:
+            raise ValueError(f"cycles must be >= 1, got {bad}")
+        return v
+
+
+class JobSpec(_Strict):
+    job: JobInfo
+    printer: PrinterSpec
+    placement: PlacementSpec
+    parts: tuple[PartSpec, ...] = Field(min_length=1)
+    resistance: tuple[ResistanceSpec, ...] = ()
+    process: ProcessSpec = ProcessSpec()
+    materials: dict[str, dict] = Field(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _names(self) -> JobSpec:
+        names = [p.name for p in self.parts]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"two parts are named {dup[0]!r}")
+        return self
+
+
+class ResolvedJob:
+    """A validated job with its materials resolved and paths made absolute.
+
+    Attributes
+    ----------
+    spec : JobSpec
+    materials : dict[str, Material]
+        The materials the parts use, in print order within a layer.
+    base_dir : Path
+        Folder of the job file (mesh paths are relative to it).
+    """
+
+    def __init__(self, spec: JobSpec, library: MaterialLibrary, base_dir: Path, source: str | None) -> None:
+        self.spec = spec
+        self.library = library
+        self.base_dir = base_dir
+        self.source = source
+        used = []
+        for p in spec.parts:
+            if p.material not in used:
+                used.append(p.material)
+        order = list(spec.process.order) if spec.process.order is not None else used
+        self.material_order: list[str] = order
+        self.materials: dict[str, Material] = {n: library[n] for n in order}
+
+    def part(self, name: str) -> PartSpec:
+        for p in self.spec.parts:
+            if p.name == name:
+                return p
+        raise ConfigError(f"no part named {name!r}", path=self.source)
+
+    def head_for_ink(self, ink: str) -> int:
+        for j, h in enumerate(self.spec.printer.heads):
+            if h.ink == ink:
+                return j
+        raise ConfigError(f"no head carries the ink {ink!r}", path=self.source)
+
+
+def _check_refs(spec: JobSpec, lib: MaterialLibrary, src: str | None) -> None:
+    def err(msg: str):
+        raise ConfigError(msg, path=src)
+
+    for i, p in enumerate(spec.parts):
+        if p.material not in lib:
+            err(f"parts[{i}].material: unknown material {p.material!r}; known: {', '.join(lib.names())}")
+    used = {p.material for p in spec.parts}
+    if spec.process.order is not None:
+        order = list(spec.process.order)
+        for j, m in enumerate(order):
+            if m not in used:
+                err(f"process.order[{j}]: {m!r} is not the material of any part")
+        missing = sorted(used - set(order))
+        if missing:
+            err(f"process.order: the material {missing[0]!r} of a part is missing from the order")
+        if len(set(order)) != len(order):
+            err("process.order: a material is listed twice")
+    for m in spec.process.cycles_per_layer:
+        if m not in used:
+            err(f"process.cycles_per_layer.{m}: not the material of any part")
+    inks = {h.ink: j for j, h in enumerate(spec.printer.heads)}
+    for m in sorted(used):
+        for ink in lib[m].inks:
+            if ink.name not in inks:
+                err(f"printer.heads: no head carries the ink {ink.name!r} that material {m!r} needs "
+                    f"(inks: {', '.join(i.name for i in lib[m].inks)})")
+    # parts of different materials with the same priority could overlap ambiguously
+    seen: dict[int, str] = {}
+    for i, p in enumerate(spec.parts):
+        other = seen.get(p.priority)
+        if other is not None and other != p.material:
+            err(f"parts[{i}].priority: {p.priority} is also the priority of a {other!r} part; parts of different "
+                "materials need different priorities (the higher one wins where they overlap)")
+        seen[p.priority] = p.material
+    names = {p.name: p for p in spec.parts}
+    for i, r in enumerate(spec.resistance):
+        if r.part not in names:
+            err(f"resistance[{i}].part: no part named {r.part!r}")
+        p = names[r.part]
+        if not lib[p.material].conductive:
+            err(f"resistance[{i}].part: {r.part!r} is {p.material}, which has no conductivity")
+        avail = dict(p.terminals)
+        if p.shape is not None:
+            avail = {**p.shape.terminals(), **avail}
+        for t in r.between:
+            if t not in avail:
+                err(f"resistance[{i}].between: part {r.part!r} has no terminal {t!r}; it has: {', '.join(sorted(avail)) or 'none'}")
+        if r.between[0] == r.between[1]:
+            err(f"resistance[{i}].between: the two terminals must differ")
+
+
+def parse_job(data: dict, *, base_dir: str | Path = ".", source: str | None = None) -> ResolvedJob:
+    """Validate a job given as a dict (the parsed TOML)."""
+    try:
+        spec = JobSpec.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(validation_message(exc), path=source) from None
+    base = Path(base_dir)
+    lib = builtin_library()
+    if spec.job.materials_file:
+        mp = Path(spec.job.materials_file)
+        lib = load_materials(mp if mp.is_absolute() else base / mp, base=lib)
+    if spec.materials:
+        lib = load_materials(spec.materials, base=lib)
+    _check_refs(spec, lib, source)
+    return ResolvedJob(spec, lib, base, source)
+
+
+def load_job(path: str | Path) -> ResolvedJob:
+    """Read and validate a job file.
+
+    Raises
+    ------
+    InputFileError
+        Missing or unreadable file.
+    ConfigError
+        Not TOML, or a field is missing or invalid (the message names the field).
+    """
+    p = Path(path)
+    if not p.exists():
+        raise InputFileError("no such job file", path=p)
+    if p.is_dir():
+        raise InputFileError("is a directory, expected a job .toml file", path=p)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except UnicodeDecodeError:
+        raise ConfigError("job file is not UTF-8 text", path=p) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"not valid TOML: {exc}", path=p) from None
+    return parse_job(data, base_dir=p.resolve().parent, source=str(p))
+
+
+def material_of(job: ResolvedJob, name: str) -> Material:
+    return job.materials[name]

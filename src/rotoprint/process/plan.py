@@ -1,0 +1,471 @@
+"""The pass plan: for every layer, the ordered passes (head, ink, print-ready image, repeats),
+waits and post-steps, from a job (:mod:`.job`).
+
+How a plan is made:
+
+1. Every part is loaded (mesh file or built-in shape) in the job's model frame; the assembly's
+   footprint (XY bounding box of all parts) is placed on the platform as one part
+   (:class:`~rotoprint.rotary.direct.PartPlacement`) and its height range is cut into layers
+   (:func:`~rotoprint.slicing.layers.plan_layers`), so every material's layer ``i`` is the same
+   slab.
+2. Each head gets the direct rotary slicer's drop lattice for the assembly
+   (:func:`~rotoprint.rotary.direct.slice_rotary` with the head's tilt; a head mounted at
+   ``psi`` prints the part at ``angle - psi`` in its own frame, which is the same landing
+   geometry). A material's image on a head is the direct slicer's print of each of its parts'
+   exact cross-sections on that head's lattice.
+3. Overlaps: a drop of a part is removed where its landing point is inside a part of another
+   material with a higher priority (the same exact inside rule, on the same lattice, without
+   density thinning), so every drop site belongs to at most one material.
+4. Passes: per material, one *cycle* is every ink in order, each ``repeats`` times; the
+   cycles per layer are the fewest that make the thinnest point of the material (lowest drop
+   density over its radial band) reach the layer height, from :mod:`.estimates`. More passes
+   than ``process.max_passes_per_layer`` give a warning and are capped.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..devices import InkjetDevice, load_device
+from ..errors import ConfigError, RotoprintError
+from ..mesh import Mesh
+from ..rotary.direct import DirectSliceJob, PartPlacement, rasterize_section, slice_rotary
+from ..rotary.placement import Placement
+from ..rotary.printdata import RotaryPrint
+from ..slicing import slice_mesh
+from ..slicing._sections import Segments
+from .estimates import cycle_thickness_um, cycles_for_height, track_density_per_mm2, wet_film_um
+from .job import ResolvedJob
+from .materials import Material
+
+__all__ = ["HeadSetup", "PassStep", "MaterialBlock", "LayerSchedule", "MaterialEstimate", "BuildPlan", "plan_job",
+           "load_part_mesh"]
+
+log = logging.getLogger(__name__)
+
+#: Radii sampled over a material's band for the thickness profile.
+_PROFILE_SAMPLES = 64
+#: Relative spread of a material's thickness over its band above which the plan warns.
+THICKNESS_SPREAD_WARN = 0.10
+#: A material whose planned thickness falls short of the layer height by more than this warns.
+SHORTFALL_WARN = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class HeadSetup:
+    """One head of the job with its drop lattice.
+
+    Attributes
+    ----------
+    lattice : DirectSliceJob
+        Direct slicer for the assembly in the head's frame (with the job's equalisation).
+    inside : DirectSliceJob
+        The same lattice without thinning: "landing point inside" for priority masks.
+    r_mm, density_per_mm2 : (M,) float64
+        Track radii and drops per mm^2 (after equalisation when on).
+    revolution_s : tuple of float
+        Time of one revolution per swathe at the clock frequency.
+    """
+
+    index: int
+    name: str
+    ink: str
+    mount_angle_deg: float
+    tilt_deg: float
+    lattice: DirectSliceJob
+    inside: DirectSliceJob
+    r_mm: np.ndarray
+    density_per_mm2: np.ndarray
+    frequency_hz: float
+    revolution_s: tuple[float, ...]
+
+    def density_at(self, r_mm) -> np.ndarray:
+        """Drops per mm^2 at radii ``r_mm`` (linear between tracks, held beyond them)."""
+        return np.interp(np.asarray(r_mm, np.float64), self.r_mm, self.density_per_mm2)
+
+    def to_json(self) -> dict:
+        return {
+            "index": self.index, "name": self.name, "ink": self.ink, "mount_angle_deg": self.mount_angle_deg,
+            "tilt_deg": self.tilt_deg, "frequency_hz": self.frequency_hz,
+            "revolution_s": list(self.revolution_s), "swathes": len(self.lattice.tracks),
+            "density_per_mm2": {"min": float(self.density_per_mm2.min()), "max": float(self.density_per_mm2.max())},
+            "lattice": self.lattice.to_json(),
+        }
+
+
+@dataclass(frozen=True)
+class PassStep:
+    """``repeats`` consecutive passes of one ink by one head, then ``wait_s``."""
+
+    material: str
+    ink: str
+    head: str
+    head_index: int
+    repeats: int
+    wait_s: float = 0.0
+
+    def to_json(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+@dataclass(frozen=True)
+class MaterialEstimate:
+    """Thickness figures of a material over its radial band (the same for every layer).
+
+    ``per_pass_wet_um`` per ink: wet film of one pass at the band's lowest and highest
+    density; ``per_cycle_um``: solid of one cycle (min, max over the band); ``cycles``: per
+    layer; ``per_layer_um``: ``cycles * per_cycle`` (min, max)."""
+
+    material: str
+    band_mm: tuple[float, float]
+    per_pass_wet_um: dict[str, tuple[float, float]]
+    per_cycle_um: tuple[float, float]
+    cycles: int
+    cycles_needed: int
+    passes_per_layer: int
+    per_layer_um: tuple[float, float]
+    profile_r_mm: np.ndarray
+    profile_per_layer_um: np.ndarray
+    warnings: tuple[str, ...]
+
+    def to_json(self) -> dict:
+        d = {k: v for k, v in dataclasses.asdict(self).items() if not k.startswith("profile")}
+        d["profile"] = {"r_mm": self.profile_r_mm.round(4).tolist(), "per_layer_um": self.profile_per_layer_um.round(5).tolist()}
+        return d
+
+
+@dataclass(frozen=True)
+class MaterialBlock:
+    """One material in one layer: ``cycles`` times the ``passes`` in order, then the post-steps."""
+
+    material: str
+    cycles: int
+    passes: tuple[PassStep, ...]
+    post_steps: tuple[str, ...]
+    drops: dict[str, int]
+    thickness_um: tuple[float, float]
+
+    @property
+    def pass_count(self) -> int:
+        return self.cycles * sum(p.repeats for p in self.passes)
+
+    def to_json(self) -> dict:
+        return {"material": self.material, "cycles": self.cycles, "passes_per_cycle": [p.to_json() for p in self.passes],
+                "passes": self.pass_count, "post_steps": list(self.post_steps), "drops_per_pass": self.drops,
+                "thickness_um": list(self.thickness_um)}
+
+
+@dataclass(frozen=True, eq=False)
+class LayerSchedule:
+    """Layer ``index``: the material blocks in print order and the print-ready images.
+
+    ``images[(material, ink)]`` is the :class:`RotaryPrint` for that ink's head (one
+    ``(F, N) uint8`` image per swathe); ``time_s`` the estimated printing time."""
+
+    index: int
+    z_bottom_mm: float
+    z_top_mm: float
+    blocks: tuple[MaterialBlock, ...]
+    images: dict[tuple[str, str], RotaryPrint] = field(repr=False)
+    time_s: float
+
+    def sequence(self) -> list[dict]:
+        """The layer's steps in order, cycles expanded: ``{"kind": "pass"|"post", ...}``."""
+        out = []
+        for b in self.blocks:
+            for c in range(b.cycles):
+                for p in b.passes:
+                    out.append({"kind": "pass", "cycle": c, **p.to_json()})
+            for s in b.post_steps:
+                out.append({"kind": "post", "material": b.material, "step": s})
+        return out
+
+
+def load_part_mesh(job: ResolvedJob, part) -> Mesh:
+    """A part's mesh in the job's model frame (mm)."""
+    from ..io.mesh import load_mesh, make_transform
+
+    T = make_transform(translate_mm=tuple(part.translate_mm), rotate_deg=tuple(part.rotate_deg), scale=1.0)
+    if part.mesh is not None:
+        from pathlib import Path
+
+        p = Path(part.mesh)
+        return load_mesh(p if p.is_absolute() else job.base_dir / p, units=part.units, transform=T)
+    mesh = Mesh.from_triangles(part.shape.triangles(), source=f"shape {part.shape.kind} (part {part.name})")
+    return mesh if np.array_equal(T, np.eye(4)) else mesh.transformed(T)
+
+
+class BuildPlan:
+    """A planned multi-material job. :meth:`layer` makes one layer's schedule and images."""
+
+    def __init__(self, job: ResolvedJob, device: InkjetDevice, meshes: dict[str, Mesh], heads: tuple[HeadSetup, ...],
+                 estimates: dict[str, MaterialEstimate], warnings: list[str]) -> None:
+        self.job = job
+        self.device = device
+        self.meshes = meshes
+        self.heads = heads
+        self.estimates = estimates
+        self.warnings = warnings
+        h0 = heads[0].lattice
+        self.layers = h0.layers
+        self.placement: PartPlacement = dataclasses.replace(h0.part, angle_deg=job.spec.placement.angle_deg)
+        lh = job.spec.job.layer_height_mm
+        self._slicers = {n: slice_mesh(m, device, layer_height_mm=lh) for n, m in meshes.items()}
+
+    def __len__(self) -> int:
+        return len(self.layers)
+
+    @property
+    def material_order(self) -> list[str]:
+        return self.job.material_order
+
+    def head(self, name_or_ink: str) -> HeadSetup:
+        for h in self.heads:
+            if name_or_ink in (h.name, h.ink):
+                return h
+        raise ConfigError(f"no head named or carrying {name_or_ink!r}")
+
+    def design_grid(self, *, oversample: int = 1) -> Placement:
+        """The assembly's Cartesian grid at the first head's pitch, in the job's placement."""
+        d = self.heads[0].lattice.design
+        return self.placement.design_placement(d.pitch_x_mm, d.pitch_y_mm, oversample=oversample)
+
+    def sections(self, index: int) -> dict[str, Segments]:
+        """Exact cross-sections (model XY) of every part in layer ``index``."""
+        z = float(self.layers.z_slice_mm[index])
+        return {n: s.segments_at(z)[0] for n, s in self._slicers.items()}
+
+    def _higher(self, part) -> list[str]:
+        return [q.name for q in self.job.spec.parts if q.material != part.material and q.priority > part.priority]
+
+    def material_print(self, material: str, head: HeadSetup, sections: dict[str, Segments], index: int, *,
+                       thinned: bool = True) -> RotaryPrint:
+        """The print of ``material`` on ``head`` in layer ``index``, overlaps resolved.
+
+        ``thinned=False`` gives every lattice site inside the region (no density
+        equalisation): the coverage the drops' film makes, for the simulator's cell model."""
+        lat = head.lattice if thinned else head.inside
+        A = self.job.spec.placement.angle_deg
+        levels = None
+        pr0 = None
+        for part in self.job.spec.parts:
+            if part.material != material:
+                continue
+            seg = sections[part.name]
+            pr = lat.print_from_segments(seg, layer_index=index)
+            blocks = [sections[q] for q in self._higher(part) if len(sections[q])]
+            lv = [s.levels.copy() for s in pr.swathes]
+            for q in blocks:
+                ins = head.inside.print_from_segments(q, layer_index=index)
+                for j, s in enumerate(ins.swathes):
+                    lv[j][s.levels > 0] = 0
+            levels = lv if levels is None else [np.maximum(a, b) for a, b in zip(levels, lv)]
+            pr0 = pr
+        if pr0 is None:
+            raise ConfigError(f"no part is made of {material!r}")
+        sw = tuple(dataclasses.replace(s, levels=lv) for s, lv in zip(pr0.swathes, levels))
+        return dataclasses.replace(pr0, swathes=sw, mount_angle_deg=head.mount_angle_deg,
+                                   placement=dataclasses.replace(pr0.placement, angle_deg=A))
+
+    def layer(self, index: int) -> LayerSchedule:
+        """Schedule and print-ready images of layer ``index``."""
+        if not 0 <= index < len(self):
+            raise IndexError(f"layer {index} out of range 0..{len(self) - 1}")
+        sections = self.sections(index)
+        images: dict[tuple[str, str], RotaryPrint] = {}
+        blocks = []
+        t = 0.0
+        for mname in self.material_order:
+            mat: Material = self.job.materials[mname]
+            if not any(len(sections[p.name]) for p in self.job.spec.parts if p.material == mname):
+                continue
+            drops = {}
+            for ink in mat.inks:
+                h = self.head(ink.name)
+                pr = self.material_print(mname, h, sections, index)
+                images[(mname, ink.name)] = pr
+                drops[ink.name] = int(sum(np.count_nonzero(s.levels) for s in pr.swathes))
+            if not any(drops.values()):
+                for ink in mat.inks:
+                    images.pop((mname, ink.name), None)
+                continue
+            est = self.estimates[mname]
+            passes = tuple(
+                PassStep(material=mname, ink=ink.name, head=self.head(ink.name).name, head_index=self.head(ink.name).index,
+                         repeats=ink.repeats, wait_s=ink.wait_after_s)
+                for ink in mat.inks
+            )
+            blk = MaterialBlock(material=mname, cycles=est.cycles, passes=passes,
+                                post_steps=tuple(s.describe() for s in mat.post_steps), drops=drops,
+                                thickness_um=est.per_layer_um)
+            blocks.append(blk)
+            for p in passes:
+                h = self.heads[p.head_index]
+                t += est.cycles * p.repeats * (sum(h.revolution_s) + p.wait_s)
+            t += sum(s.duration_s for s in mat.post_steps)
+        return LayerSchedule(index=index, z_bottom_mm=float(self.layers.z_bottom_mm[index]),
+                             z_top_mm=float(self.layers.z_top_mm[index]), blocks=tuple(blocks), images=images, time_s=t)
+
+    def __iter__(self) -> Iterator[LayerSchedule]:
+        for i in range(len(self)):
+            yield self.layer(i)
+
+    def reference_image(self, material: str, sections: dict[str, Segments], *, oversample: int = 1) -> np.ndarray:
+        """``(H, W) bool``: the material's region (overlaps resolved) on the assembly's grid."""
+        grid = self.design_grid(oversample=oversample)
+        out = np.zeros((grid.height_px, grid.width_px), bool)
+        for part in self.job.spec.parts:
+            if part.material != material or not len(sections[part.name]):
+                continue
+            m = rasterize_section(sections[part.name], self.placement, grid) > 0
+            for q in self._higher(part):
+                if len(sections[q]):
+                    m &= ~(rasterize_section(sections[q], self.placement, grid) > 0)
+            out |= m
+        return out
+
+    def to_json(self) -> dict:
+        sp = self.job.spec
+        return {
+            "job": sp.job.model_dump(mode="json"),
+            "device": self.device.name,
+            "head_model": self.device.head.model_dump(mode="json"),
+            "placement": self.placement.to_json(),
+            "layers": len(self),
+            "layer_height_mm": sp.job.layer_height_mm,
+            "material_order": self.material_order,
+            "materials": {n: m.model_dump(mode="json") for n, m in self.job.materials.items()},
+            "parts": [p.model_dump(mode="json", exclude_none=True) for p in sp.parts],
+            "heads": [h.to_json() for h in self.heads],
+            "estimates": {n: e.to_json() for n, e in self.estimates.items()},
+            "warnings": list(self.warnings),
+        }
+
+
+def _band(plan_part: PartPlacement, meshes: list[Mesh]) -> tuple[float, float]:
+    lo = np.min([m.bounds[0][:2] for m in meshes], axis=0)
+    hi = np.max([m.bounds[1][:2] for m in meshes], axis=0)
+    xs = np.array([lo[0], hi[0]])
+    ys = np.array([lo[1], hi[1]])
+    xl, yl = plan_part.model_to_local(xs, ys)
+    r_in = float(xl[0]) if yl[0] <= 0 <= yl[1] else float(min(np.hypot(xl[0], yl[0]), np.hypot(xl[0], yl[1])))
+    r_out = float(max(np.hypot(xl[1], yl[0]), np.hypot(xl[1], yl[1])))
+    return r_in, r_out
+
+
+def _estimate(job: ResolvedJob, mat: Material, heads: dict[str, HeadSetup], band: tuple[float, float], v_pl: float,
+              layer_um: float) -> MaterialEstimate:
+    sp = job.spec.process
+    r = np.linspace(band[0], band[1], _PROFILE_SAMPLES)
+    dens = {ink.name: heads[ink.name].density_at(r) for ink in mat.inks}
+    t_cyc = np.asarray(cycle_thickness_um(mat, v_pl, dens), np.float64)
+    t_min, t_max = float(t_cyc.min()), float(t_cyc.max())
+    wet = {k: (float(wet_film_um(v_pl, d.min())), float(wet_film_um(v_pl, d.max()))) for k, d in dens.items()}
+    needed = cycles_for_height(layer_um, t_min)
+    ppc = mat.passes_per_cycle
+    warn = []
+    name = mat.name
+    if name in sp.cycles_per_layer:
+        cycles = sp.cycles_per_layer[name]
+        if cycles * t_min < (1 - SHORTFALL_WARN) * layer_um:
+            warn.append(f"{name}: {cycles} cycle(s) per layer (set in the job) make {cycles * t_min:.3g} um at the "
+                        f"thinnest point, {100 * (1 - cycles * t_min / layer_um):.0f} % short of the {layer_um:g} um "
+                        f"layer; {needed} cycles would reach it")
+    elif needed * ppc > sp.max_passes_per_layer:
+        cycles = max(1, sp.max_passes_per_layer // ppc)
+        warn.append(f"{name}: reaching the {layer_um:g} um layer needs {needed} cycles ({needed * ppc} passes) at "
+                    f"{t_min * 1000:.3g} nm per cycle, more than process.max_passes_per_layer = "
+                    f"{sp.max_passes_per_layer}; planned {cycles} cycles ({cycles * t_min:.3g} um, "
+                    f"{100 * (1 - cycles * t_min / layer_um):.0f} % short): use a thinner layer, stronger inks or "
+                    f"set process.cycles_per_layer.{name}")
+    else:
+        cycles = needed
+    if t_max > (1 + THICKNESS_SPREAD_WARN) * t_min:
+        warn.append(f"{name}: the thickness per cycle varies by {100 * (t_max / t_min - 1):.0f} % over radii "
+                    f"{band[0]:.1f}-{band[1]:.1f} mm (1/r drop density of one angular clock); set printer.equalise = true")
+    for ink in mat.inks:
+        if ink.warning:
+            warn.append(f"{name}: {ink.warning}")
+    warn.extend(f"{name}: {w}" for w in mat.warnings)
+    return MaterialEstimate(
+        material=name, band_mm=band, per_pass_wet_um=wet, per_cycle_um=(t_min, t_max), cycles=cycles,
+        cycles_needed=needed, passes_per_layer=cycles * ppc, per_layer_um=(cycles * t_min, cycles * t_max),
+        profile_r_mm=r, profile_per_layer_um=cycles * t_cyc, warnings=tuple(warn),
+    )
+
+
+def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
+    """Plan a validated job: meshes, head lattices, estimates (images come per layer).
+
+    Parameters
+    ----------
+    job : ResolvedJob
+        From :func:`rotoprint.process.load_job` or :func:`~rotoprint.process.parse_job`.
+    kernel : {'numba', 'numpy'}
+        Direct slicer kernel (identical output).
+
+    Returns
+    -------
+    BuildPlan
+    """
+    sp = job.spec
+    device = load_device(sp.printer.device)
+    if not isinstance(device, InkjetDevice):
+        raise ConfigError(f"printer.device: {device.name!r} is not an inkjet head; a multi-material job needs print heads",
+                          path=job.source)
+    meshes = {}
+    for i, p in enumerate(sp.parts):
+        try:
+            meshes[p.name] = load_part_mesh(job, p)
+        except RotoprintError as exc:
+            raise type(exc)(f"parts[{i}].{'mesh' if p.mesh else 'shape'} (part {p.name!r}, referenced by {job.source or 'the job'}): "
+                            f"{exc.problem}", path=exc.path) from None
+    union = Mesh.from_triangles(np.concatenate([m.triangles for m in meshes.values()]), source="assembly")
+    used_inks = {ink.name for m in job.materials.values() for ink in m.inks}
+    clk = sp.printer.clock
+    heads: list[HeadSetup] = []
+    for j, hs in enumerate(sp.printer.heads):
+        if hs.ink not in used_inks:
+            continue
+        tilt = sp.printer.tilt_deg if hs.tilt_deg is None else hs.tilt_deg
+        try:
+            lat = slice_rotary(
+                union, device, layer_height_mm=sp.job.layer_height_mm, tilt_deg=tilt,
+                inner_radius_mm=sp.placement.inner_radius_mm, angle_deg=sp.placement.angle_deg - hs.mount_angle_deg,
+                dpi_y=clk.dpi_y, ref_radius_mm=clk.ref_radius_mm, direction=sp.printer.direction,
+                max_swathes=sp.printer.max_swathes, equalise=sp.printer.equalise, kernel=kernel,
+            )
+        except RotoprintError as exc:
+            fld = "printer.tilt_deg" if hs.tilt_deg is None else f"printer.heads[{j}].tilt_deg"
+            if "tilt" not in exc.problem:
+                fld = f"printer.heads[{j}] ({hs.name})"
+            raise ConfigError(f"{fld}: {exc.problem}", path=job.source) from None
+        inside = DirectSliceJob(lat.slice_job, lat.head, lat.part, lat.design, lat.plan, lat.tracks, dpi_y=lat.dpi_y,
+                                fill=lat.fill, equalise=False, kernel=lat.kernel)
+        r, dens = track_density_per_mm2(lat.tracks, equalised=sp.printer.equalise)
+        f = device.head.max_frequency_hz if clk.frequency_hz is None else clk.frequency_hz
+        if f > device.head.max_frequency_hz:
+            raise ConfigError(f"printer.clock.frequency_hz: {f:g} Hz is above the head's maximum "
+                              f"{device.head.max_frequency_hz:g} Hz", path=job.source)
+        rev = tuple(2 * math.pi / t.dphi_rad / f for t in lat.tracks)
+        heads.append(HeadSetup(index=j, name=hs.name, ink=hs.ink, mount_angle_deg=hs.mount_angle_deg, tilt_deg=tilt,
+                               lattice=lat, inside=inside, r_mm=r, density_per_mm2=dens, frequency_hz=f, revolution_s=rev))
+    by_ink = {h.ink: h for h in heads}
+    part0 = heads[0].lattice.part
+    v_pl = device.head.drop_volume_pl
+    layer_um = sp.job.layer_height_mm * 1000
+    estimates = {}
+    warnings: list[str] = []
+    for mname, mat in job.materials.items():
+        band = _band(part0, [meshes[p.name] for p in sp.parts if p.material == mname])
+        est = _estimate(job, mat, by_ink, band, v_pl, layer_um)
+        estimates[mname] = est
+        warnings.extend(est.warnings)
+    log.debug("planned %d layers, %d heads", len(heads[0].lattice), len(heads))
+    return BuildPlan(job, device, meshes, tuple(heads), estimates, warnings)
