@@ -129,7 +129,7 @@ def test_rerun_replaces_earlier_output(run_cli, tmp_path):
 def test_demo_runs(run_cli, tmp_path):
     code, out, err = run_cli("demo", "--out", tmp_path / "demo")
     assert code == 0, err
-    # the demo builds the bundled coil sensor (issue 7; details in tests/build/test_build_cli.py)
+    # the demo builds the bundled coil sensor (issue 7; details in tests/process/test_build_cli.py)
     assert "report:" in out
     assert (tmp_path / "demo" / "build" / "report.html").exists()
 

@@ -1,4 +1,4 @@
-"""Helpers for the tests of multi-material jobs (tests/build)."""
+"""Helpers for the tests of multi-material jobs (tests/process)."""
 
 from __future__ import annotations
 
