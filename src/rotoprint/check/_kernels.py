@@ -21,6 +21,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..slicing._kernels import _fibre_range
+
 _PARALLEL_EPS = 1e-15
 #: Segments shorter than this (mm) are rounding slivers (e.g. of an open mesh's gap closing):
 #: they are not sampled, their direction being noise.
@@ -527,13 +529,88 @@ def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
 
 
 @njit(cache=True, nogil=True)
-def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):  # pragma: no cover - jit
+def _strip_clear(k, i0, i1, dx, dy, sx, sy, ex, ey, bx, by, L, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy, budget):  # pragma: no cover - jit
+    """Whether no other boundary piece meets the strip swept by the rays of samples
+    ``i0..i1-1`` of segment ``k`` along unit ``(dx, dy)`` up to ``L`` (then none of these
+    rays hits anything within ``L``). Conservative: a piece within a nanometre of the strip
+    counts as meeting it, and ``False`` is returned when the strip covers more than
+    ``budget`` cells (the rays are cheaper then)."""
+    tx = ex[k] - sx[k]
+    ty = ey[k] - sy[k]
+    ll = math.hypot(tx, ty)
+    if ll == 0.0:
+        return False
+    tx /= ll
+    ty /= ll
+    ox = sx[k]
+    oy = sy[k]
+    a_lo = (bx[i0] - ox) * tx + (by[i0] - oy) * ty
+    a_hi = (bx[i1 - 1] - ox) * tx + (by[i1 - 1] - oy) * ty
+    if a_lo > a_hi:
+        a_lo, a_hi = a_hi, a_lo
+    d = 1e-6
+    # corners of the strip (with the margin)
+    cxs = np.empty(4)
+    cys = np.empty(4)
+    for q in range(4):
+        aa = a_lo - d if q < 2 else a_hi + d
+        cc = -d if (q == 0 or q == 3) else L + d
+        cxs[q] = ox + aa * tx + cc * dx
+        cys[q] = oy + aa * ty + cc * dy
+    x0 = cxs.min()
+    x1 = cxs.max()
+    y0 = cys.min()
+    y1 = cys.max()
+    c0 = max(0, int(math.floor((x0 - xmin) / h)))
+    c1 = min(ncx - 1, int(math.floor((x1 - xmin) / h)))
+    r0 = max(0, int(math.floor((y0 - ymin) / h)))
+    r1 = min(ncy - 1, int(math.floor((y1 - ymin) / h)))
+    if (c1 - c0 + 1) * (r1 - r0 + 1) > budget:
+        return False
+    for r in range(r0, r1 + 1):
+        for c in range(c0, c1 + 1):
+            cell = r * ncx + c
+            for j in range(start[cell], start[cell + 1]):
+                p = idx[j]
+                if par[p] == k:
+                    continue
+                # separating axes: the strip's own (along, across), then the piece's normal
+                ua = (px0[p] - ox) * tx + (py0[p] - oy) * ty
+                ub = (px1[p] - ox) * tx + (py1[p] - oy) * ty
+                if max(ua, ub) < a_lo - d or min(ua, ub) > a_hi + d:
+                    continue
+                va = (px0[p] - ox) * dx + (py0[p] - oy) * dy
+                vb = (px1[p] - ox) * dx + (py1[p] - oy) * dy
+                if max(va, vb) < -d or min(va, vb) > L + d:
+                    continue
+                ex_ = px1[p] - px0[p]
+                ey_ = py1[p] - py0[p]
+                neg = False
+                pos = False
+                for q in range(4):
+                    w = ex_ * (cys[q] - py0[p]) - ey_ * (cxs[q] - px0[p])
+                    if w <= 0.0:
+                        neg = True
+                    if w >= 0.0:
+                        pos = True
+                if neg and pos:
+                    return False
+    return True
+
+
+@njit(cache=True, nogil=True)
+def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm, need_wall=np.inf, need_gap=np.inf):  # pragma: no cover - jit
     """Distance from every sample along ``+u`` (into the material: wall width) and ``-u``
     (out of it: gap width) to the first other boundary segment, or ``inf`` beyond ``max_mm``.
 
     Segments are cut into pieces no longer than ``cell_mm`` and listed in a uniform grid of
     cells of that size; every ray walks the cells it crosses in order (a 2-D DDA) and stops as
     soon as its nearest hit lies before the cell it would enter next.
+
+    Only what the check uses is measured: every width below ``need_wall`` (``need_gap``)
+    exactly, and the smallest width up to ``max_mm``; other widths may come back as
+    ``inf``. A ray looks no further than ``max(need, smallest width found so far)``, and the
+    samples of a segment whose strip of rays meets no other piece cast none.
 
     Returns ``(P,) float64`` wall widths and ``(P,) float64`` gap widths.
     """
@@ -554,8 +631,29 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
     ncx = int((xmax - xmin) / h) + 1
     ncy = int((ymax - ymin) / h) + 1
     px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+    low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
+    need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
+    skip = np.zeros(2, np.bool_)
+    i_end = 0
     for i in range(P):
+        if i >= i_end:  # first sample of a segment: can its rays meet anything?
+            i_end = i + 1
+            while i_end < P and seg[i_end] == seg[i]:
+                i_end += 1
+            m = i_end - i
+            for side in range(2):
+                skip[side] = False
+                if m >= 4:
+                    sgn = 1.0 if side == 0 else -1.0
+                    L = max(need[side], low[side])
+                    budget = m * (int(L / h) + 2)
+                    skip[side] = _strip_clear(
+                        seg[i], i, i_end, sgn * ux[i], sgn * uy[i], sx, sy, ex, ey, bx, by, L,
+                        px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy, budget,
+                    )
         for side in range(2):
+            if skip[side]:
+                continue
             sgn = 1.0 if side == 0 else -1.0
             dx = sgn * ux[i]
             dy = sgn * uy[i]
@@ -587,7 +685,7 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
                 sty = 0
                 tmy = np.inf
                 tdy = np.inf
-            best = max_mm
+            best = max(need[side], low[side])
             hit = False
             while True:
                 if 0 <= cx < ncx and 0 <= cy < ncy:
@@ -623,6 +721,8 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
                     cy += sty
                     tmy += tdy
             if hit:
+                if best < low[side]:
+                    low[side] = best
                 if side == 0:
                     wall[i] = best
                 else:
@@ -738,3 +838,189 @@ def loose_pixels(new, held):  # pragma: no cover - jit
                 out[r, c] = True
                 n += 1
     return out, n
+
+
+# ---------------------------------------------------------------- runs and islands
+
+
+@njit(cache=True, nogil=True)
+def fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd):  # pragma: no cover - jit
+    """The slicer's fibre fill (:func:`rotoprint.slicing._kernels.fill_jit`, same crossings,
+    same rule) as maximal runs instead of an image: ``(n_fib + 1,) int64`` CSR row starts and
+    ``(R,) int64`` first and past-the-end columns of each run of material, rows in order and
+    columns increasing. Work is proportional to the crossings, not to the image."""
+    n_seg = ua.shape[0]
+    per = np.zeros(n_fib + 1, np.int64)
+    for s in range(n_seg):
+        v0 = va[s]
+        v1 = vb[s]
+        if v0 == v1:
+            continue
+        lv, hv = (v0, v1) if v0 < v1 else (v1, v0)
+        j0, j1 = _fibre_range(lv, hv, n_fib)
+        if j0 < j1:
+            per[j0] += 1
+            per[j1] -= 1
+    start = np.empty(n_fib + 1, np.int64)
+    acc = 0
+    run = 0
+    for j in range(n_fib):
+        run += per[j]
+        start[j] = acc
+        acc += run
+    start[n_fib] = acc
+    pos = np.empty(acc, np.int64)
+    sgn = np.empty(acc, np.int8)
+    cur = start[:n_fib].copy()
+    for s in range(n_seg):
+        v0 = va[s]
+        v1 = vb[s]
+        if v0 == v1:
+            continue
+        if v0 < v1:
+            sign = -1
+            lu, lv, hu, hv = ua[s], v0, ub[s], v1
+        else:
+            sign = 1
+            lu, lv, hu, hv = ub[s], v1, ua[s], v0
+        j0, j1 = _fibre_range(lv, hv, n_fib)
+        slope = (hu - lu) / (hv - lv)
+        for j in range(j0, j1):
+            u = lu + (j - lv) * slope
+            if u <= 0.0:
+                i = 0
+            elif u >= n_samp:
+                i = n_samp
+            else:
+                i = math.ceil(u)
+            k = cur[j]
+            pos[k] = i
+            sgn[k] = sign
+            cur[j] = k + 1
+    rs = np.zeros(n_fib + 1, np.int64)
+    r0 = np.empty(acc, np.int64)  # a row's runs are at most its crossings
+    r1 = np.empty(acc, np.int64)
+    nr = 0
+    for j in range(n_fib):
+        rs[j] = nr
+        a = start[j]
+        b = start[j + 1]
+        if a == b:
+            continue
+        for k in range(a + 1, b):  # insertion sort, as the slicer
+            p = pos[k]
+            q = sgn[k]
+            m = k - 1
+            while m >= a and pos[m] > p:
+                pos[m + 1] = pos[m]
+                sgn[m + 1] = sgn[m]
+                m -= 1
+            pos[m + 1] = p
+            sgn[m + 1] = q
+        w = 0
+        prev = 0
+        for k in range(a, b + 1):
+            i = pos[k] if k < b else n_samp
+            inside = (w & 1) != 0 if evenodd else w != 0
+            if inside and i > prev:
+                if nr > rs[j] and r1[nr - 1] == prev:
+                    r1[nr - 1] = i  # touching spans make one run
+                else:
+                    r0[nr] = prev
+                    r1[nr] = i
+                    nr += 1
+            if k < b:
+                w += sgn[k]
+                prev = i
+    rs[n_fib] = nr
+    return rs, r0[:nr].copy(), r1[:nr].copy()
+
+
+@njit(cache=True, nogil=True)
+def runs_to_image(rs, r0, r1, H, W):  # pragma: no cover - jit
+    """``(H, W) uint8`` image (255 in the runs), for tests."""
+    out = np.zeros((H, W), np.uint8)
+    for j in range(H):
+        for k in range(rs[j], rs[j + 1]):
+            out[j, r0[k] : r1[k]] = 255
+    return out
+
+
+@njit(cache=True, nogil=True)
+def island_runs(rs, r0, r1, ps, p0, p1):  # pragma: no cover - jit
+    """Islands of a layer given as runs (``rs, r0, r1``, see :func:`fill_runs`) over the layer
+    below (``ps, p0, p1``): the 8-connected regions of material none of whose pixels has
+    material directly below.
+
+    Returns, per island in raster order of its first pixel: ``(I,)`` pixel count, sums of the
+    rows and of the columns of its pixels (float64), first and last row, first and last
+    column; and ``(R,) int64`` the island (``0..I-1``) of every run, ``-1`` if supported.
+    """
+    H = rs.shape[0] - 1
+    n = r0.shape[0]
+    parent = np.arange(n)
+    sup = np.zeros(n, np.bool_)
+    for j in range(H):
+        # support: overlap with a run of the layer below in the same row (both sorted)
+        q = ps[j]
+        qe = ps[j + 1]
+        for k in range(rs[j], rs[j + 1]):
+            while q < qe and p1[q] <= r0[k]:
+                q += 1
+            if q < qe and p0[q] < r1[k]:
+                sup[k] = True
+        # 8-connection with the runs of the row above: columns within one
+        if j == 0:
+            continue
+        q = rs[j - 1]
+        qe = rs[j]
+        for k in range(rs[j], rs[j + 1]):
+            while q < qe and r1[q] < r0[k]:  # ends more than one column left of k
+                q += 1
+            t = q
+            while t < qe and r0[t] <= r1[k]:
+                a = _find(parent, k)
+                b = _find(parent, t)
+                if a != b:
+                    if a < b:
+                        parent[b] = a
+                    else:
+                        parent[a] = b
+                t += 1
+    root_sup = np.zeros(n, np.bool_)
+    for k in range(n):
+        if sup[k]:
+            root_sup[_find(parent, k)] = True
+    isl = np.full(n, -1, np.int64)
+    root_isl = np.full(n, -1, np.int64)
+    ni = 0
+    # raster order of the first pixel: the first run of each component, runs in raster order
+    for k in range(n):
+        r = _find(parent, k)
+        if root_sup[r]:
+            continue
+        if root_isl[r] < 0:
+            root_isl[r] = ni
+            ni += 1
+        isl[k] = root_isl[r]
+    cnt = np.zeros(ni, np.int64)
+    srow = np.zeros(ni)
+    scol = np.zeros(ni)
+    rlo = np.full(ni, H, np.int64)
+    rhi = np.full(ni, -1, np.int64)
+    clo = np.full(ni, np.iinfo(np.int64).max, np.int64)
+    chi = np.full(ni, -1, np.int64)
+    for j in range(H):
+        for k in range(rs[j], rs[j + 1]):
+            i = isl[k]
+            if i < 0:
+                continue
+            L = r1[k] - r0[k]
+            cnt[i] += L
+            srow[i] += float(j) * L
+            scol[i] += 0.5 * float(r0[k] + r1[k] - 1) * L
+            rlo[i] = min(rlo[i], j)
+            rhi[i] = max(rhi[i], j)
+            clo[i] = min(clo[i], r0[k])
+            chi[i] = max(chi[i], r1[k] - 1)
+    return cnt, srow, scol, rlo, rhi, clo, chi, isl

@@ -31,6 +31,7 @@ from scipy import ndimage
 
 from ..errors import ConfigError
 from ..mesh import Mesh
+from ..slicing.fibres import _affine as _slicer_affine
 from . import _kernels as K
 from .limits import default_minimum_mm, device_limits
 
@@ -203,7 +204,13 @@ class _LayerChecker:
         self.thr = cure_threshold
         self.islands = islands
         self.evenodd = job.fill == "evenodd"
-        self.prev: np.ndarray | None = None
+        # widths the findings need exactly (the smallest one is measured up to the cap)
+        lim = _RASTER_TEST_PX * self.pmax
+        if grey_fn is not None:
+            lim = max(lim, _EXPOSURE_TEST_PX * self.pmax)
+        self.need_wall = max(min_wall_mm, lim)
+        self.need_gap = max(min_gap_mm, lim)
+        self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def run(self, index: int) -> LayerCheck:
         layer, seg = self.job.layer_and_segments(index)
@@ -221,7 +228,10 @@ class _LayerChecker:
             comp, ncomp = K.chain_components(sx, sy, ex, ey, join_s, join_e, _point_keys(sx, sy), _point_keys(ex, ey))
             keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, ncomp, self.evenodd, _SIDE_EPS_MM)
             bx, by, ux, uy, sid, ln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, self.spacing)
-            wall, gap = K.cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm))
+            wall, gap = K.cast_rays(
+                bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm),
+                self.need_wall, self.need_gap,
+            )
             thin_w = self._extreme(wall, bx, by, ux, uy, +1.0, index, z)
             narrow_g = self._extreme(gap, bx, by, ux, uy, -1.0, index, z)
             # widths against the thresholds
@@ -259,8 +269,9 @@ class _LayerChecker:
                     self._emit(kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
         island_mask = None
         if self.islands:
-            island_mask = self._islands(img, index, z, findings)
-        self.prev = img
+            runs = self._runs(seg)
+            island_mask = self._islands(runs, img.shape, index, z, findings)
+            self.prev_runs = runs
         return LayerCheck(index, z, img, findings, chords, island_mask, thin_w, narrow_g)
 
     # -- helpers
@@ -348,64 +359,56 @@ class _LayerChecker:
                 )
             )
 
-    def _islands(self, img: np.ndarray, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
+    def _runs(self, seg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The layer's material as runs per image row, from the section by the slicer's own
+        fill (same pixel coordinates, crossings and rule; equal to the image)."""
+        t = self.job.grid.model_to_pixel
+        a = _slicer_affine(t, seg.start)
+        b = _slicer_affine(t, seg.end)
+        cols = [np.ascontiguousarray(x) for x in (a[:, 0], a[:, 1], b[:, 0], b[:, 1])]
+        return K.fill_runs(*cols, self.grid.height, self.grid.width, self.evenodd)
+
+    def _islands(self, runs, shape, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
         """Regions (8-connected) of this layer with no material pixel of the layer below.
 
-        Such a region lies wholly in ``new = material & ~below``; a connected part of ``new``
-        is one when none of its pixels is next to a pixel of ``material & below``.
+        Found on the runs of material of each image row (union-find over the runs of
+        neighbouring rows), so the work follows the outline, not the image size.
         """
-        prev = self.prev
+        prev = self.prev_runs
         if prev is None:
             return None  # the first layer stands on the platform
-        new = (img > 0) & (prev == 0)
-        rows = np.flatnonzero(new.any(axis=1))
-        if not rows.size:
+        rs, r0, r1 = runs
+        if not r0.size:
             return None
-        cols = np.flatnonzero(new.any(axis=0))
-        r0, r1 = max(rows[0] - 1, 0), min(rows[-1] + 2, img.shape[0])
-        c0, c1 = max(cols[0] - 1, 0), min(cols[-1] + 2, img.shape[1])
-        sub_new = np.ascontiguousarray(new[r0:r1, c0:c1])
-        held = np.ascontiguousarray((img[r0:r1, c0:c1] > 0) & (prev[r0:r1, c0:c1] > 0))
-        loose, n_loose = K.loose_pixels(sub_new, held)
-        if n_loose == 0:
-            return None  # every new pixel touches one that stands on the layer below
-        eight = np.ones((3, 3), bool)
-        lab, n = ndimage.label(sub_new, structure=eight)
-        touched = np.zeros(n + 1, bool)
-        touched[lab[sub_new & ~loose]] = True
-        touched[0] = True
-        if touched.all():
+        cnt, srow, scol, rlo, rhi, clo, chi, isl = K.island_runs(rs, r0, r1, *prev)
+        if not cnt.size:
             return None
-        bad = np.flatnonzero(~touched)
         g = self.grid
         px_area = g.pitch_x_mm * g.pitch_y_mm
-        areas = np.bincount(lab.ravel(), minlength=n + 1)
-        slices = ndimage.find_objects(lab)
-        out = np.zeros(img.shape, bool)
-        for b in bad:
-            sl = slices[b - 1]
-            part = lab[sl] == b
-            rr, cc = np.nonzero(part)
-            cr = rr.mean() + sl[0].start + r0
-            ccn = cc.mean() + sl[1].start + c0
-            x, y = _affine_apply(self.p2m, ccn, cr)
-            corners_c = np.array([sl[1].start - 0.5, sl[1].stop - 0.5]) + c0
-            corners_r = np.array([sl[0].start - 0.5, sl[0].stop - 0.5]) + r0
+        cr = srow / cnt
+        cc = scol / cnt
+        x, y = _affine_apply(self.p2m, cc, cr)
+        for i in range(cnt.size):
+            corners_c = np.array([clo[i] - 0.5, chi[i] + 0.5])
+            corners_r = np.array([rlo[i] - 0.5, rhi[i] + 0.5])
             X, Y = _affine_apply(self.p2m, np.repeat(corners_c, 2), np.tile(corners_r, 2))
             findings.append(
                 Finding(
                     kind="island",
                     layer=index,
                     z_mm=z,
-                    x_mm=float(x),
-                    y_mm=float(y),
-                    col=float(ccn),
-                    row=float(cr),
-                    area_mm2=float(areas[b] * px_area),
+                    x_mm=float(x[i]),
+                    y_mm=float(y[i]),
+                    col=float(cc[i]),
+                    row=float(cr[i]),
+                    area_mm2=float(cnt[i] * px_area),
                     bbox_mm=(float(X.min()), float(Y.min()), float(X.max()), float(Y.max())),
                 )
             )
-            out[r0 + sl[0].start : r0 + sl[0].stop, c0 + sl[1].start : c0 + sl[1].stop] |= part
+        out = np.zeros(shape, bool)
+        row = np.repeat(np.arange(shape[0]), np.diff(rs))
+        for k in np.flatnonzero(isl >= 0):
+            out[row[k], r0[k] : r1[k]] = True
         return out
 
 
