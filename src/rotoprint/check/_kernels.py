@@ -1024,3 +1024,100 @@ def island_runs(rs, r0, r1, ps, p0, p1):  # pragma: no cover - jit
             clo[i] = min(clo[i], r0[k])
             chi[i] = max(chi[i], r1[k] - 1)
     return cnt, srow, scol, rlo, rhi, clo, chi, isl
+
+
+@njit(cache=True, nogil=True)
+def group_chords(ac, ar, bc, br, c0, r0, Hc, Wc, grow):  # pragma: no cover - jit
+    """Group chords (pixel indices) into regions: each chord is painted on the pixels
+    nearest to points every quarter pixel along it (:func:`paint_chords`) on a canvas of
+    ``Hc`` x ``Wc`` pixels whose origin is pixel ``(c0, r0)``, the paint is dilated by
+    ``grow`` pixels (square), and the 8-connected regions are numbered in raster order of
+    their first pixel. A chord belongs to the region of the pixel nearest to its start.
+
+    Work follows the painted pixels, not the canvas. Returns ``(n,) int64`` regions and
+    their number."""
+    n = ac.shape[0]
+    canvas = np.zeros((Hc, Wc), np.int32)  # 0 empty, -1 painted, -2 dilated, k > 0 region k - 1
+    npix = 0
+    for i in range(n):
+        L = math.hypot(bc[i] - ac[i], br[i] - ar[i])
+        npix += max(1, int(math.ceil(L * 4.0))) + 1
+    pr = np.empty(npix, np.int64)
+    m_ = 0
+    for i in range(n):
+        a_c = ac[i] - c0
+        a_r = ar[i] - r0
+        b_c = bc[i] - c0
+        b_r = br[i] - r0
+        L = math.hypot(b_c - a_c, b_r - a_r)
+        m = max(1, int(math.ceil(L * 4.0)))
+        for j in range(m + 1):
+            f = j / m
+            c = int(math.floor(a_c + f * (b_c - a_c) + 0.5))
+            r = int(math.floor(a_r + f * (b_r - a_r) + 0.5))
+            if 0 <= r < Hc and 0 <= c < Wc and canvas[r, c] != -1:
+                canvas[r, c] = -1
+                pr[m_] = r * Wc + c
+                m_ += 1
+    pr = np.sort(pr[:m_])
+    nd = 0
+    for q in range(m_):
+        r = pr[q] // Wc
+        c = pr[q] % Wc
+        for rr in range(max(0, r - grow), min(Hc, r + grow + 1)):
+            for cc in range(max(0, c - grow), min(Wc, c + grow + 1)):
+                if canvas[rr, cc] == 0:
+                    canvas[rr, cc] = -2
+                    nd += 1
+    stack = np.empty(m_ + nd + 1, np.int64)
+    ng = 0
+    # the first painted pixel of a region in raster order is the first pixel of its
+    # dilation shifted by (grow, grow): regions are found in raster order
+    for q in range(m_):
+        r = pr[q] // Wc
+        c = pr[q] % Wc
+        if canvas[r, c] > 0:
+            continue
+        ng += 1
+        canvas[r, c] = ng
+        sp = 1
+        stack[0] = pr[q]
+        while sp > 0:
+            sp -= 1
+            v = stack[sp]
+            vr = v // Wc
+            vc = v % Wc
+            for rr in range(max(0, vr - 1), min(Hc, vr + 2)):
+                for cc in range(max(0, vc - 1), min(Wc, vc + 2)):
+                    if canvas[rr, cc] < 0:
+                        canvas[rr, cc] = ng
+                        stack[sp] = rr * Wc + cc
+                        sp += 1
+    g = np.empty(n, np.int64)
+    for i in range(n):
+        sc = np.int64(math.floor(ac[i] + 0.5)) - c0
+        sr = np.int64(math.floor(ar[i] + 0.5)) - r0
+        g[i] = canvas[sr, sc] - 1
+    return g, ng
+
+
+@njit(cache=True, nogil=True)
+def group_stats(g, ng, w, ln, x0, y0, x1, y1):  # pragma: no cover - jit
+    """Per region (``g`` from :func:`group_chords`): its narrowest chord (the first one of
+    that width), the summed lengths ``ln``, and the bounding box of the chords' ends."""
+    worst = np.full(ng, -1, np.int64)
+    length = np.zeros(ng)
+    lo_x = np.full(ng, np.inf)
+    lo_y = np.full(ng, np.inf)
+    hi_x = np.full(ng, -np.inf)
+    hi_y = np.full(ng, -np.inf)
+    for i in range(g.shape[0]):
+        k = g[i]
+        if worst[k] < 0 or w[i] < w[worst[k]]:
+            worst[k] = i
+        length[k] += ln[i]
+        lo_x[k] = min(lo_x[k], min(x0[i], x1[i]))
+        lo_y[k] = min(lo_y[k], min(y0[i], y1[i]))
+        hi_x[k] = max(hi_x[k], max(x0[i], x1[i]))
+        hi_y[k] = max(hi_y[k], max(y0[i], y1[i]))
+    return worst, length, lo_x, lo_y, hi_x, hi_y

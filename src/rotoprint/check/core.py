@@ -27,7 +27,6 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from ..errors import ConfigError
 from ..mesh import Mesh
@@ -307,39 +306,14 @@ class _LayerChecker:
         r0 = int(math.floor(min(ar.min(), br.min()) + 0.5)) - pad
         c1 = int(math.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
         r1 = int(math.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
-        canvas = np.zeros((r1 - r0, c1 - c0), np.uint8)
-        K.paint_chords(ac - c0, ar - r0, bc - c0, br - r0, canvas, 1)
-        if _GROUP_PX:
-            canvas = ndimage.binary_dilation(canvas, structure=np.ones((3, 3), bool), iterations=_GROUP_PX)
-        lab, n = ndimage.label(canvas, structure=np.ones((3, 3), bool))
-        sc = np.floor(ac + 0.5).astype(np.int64) - c0
-        sr = np.floor(ar + 0.5).astype(np.int64) - r0
-        g = lab[sr, sc] - 1
-        ng = int(g.max()) + 1
+        g, ng = K.group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, _GROUP_PX)
         mx, my = x0 + 0.5 * w * dx, y0 + 0.5 * w * dy
         x1, y1 = x0 + w * dx, y0 + w * dy
-        order = np.lexsort((w, g))  # by group, narrowest first
-        first = np.ones(order.size, bool)
-        first[1:] = g[order][1:] != g[order][:-1]
-        worst = order[first]  # one sample per group, in group order
-        length = np.bincount(g, weights=ln[idx], minlength=ng)
-        lo_x = np.full(ng, np.inf)
-        lo_y = np.full(ng, np.inf)
-        hi_x = np.full(ng, -np.inf)
-        hi_y = np.full(ng, -np.inf)
-        np.minimum.at(lo_x, g, np.minimum(x0, x1))
-        np.minimum.at(lo_y, g, np.minimum(y0, y1))
-        np.maximum.at(hi_x, g, np.maximum(x0, x1))
-        np.maximum.at(hi_y, g, np.maximum(y0, y1))
+        worst, length, lo_x, lo_y, hi_x, hi_y = K.group_stats(g, ng, w, ln[idx], x0, y0, x1, y1)
         val = None
         if values is not None:
             v = values[idx]
-            if kind == "underexposed":
-                val = np.full(ng, -np.inf)
-                np.maximum.at(val, g, v)
-            else:
-                val = np.full(ng, np.inf)
-                np.minimum.at(val, g, v)
+            val = [v[g == k].max() if kind == "underexposed" else v[g == k].min() for k in range(ng)]
         cols, rows = _affine_apply(self.m2p, mx[worst], my[worst])
         for k, j in enumerate(worst):
             gi = g[j]
