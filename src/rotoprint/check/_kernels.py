@@ -501,21 +501,42 @@ def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
     ``key_s``, ``key_e`` are ``(Q,) int64`` hashes of the start and end points."""
     n = sx.shape[0]
     parent = np.arange(n)
-    order = np.argsort(key_s)
-    ks = key_s[order]
+    # hash table of start keys (open addressing), each slot heading a list of the starts
+    # with that key
+    bits = 1
+    while (1 << bits) < 2 * n:
+        bits += 1
+    size = 1 << bits
+    slot_key = np.empty(size, np.int64)
+    slot_head = np.full(size, -1, np.int64)
+    nxt = np.full(n, -1, np.int64)
+    shift = np.uint64(64 - bits)
+    mul = np.uint64(0x9E3779B97F4A7C15)
+    mask = size - 1
+    for i in range(n):
+        k = key_s[i]
+        h = np.int64((np.uint64(k) * mul) >> shift)
+        while slot_head[h] >= 0 and slot_key[h] != k:
+            h = (h + 1) & mask
+        if slot_head[h] < 0:
+            slot_key[h] = k
+        nxt[i] = slot_head[h]
+        slot_head[h] = i
     for i in range(n):
         if not join_e[i]:
             continue
-        lo = np.searchsorted(ks, key_e[i])
-        j = lo
-        while j < n and ks[j] == key_e[i]:
-            o = order[j]
+        k = key_e[i]
+        h = np.int64((np.uint64(k) * mul) >> shift)
+        while slot_head[h] >= 0 and slot_key[h] != k:
+            h = (h + 1) & mask
+        o = slot_head[h]
+        while o >= 0:
             if join_s[o] and sx[o] == ex[i] and sy[o] == ey[i]:
                 a = _find(parent, i)
                 b = _find(parent, o)
                 if a != b:
                     parent[a] = b
-            j += 1
+            o = nxt[o]
     lab = np.empty(n, np.int64)
     root_lab = np.full(n, -1, np.int64)
     k = 0
