@@ -832,35 +832,6 @@ def chord_extreme(ac, ar, bc, br, grey, take_max):  # pragma: no cover - jit
     return out
 
 
-@njit(cache=True, nogil=True)
-def loose_pixels(new, held):  # pragma: no cover - jit
-    """``(H, W) bool``: pixels of ``new`` with no pixel of ``held`` among their 8 neighbours
-    (both ``(H, W) bool``), and how many there are."""
-    H, W = new.shape
-    out = np.zeros((H, W), np.bool_)
-    n = 0
-    for r in range(H):
-        for c in range(W):
-            if not new[r, c]:
-                continue
-            ok = False
-            for dr in range(-1, 2):
-                rr = r + dr
-                if rr < 0 or rr >= H:
-                    continue
-                for dc in range(-1, 2):
-                    cc = c + dc
-                    if 0 <= cc < W and held[rr, cc]:
-                        ok = True
-                        break
-                if ok:
-                    break
-            if not ok:
-                out[r, c] = True
-                n += 1
-    return out, n
-
-
 # ---------------------------------------------------------------- runs and islands
 
 
@@ -1142,3 +1113,47 @@ def group_stats(g, ng, w, ln, x0, y0, x1, y1):  # pragma: no cover - jit
         hi_x[k] = max(hi_x[k], max(x0[i], x1[i]))
         hi_y[k] = max(hi_y[k], max(y0[i], y1[i]))
     return worst, length, lo_x, lo_y, hi_x, hi_y
+
+
+@njit(cache=True, nogil=True)
+def _keys(x, y):  # pragma: no cover - jit
+    """``(n,) int64`` hashes of points from their exact bits (equal points, equal keys)."""
+    return x.view(np.int64) * np.int64(-7046029254386353131) ^ y.view(np.int64)
+
+
+@njit(cache=True, nogil=True)
+def measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap):  # pragma: no cover - jit
+    """The whole width measurement of one section (``(S, 2)`` segment starts and ends, model
+    mm) in one call: :func:`split_at_crossings`, :func:`chain_components`,
+    :func:`classify_segments`, :func:`boundary_samples` and :func:`cast_rays`.
+
+    Returns the samples ``(P,)`` x, y, inward normal x, y, the boundary length each stands
+    for, and their wall and gap widths."""
+    sx = np.ascontiguousarray(start[:, 0])
+    sy = np.ascontiguousarray(start[:, 1])
+    ex = np.ascontiguousarray(end[:, 0])
+    ey = np.ascontiguousarray(end[:, 1])
+    sx, sy, ex, ey, _, join_s, join_e = split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm)
+    comp, ncomp = chain_components(sx, sy, ex, ey, join_s, join_e, _keys(sx, sy), _keys(ex, ey))
+    keep, nx, ny = classify_segments(sx, sy, ex, ey, comp, ncomp, evenodd, side_eps)
+    bx, by, ux, uy, sid, ln = boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing)
+    wall, gap = cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm, need_wall, need_gap)
+    return bx, by, ux, uy, ln, wall, gap
+
+
+@njit(cache=True, nogil=True)
+def section_runs(start, end, m, n_fib, n_samp, evenodd):  # pragma: no cover - jit
+    """:func:`fill_runs` of a section in model mm (``(S, 2)`` starts and ends) through the
+    ``(2, 3)`` model-to-pixel affine ``m``, evaluated with the slicer's operations in the
+    slicer's order (``(m00 x + m01 y) + m02``), so the crossings are the image's."""
+    n = start.shape[0]
+    ua = np.empty(n)
+    va = np.empty(n)
+    ub = np.empty(n)
+    vb = np.empty(n)
+    for k in range(n):
+        ua[k] = (m[0, 0] * start[k, 0] + m[0, 1] * start[k, 1]) + m[0, 2]
+        va[k] = (m[1, 0] * start[k, 0] + m[1, 1] * start[k, 1]) + m[1, 2]
+        ub[k] = (m[0, 0] * end[k, 0] + m[0, 1] * end[k, 1]) + m[0, 2]
+        vb[k] = (m[1, 0] * end[k, 0] + m[1, 1] * end[k, 1]) + m[1, 2]
+    return fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd)

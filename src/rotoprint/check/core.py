@@ -30,7 +30,6 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..mesh import Mesh
-from ..slicing.fibres import _affine as _slicer_affine
 from . import _kernels as K
 from .limits import default_minimum_mm, device_limits
 
@@ -172,12 +171,6 @@ def _positive(name: str, value, *, allow_none: bool = True) -> float | None:
     return v
 
 
-def _point_keys(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``(n,) int64`` hashes of points from their exact bits (equal points, equal keys)."""
-    with np.errstate(over="ignore"):
-        return x.view(np.int64) * np.int64(-7046029254386353131) ^ y.view(np.int64)
-
-
 def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return m[0, 0] * x + m[0, 1] * y + m[0, 2], m[1, 0] * x + m[1, 1] * y + m[1, 2]
 
@@ -209,27 +202,21 @@ class _LayerChecker:
             lim = max(lim, _EXPOSURE_TEST_PX * self.pmax)
         self.need_wall = max(min_wall_mm, lim)
         self.need_gap = max(min_gap_mm, lim)
+        self.cell = _CELL_PX * min(g.pitch_x_mm, g.pitch_y_mm)
+        # the slicer's own model-to-pixel affine (its fill's crossings are recomputed as runs)
+        self.uv = np.ascontiguousarray(getattr(job, "_to_uv", g.model_to_pixel), dtype=np.float64)
         self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def run(self, index: int) -> LayerCheck:
         layer, seg = self.job.layer_and_segments(index)
         img = layer.image
         z = layer.z_mm
-        sx = np.ascontiguousarray(seg.start[:, 0])
-        sy = np.ascontiguousarray(seg.start[:, 1])
-        ex = np.ascontiguousarray(seg.end[:, 0])
-        ey = np.ascontiguousarray(seg.end[:, 1])
         findings: list[Finding] = []
         chords: dict[str, np.ndarray] = {}
         thin_w = narrow_g = None
-        if sx.size:
-            sx, sy, ex, ey, _, join_s, join_e = K.split_at_crossings(sx, sy, ex, ey, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm), _NEAR_MM)
-            comp, ncomp = K.chain_components(sx, sy, ex, ey, join_s, join_e, _point_keys(sx, sy), _point_keys(ex, ey))
-            keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, ncomp, self.evenodd, _SIDE_EPS_MM)
-            bx, by, ux, uy, sid, ln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, self.spacing)
-            wall, gap = K.cast_rays(
-                bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm),
-                self.need_wall, self.need_gap,
+        if len(seg):
+            bx, by, ux, uy, ln, wall, gap = K.measure_widths(
+                seg.start, seg.end, self.cell, _NEAR_MM, self.evenodd, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM, self.need_wall, self.need_gap
             )
             thin_w = self._extreme(wall, bx, by, ux, uy, +1.0, index, z)
             narrow_g = self._extreme(gap, bx, by, ux, uy, -1.0, index, z)
@@ -336,11 +323,7 @@ class _LayerChecker:
     def _runs(self, seg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The layer's material as runs per image row, from the section by the slicer's own
         fill (same pixel coordinates, crossings and rule; equal to the image)."""
-        t = self.job.grid.model_to_pixel
-        a = _slicer_affine(t, seg.start)
-        b = _slicer_affine(t, seg.end)
-        cols = [np.ascontiguousarray(x) for x in (a[:, 0], a[:, 1], b[:, 0], b[:, 1])]
-        return K.fill_runs(*cols, self.grid.height, self.grid.width, self.evenodd)
+        return K.section_runs(seg.start, seg.end, self.uv, self.grid.height, self.grid.width, self.evenodd)
 
     def _islands(self, runs, shape, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
         """Regions (8-connected) of this layer with no material pixel of the layer below.
