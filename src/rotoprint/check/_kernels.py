@@ -550,9 +550,9 @@ def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
 
 
 @njit(cache=True, nogil=True)
-def _strip_clear(k, i0, i1, dx, dy, sx, sy, ex, ey, bx, by, L, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy, budget):  # pragma: no cover - jit
-    """Whether no other boundary piece meets the strip swept by the rays of samples
-    ``i0..i1-1`` of segment ``k`` along unit ``(dx, dy)`` up to ``L`` (then none of these
+def _strip_clear(k, fx, fy, dx, dy, sx, sy, ex, ey, L, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy, budget):  # pragma: no cover - jit
+    """Whether no other boundary piece meets the strip swept by the rays from the points of
+    segment ``k`` between its samples ``(fx[0], fy[0])`` and ``(fx[1], fy[1])`` along unit ``(dx, dy)`` up to ``L`` (then none of these
     rays hits anything within ``L``). Conservative: a piece within a nanometre of the strip
     counts as meeting it, and ``False`` is returned when the strip covers more than
     ``budget`` cells (the rays are cheaper then)."""
@@ -565,8 +565,8 @@ def _strip_clear(k, i0, i1, dx, dy, sx, sy, ex, ey, bx, by, L, px0, py0, px1, py
     ty /= ll
     ox = sx[k]
     oy = sy[k]
-    a_lo = (bx[i0] - ox) * tx + (by[i0] - oy) * ty
-    a_hi = (bx[i1 - 1] - ox) * tx + (by[i1 - 1] - oy) * ty
+    a_lo = (fx[0] - ox) * tx + (fy[0] - oy) * ty
+    a_hi = (fx[1] - ox) * tx + (fy[1] - oy) * ty
     if a_lo > a_hi:
         a_lo, a_hi = a_hi, a_lo
     d = 1e-6
@@ -620,26 +620,76 @@ def _strip_clear(k, i0, i1, dx, dy, sx, sy, ex, ey, bx, by, L, px0, py0, px1, py
 
 
 @njit(cache=True, nogil=True)
-def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm, need_wall=np.inf, need_gap=np.inf):  # pragma: no cover - jit
-    """Distance from every sample along ``+u`` (into the material: wall width) and ``-u``
-    (out of it: gap width) to the first other boundary segment, or ``inf`` beyond ``max_mm``.
+def _ray(ox, oy, dx, dy, own, best, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
+    """Distance along unit ``(dx, dy)`` from ``(ox, oy)`` to the first piece (not of segment
+    ``own``) hit beyond ``tmin`` and at most ``best``; ``inf`` if none. The ray walks the
+    cells it crosses in order (a 2-D DDA) and stops as soon as its nearest hit lies before
+    the cell it would enter next."""
+    cx = int(math.floor((ox - xmin) / h))
+    cy = int(math.floor((oy - ymin) / h))
+    if dx > 0.0:
+        stx = 1
+        tmx = (xmin + (cx + 1) * h - ox) / dx
+        tdx = h / dx
+    elif dx < 0.0:
+        stx = -1
+        tmx = (xmin + cx * h - ox) / dx
+        tdx = -h / dx
+    else:
+        stx = 0
+        tmx = np.inf
+        tdx = np.inf
+    if dy > 0.0:
+        sty = 1
+        tmy = (ymin + (cy + 1) * h - oy) / dy
+        tdy = h / dy
+    elif dy < 0.0:
+        sty = -1
+        tmy = (ymin + cy * h - oy) / dy
+        tdy = -h / dy
+    else:
+        sty = 0
+        tmy = np.inf
+        tdy = np.inf
+    hit = False
+    while True:
+        if 0 <= cx < ncx and 0 <= cy < ncy:
+            c = cy * ncx + cx
+            for j in range(start[c], start[c + 1]):
+                p = idx[j]
+                if par[p] == own:
+                    continue
+                e0 = px1[p] - px0[p]
+                e1 = py1[p] - py0[p]
+                den = dx * e1 - dy * e0
+                if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
+                    continue
+                w0 = px0[p] - ox
+                w1 = py0[p] - oy
+                t = (w0 * e1 - w1 * e0) / den
+                if t <= tmin or t > best:
+                    continue
+                s = (w0 * dy - w1 * dx) / den
+                if s < 0.0 or s > 1.0:
+                    continue
+                best = t
+                hit = True
+        else:
+            break
+        texit = min(tmx, tmy)
+        if texit >= best:
+            break
+        if tmx < tmy:
+            cx += stx
+            tmx += tdx
+        else:
+            cy += sty
+            tmy += tdy
+    return best if hit else np.inf
 
-    Segments are cut into pieces no longer than ``cell_mm`` and listed in a uniform grid of
-    cells of that size; every ray walks the cells it crosses in order (a 2-D DDA) and stops as
-    soon as its nearest hit lies before the cell it would enter next.
 
-    Only what the check uses is measured: every width below ``need_wall`` (``need_gap``)
-    exactly, and the smallest width up to ``max_mm``; other widths may come back as
-    ``inf``. A ray looks no further than ``max(need, smallest width found so far)``, and the
-    samples of a segment whose strip of rays meets no other piece cast none.
-
-    Returns ``(P,) float64`` wall widths and ``(P,) float64`` gap widths.
-    """
-    P = bx.shape[0]
-    wall = np.full(P, np.inf)
-    gap = np.full(P, np.inf)
-    if P == 0:
-        return wall, gap
+@njit(cache=True, nogil=True)
+def _grid(sx, sy, ex, ey, keep, cell_mm):  # pragma: no cover - jit
     nk = 0
     for k in range(keep.shape[0]):
         if keep[k]:
@@ -651,104 +701,183 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm, 
     ymax = max(sy.max(), ey.max()) + h
     ncx = int((xmax - xmin) / h) + 1
     ncy = int((ymax - ymin) / h) + 1
+    return h, xmin, ymin, ncx, ncy
+
+
+@njit(cache=True, nogil=True)
+def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):  # pragma: no cover - jit
+    """Distance from every sample along ``+u`` (into the material: wall width) and ``-u``
+    (out of it: gap width) to the first other boundary segment, or ``inf`` beyond ``max_mm``:
+    every width up to ``max_mm``, the reference for :func:`sample_widths`.
+
+    Segments are cut into pieces no longer than ``cell_mm`` and listed in a uniform grid of
+    cells of that size; every ray walks the cells it crosses (:func:`_ray`).
+
+    Returns ``(P,) float64`` wall widths and ``(P,) float64`` gap widths.
+    """
+    P = bx.shape[0]
+    wall = np.full(P, np.inf)
+    gap = np.full(P, np.inf)
+    if P == 0:
+        return wall, gap
+    h, xmin, ymin, ncx, ncy = _grid(sx, sy, ex, ey, keep, cell_mm)
+    px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+    for i in range(P):
+        wall[i] = _ray(bx[i], by[i], ux[i], uy[i], seg[i], max_mm, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy)
+        gap[i] = _ray(bx[i], by[i], -ux[i], -uy[i], seg[i], max_mm, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy)
+    return wall, gap
+
+
+@njit(cache=True, nogil=True)
+def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap):  # pragma: no cover - jit
+    """The samples of :func:`boundary_samples` with the widths of :func:`cast_rays`, measuring
+    only what the check uses: every width below ``need_wall`` (``need_gap``) exactly, and the
+    smallest width up to ``max_mm``; any other width may come back as ``inf``.
+
+    A ray looks no further than ``max(need, smallest width found so far)``, and a segment
+    whose strip of rays (on a side) meets no other piece casts none there
+    (:func:`_strip_clear`); a segment clear on both sides gives no samples at all (none of
+    them could be a finding or the thinnest). Samples keep their order.
+
+    Returns ``(P,)`` x, y, inward normal x, y, length each stands for, wall and gap widths.
+    """
+    n = sx.shape[0]
+    total = 0
+    for k in range(n):
+        if keep[k]:
+            L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+            total += max(1, int(math.ceil(L / spacing)))
+    bx = np.empty(total)
+    by = np.empty(total)
+    ux = np.empty(total)
+    uy = np.empty(total)
+    ln = np.empty(total)
+    wall = np.empty(total)
+    gap = np.empty(total)
+    if total == 0:
+        return bx, by, ux, uy, ln, wall, gap
+    h, xmin, ymin, ncx, ncy = _grid(sx, sy, ex, ey, keep, cell_mm)
     px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
     low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
     need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
     skip = np.zeros(2, np.bool_)
-    i_end = 0
-    for i in range(P):
-        if i >= i_end:  # first sample of a segment: can its rays meet anything?
-            i_end = i + 1
-            while i_end < P and seg[i_end] == seg[i]:
-                i_end += 1
-            m = i_end - i
+    fx = np.empty(2)
+    fy = np.empty(2)
+    p = 0
+    for k in range(n):
+        if not keep[k]:
+            continue
+        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        m = max(1, int(math.ceil(L / spacing)))
+        if m >= 4:  # a long segment: test the strips its rays sweep first
+            for e in range(2):
+                f = (0.5 if e == 0 else m - 0.5) / m
+                fx[e] = sx[k] + f * (ex[k] - sx[k])
+                fy[e] = sy[k] + f * (ey[k] - sy[k])
             for side in range(2):
-                skip[side] = False
-                if m >= 4:
-                    sgn = 1.0 if side == 0 else -1.0
-                    L = max(need[side], low[side])
-                    budget = m * (int(L / h) + 2)
-                    skip[side] = _strip_clear(
-                        seg[i], i, i_end, sgn * ux[i], sgn * uy[i], sx, sy, ex, ey, bx, by, L,
-                        px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy, budget,
-                    )
-        for side in range(2):
-            if skip[side]:
+                sgn = 1.0 if side == 0 else -1.0
+                Lr = max(need[side], low[side])
+                skip[side] = _strip_clear(
+                    k, fx, fy, sgn * nx[k], sgn * ny[k], sx, sy, ex, ey, Lr,
+                    px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy, m * (int(Lr / h) + 2),
+                )
+            if skip[0] and skip[1]:
                 continue
-            sgn = 1.0 if side == 0 else -1.0
-            dx = sgn * ux[i]
-            dy = sgn * uy[i]
-            ox = bx[i]
-            oy = by[i]
-            cx = int(math.floor((ox - xmin) / h))
-            cy = int(math.floor((oy - ymin) / h))
-            if dx > 0.0:
-                stx = 1
-                tmx = (xmin + (cx + 1) * h - ox) / dx
-                tdx = h / dx
-            elif dx < 0.0:
-                stx = -1
-                tmx = (xmin + cx * h - ox) / dx
-                tdx = -h / dx
-            else:
-                stx = 0
-                tmx = np.inf
-                tdx = np.inf
-            if dy > 0.0:
-                sty = 1
-                tmy = (ymin + (cy + 1) * h - oy) / dy
-                tdy = h / dy
-            elif dy < 0.0:
-                sty = -1
-                tmy = (ymin + cy * h - oy) / dy
-                tdy = -h / dy
-            else:
-                sty = 0
-                tmy = np.inf
-                tdy = np.inf
-            best = max(need[side], low[side])
-            hit = False
-            while True:
-                if 0 <= cx < ncx and 0 <= cy < ncy:
-                    c = cy * ncx + cx
-                    for j in range(start[c], start[c + 1]):
-                        p = idx[j]
-                        if par[p] == seg[i]:
-                            continue
-                        e0 = px1[p] - px0[p]
-                        e1 = py1[p] - py0[p]
-                        den = dx * e1 - dy * e0
-                        if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
-                            continue
-                        w0 = px0[p] - ox
-                        w1 = py0[p] - oy
-                        t = (w0 * e1 - w1 * e0) / den
-                        if t <= tmin or t > best:
-                            continue
-                        s = (w0 * dy - w1 * dx) / den
-                        if s < 0.0 or s > 1.0:
-                            continue
-                        best = t
-                        hit = True
+        else:
+            skip[0] = False
+            skip[1] = False
+        for j in range(m):
+            f = (j + 0.5) / m
+            bx[p] = sx[k] + f * (ex[k] - sx[k])
+            by[p] = sy[k] + f * (ey[k] - sy[k])
+            ux[p] = nx[k]
+            uy[p] = ny[k]
+            ln[p] = L / m
+            p += 1
+        for i in range(p - m, p):
+            for side in range(2):
+                if skip[side]:
+                    if side == 0:
+                        wall[i] = np.inf
+                    else:
+                        gap[i] = np.inf
+                    continue
+                sgn = 1.0 if side == 0 else -1.0
+                dx = sgn * ux[i]
+                dy = sgn * uy[i]
+                ox = bx[i]
+                oy = by[i]
+                cx = int(math.floor((ox - xmin) / h))
+                cy = int(math.floor((oy - ymin) / h))
+                if dx > 0.0:
+                    stx = 1
+                    tmx = (xmin + (cx + 1) * h - ox) / dx
+                    tdx = h / dx
+                elif dx < 0.0:
+                    stx = -1
+                    tmx = (xmin + cx * h - ox) / dx
+                    tdx = -h / dx
                 else:
-                    break
-                texit = min(tmx, tmy)
-                if texit >= best:
-                    break
-                if tmx < tmy:
-                    cx += stx
-                    tmx += tdx
+                    stx = 0
+                    tmx = np.inf
+                    tdx = np.inf
+                if dy > 0.0:
+                    sty = 1
+                    tmy = (ymin + (cy + 1) * h - oy) / dy
+                    tdy = h / dy
+                elif dy < 0.0:
+                    sty = -1
+                    tmy = (ymin + cy * h - oy) / dy
+                    tdy = -h / dy
                 else:
-                    cy += sty
-                    tmy += tdy
-            if hit:
-                if best < low[side]:
-                    low[side] = best
+                    sty = 0
+                    tmy = np.inf
+                    tdy = np.inf
+                best = max(need[side], low[side])
+                hit = False
+                while True:
+                    if 0 <= cx < ncx and 0 <= cy < ncy:
+                        c = cy * ncx + cx
+                        for q in range(start[c], start[c + 1]):
+                            pc = idx[q]
+                            if par[pc] == k:
+                                continue
+                            e0 = px1[pc] - px0[pc]
+                            e1 = py1[pc] - py0[pc]
+                            den = dx * e1 - dy * e0
+                            if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
+                                continue
+                            w0 = px0[pc] - ox
+                            w1 = py0[pc] - oy
+                            t = (w0 * e1 - w1 * e0) / den
+                            if t <= tmin or t > best:
+                                continue
+                            sp = (w0 * dy - w1 * dx) / den
+                            if sp < 0.0 or sp > 1.0:
+                                continue
+                            best = t
+                            hit = True
+                    else:
+                        break
+                    texit = min(tmx, tmy)
+                    if texit >= best:
+                        break
+                    if tmx < tmy:
+                        cx += stx
+                        tmx += tdx
+                    else:
+                        cy += sty
+                        tmy += tdy
+                t = np.inf
+                if hit:
+                    t = best
+                    if best < low[side]:
+                        low[side] = best
                 if side == 0:
-                    wall[i] = best
+                    wall[i] = t
                 else:
-                    gap[i] = best
-    return wall, gap
+                    gap[i] = t
+    return bx[:p], by[:p], ux[:p], uy[:p], ln[:p], wall[:p], gap[:p]
 
 
 # ---------------------------------------------------------------- raster kernels
@@ -1125,7 +1254,7 @@ def _keys(x, y):  # pragma: no cover - jit
 def measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap):  # pragma: no cover - jit
     """The whole width measurement of one section (``(S, 2)`` segment starts and ends, model
     mm) in one call: :func:`split_at_crossings`, :func:`chain_components`,
-    :func:`classify_segments`, :func:`boundary_samples` and :func:`cast_rays`.
+    :func:`classify_segments` and :func:`sample_widths` (see there for what is measured).
 
     Returns the samples ``(P,)`` x, y, inward normal x, y, the boundary length each stands
     for, and their wall and gap widths."""
@@ -1136,9 +1265,7 @@ def measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max
     sx, sy, ex, ey, _, join_s, join_e = split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm)
     comp, ncomp = chain_components(sx, sy, ex, ey, join_s, join_e, _keys(sx, sy), _keys(ex, ey))
     keep, nx, ny = classify_segments(sx, sy, ex, ey, comp, ncomp, evenodd, side_eps)
-    bx, by, ux, uy, sid, ln = boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing)
-    wall, gap = cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm, need_wall, need_gap)
-    return bx, by, ux, uy, ln, wall, gap
+    return sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap)
 
 
 @njit(cache=True, nogil=True)
@@ -1157,3 +1284,141 @@ def section_runs(start, end, m, n_fib, n_samp, evenodd):  # pragma: no cover - j
         ub[k] = (m[0, 0] * end[k, 0] + m[0, 1] * end[k, 1]) + m[0, 2]
         vb[k] = (m[1, 0] * end[k, 0] + m[1, 1] * end[k, 1]) + m[1, 2]
     return fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd)
+
+
+@njit(cache=True, nogil=True)
+def _below(width, lim):  # pragma: no cover - jit
+    n = 0
+    for i in range(width.shape[0]):
+        if width[i] < lim:
+            n += 1
+    out = np.empty(n, np.int64)
+    n = 0
+    for i in range(width.shape[0]):
+        if width[i] < lim:
+            out[n] = i
+            n += 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _argmin_finite(width):  # pragma: no cover - jit
+    """Index of the first smallest finite width, or -1 (as ``np.argmin`` on finite data)."""
+    best = np.inf
+    k = -1
+    for i in range(width.shape[0]):
+        if width[i] < best:
+            best = width[i]
+            k = i
+    return k
+
+
+@njit(cache=True, nogil=True)
+def _absent(cand, sgn, bx, by, ux, uy, width, image, want, p2m, m2p, half_along):  # pragma: no cover - jit
+    """The candidates whose chord has no pixel centre with ``image == want``
+    (:func:`chord_presence`)."""
+    n = cand.shape[0]
+    cx = np.empty(n)
+    cy = np.empty(n)
+    dx = np.empty(n)
+    dy = np.empty(n)
+    w = np.empty(n)
+    for q in range(n):
+        i = cand[q]
+        cx[q] = bx[i]
+        cy[q] = by[i]
+        dx[q] = sgn * ux[i]
+        dy[q] = sgn * uy[i]
+        w[q] = width[i]
+    present = chord_presence(cx, cy, dx, dy, w, image, want, p2m, m2p, half_along)
+    m = 0
+    for q in range(n):
+        if not present[q]:
+            m += 1
+    out = np.empty(m, np.int64)
+    m = 0
+    for q in range(n):
+        if not present[q]:
+            out[m] = cand[q]
+            m += 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def layer_widths(start, end, image, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap, min_wall, min_gap, raster_lim, p2m, m2p, pmax):  # pragma: no cover - jit
+    """:func:`measure_widths` and what the check selects from it, in one call: the index of
+    the thinnest wall and of the narrowest gap (-1: none below ``max_mm``), the samples of
+    walls below ``min_wall`` and gaps below ``min_gap``, and, among walls and gaps below
+    ``raster_lim``, those the image loses (no material / no empty pixel centre across them,
+    :func:`chord_presence`)."""
+    bx, by, ux, uy, ln, wall, gap = measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap)
+    iw = _argmin_finite(wall)
+    ig = _argmin_finite(gap)
+    thin = _below(wall, min_wall)
+    narrow = _below(gap, min_gap)
+    vanished = _absent(_below(wall, raster_lim), 1.0, bx, by, ux, uy, wall, image, 255, p2m, m2p, pmax)
+    closed = _absent(_below(gap, raster_lim), -1.0, bx, by, ux, uy, gap, image, 0, p2m, m2p, pmax)
+    return bx, by, ux, uy, ln, wall, gap, iw, ig, thin, narrow, vanished, closed
+
+
+@njit(cache=True, nogil=True)
+def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow):  # pragma: no cover - jit
+    """Everything a finding needs for the samples ``idx``: their chords ``(n, 4)`` in pixel
+    indices, their regions (:func:`group_chords` on a canvas padded by ``grow + 1``), and
+    per region (:func:`group_stats`) the narrowest sample, the length, the bounding box, and
+    the middle of the narrowest chord in model mm and in pixels."""
+    n = idx.shape[0]
+    w = np.empty(n)
+    x0 = np.empty(n)
+    y0 = np.empty(n)
+    x1 = np.empty(n)
+    y1 = np.empty(n)
+    mx = np.empty(n)
+    my = np.empty(n)
+    l_ = np.empty(n)
+    ch = np.empty((n, 4))
+    ac = np.empty(n)
+    ar = np.empty(n)
+    bc = np.empty(n)
+    br = np.empty(n)
+    for q in range(n):
+        i = idx[q]
+        wi = width[i]
+        dx = sgn * ux[i]
+        dy = sgn * uy[i]
+        w[q] = wi
+        x0[q] = bx[i]
+        y0[q] = by[i]
+        x1[q] = bx[i] + wi * dx
+        y1[q] = by[i] + wi * dy
+        mx[q] = bx[i] + 0.5 * wi * dx
+        my[q] = by[i] + 0.5 * wi * dy
+        l_[q] = ln[i]
+        ac[q] = m2p[0, 0] * x0[q] + m2p[0, 1] * y0[q] + m2p[0, 2]
+        ar[q] = m2p[1, 0] * x0[q] + m2p[1, 1] * y0[q] + m2p[1, 2]
+        bc[q] = m2p[0, 0] * x1[q] + m2p[0, 1] * y1[q] + m2p[0, 2]
+        br[q] = m2p[1, 0] * x1[q] + m2p[1, 1] * y1[q] + m2p[1, 2]
+        ch[q, 0] = ac[q]
+        ch[q, 1] = ar[q]
+        ch[q, 2] = bc[q]
+        ch[q, 3] = br[q]
+    pad = grow + 1
+    c0 = int(math.floor(min(ac.min(), bc.min()) + 0.5)) - pad
+    r0 = int(math.floor(min(ar.min(), br.min()) + 0.5)) - pad
+    c1 = int(math.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
+    r1 = int(math.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
+    g, ng = group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow)
+    worst, length, lo_x, lo_y, hi_x, hi_y = group_stats(g, ng, w, l_, x0, y0, x1, y1)
+    wx = np.empty(ng)
+    wy = np.empty(ng)
+    wc = np.empty(ng)
+    wr = np.empty(ng)
+    ww = np.empty(ng)
+    for k in range(ng):
+        j = worst[k]
+        wx[k] = mx[j]
+        wy[k] = my[j]
+        ww[k] = w[j]
+        wc[k] = m2p[0, 0] * mx[j] + m2p[0, 1] * my[j] + m2p[0, 2]
+        wr[k] = m2p[1, 0] * mx[j] + m2p[1, 1] * my[j] + m2p[1, 2]
+    return ch, g, ww, wx, wy, wc, wr, length, lo_x, lo_y, hi_x, hi_y

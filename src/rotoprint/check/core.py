@@ -215,25 +215,16 @@ class _LayerChecker:
         chords: dict[str, np.ndarray] = {}
         thin_w = narrow_g = None
         if len(seg):
-            bx, by, ux, uy, ln, wall, gap = K.measure_widths(
-                seg.start, seg.end, self.cell, _NEAR_MM, self.evenodd, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM, self.need_wall, self.need_gap
+            bx, by, ux, uy, ln, wall, gap, iw, ig, thin, narrow, vanished, closed = K.layer_widths(
+                seg.start, seg.end, img, self.cell, _NEAR_MM, self.evenodd, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
+                self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
             )
-            thin_w = self._extreme(wall, bx, by, ux, uy, +1.0, index, z)
-            narrow_g = self._extreme(gap, bx, by, ux, uy, -1.0, index, z)
-            # widths against the thresholds
-            self._emit("thin_wall", wall < self.min_wall, wall, +1.0, bx, by, ux, uy, ln, index, z, findings, chords)
-            self._emit("narrow_gap", gap < self.min_gap, gap, -1.0, bx, by, ux, uy, ln, index, z, findings, chords)
-            # widths against the raster
-            lim = _RASTER_TEST_PX * self.pmax
-            for kind, width, sgn, want in (("vanished_wall", wall, 1.0, 255), ("closed_gap", gap, -1.0, 0)):
-                cand = np.flatnonzero(width < lim)
-                if cand.size:
-                    present = K.chord_presence(
-                        bx[cand], by[cand], sgn * ux[cand], sgn * uy[cand], width[cand], img, want, self.p2m, self.m2p, self.pmax
-                    )
-                    sel = np.zeros(width.shape, bool)
-                    sel[cand[~present]] = True
-                    self._emit(kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords)
+            thin_w = self._extreme(iw, wall, bx, by, ux, uy, +1.0, index, z)
+            narrow_g = self._extreme(ig, gap, bx, by, ux, uy, -1.0, index, z)
+            # widths against the thresholds, then against the raster
+            for kind, idx, width, sgn in (("thin_wall", thin, wall, 1.0), ("narrow_gap", narrow, gap, -1.0), ("vanished_wall", vanished, wall, 1.0), ("closed_gap", closed, gap, -1.0)):
+                if idx.size:
+                    self._emit(kind, idx, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords)
             # widths against the exposure
             if self.grey_fn is not None:
                 grey = np.asarray(self.grey_fn(index, img))
@@ -248,11 +239,9 @@ class _LayerChecker:
                     ac, ar, bc, br = self._chord_px(bx[cand], by[cand], sgn * ux[cand], sgn * uy[cand], width[cand])
                     ext = K.chord_extreme(ac, ar, bc, br, grey, take_max)
                     bad = ext < level if take_max else ext >= level
-                    sel = np.zeros(width.shape, bool)
-                    sel[cand[bad]] = True
                     vals = np.full(width.shape, np.nan)
                     vals[cand] = ext / 255.0
-                    self._emit(kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
+                    self._emit(kind, cand[bad], width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
         island_mask = None
         if self.islands:
             runs = self._runs(seg)
@@ -267,56 +256,40 @@ class _LayerChecker:
         bc, br = _affine_apply(self.m2p, bx + w * ux, by + w * uy)
         return (np.ascontiguousarray(a) for a in (ac, ar, bc, br))
 
-    def _extreme(self, width, bx, by, ux, uy, sgn, index, z) -> dict | None:
-        if not width.size or not np.isfinite(width).any():
+    def _extreme(self, i, width, bx, by, ux, uy, sgn, index, z) -> dict | None:
+        if i < 0:
             return None
-        i = int(np.argmin(width))
         w = float(width[i])
         mx = bx[i] + 0.5 * w * sgn * ux[i]
         my = by[i] + 0.5 * w * sgn * uy[i]
         c, r = _affine_apply(self.m2p, mx, my)
         return {"width_mm": w, "layer": index, "z_mm": z, "x_mm": float(mx), "y_mm": float(my), "col": float(c), "row": float(r)}
 
-    def _emit(self, kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=None) -> None:
-        """Group the selected samples' chords into pixel regions (chords closer than
-        ``_GROUP_PX`` pixels join), one finding per region."""
-        idx = np.flatnonzero(sel)
+    def _emit(self, kind, idx, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=None) -> None:
+        """Group the chords of the samples ``idx`` (increasing) into pixel regions (chords
+        closer than ``_GROUP_PX`` pixels join), one finding per region."""
         if not idx.size:
             return
-        w = width[idx]
-        x0, y0 = bx[idx], by[idx]
-        dx, dy = sgn * ux[idx], sgn * uy[idx]
-        ac, ar, bc, br = self._chord_px(x0, y0, dx, dy, w)
-        chords[kind] = np.stack([ac, ar, bc, br], axis=1)
-        pad = _GROUP_PX + 1
-        c0 = int(math.floor(min(ac.min(), bc.min()) + 0.5)) - pad
-        r0 = int(math.floor(min(ar.min(), br.min()) + 0.5)) - pad
-        c1 = int(math.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
-        r1 = int(math.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
-        g, ng = K.group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, _GROUP_PX)
-        mx, my = x0 + 0.5 * w * dx, y0 + 0.5 * w * dy
-        x1, y1 = x0 + w * dx, y0 + w * dy
-        worst, length, lo_x, lo_y, hi_x, hi_y = K.group_stats(g, ng, w, ln[idx], x0, y0, x1, y1)
+        ch, g, ww, wx, wy, wc, wr, length, lo_x, lo_y, hi_x, hi_y = K.emit_groups(idx, width, sgn, bx, by, ux, uy, ln, self.m2p, _GROUP_PX)
+        chords[kind] = ch
         val = None
         if values is not None:
             v = values[idx]
-            val = [v[g == k].max() if kind == "underexposed" else v[g == k].min() for k in range(ng)]
-        cols, rows = _affine_apply(self.m2p, mx[worst], my[worst])
-        for k, j in enumerate(worst):
-            gi = g[j]
+            val = [v[g == k].max() if kind == "underexposed" else v[g == k].min() for k in range(ww.size)]
+        for k in range(ww.size):
             findings.append(
                 Finding(
                     kind=kind,
                     layer=index,
                     z_mm=z,
-                    x_mm=float(mx[j]),
-                    y_mm=float(my[j]),
-                    col=float(cols[k]),
-                    row=float(rows[k]),
-                    width_mm=float(w[j]),
-                    length_mm=float(length[gi]),
-                    value=None if val is None else float(val[gi]),
-                    bbox_mm=(float(lo_x[gi]), float(lo_y[gi]), float(hi_x[gi]), float(hi_y[gi])),
+                    x_mm=float(wx[k]),
+                    y_mm=float(wy[k]),
+                    col=float(wc[k]),
+                    row=float(wr[k]),
+                    width_mm=float(ww[k]),
+                    length_mm=float(length[k]),
+                    value=None if val is None else float(val[k]),
+                    bbox_mm=(float(lo_x[k]), float(lo_y[k]), float(hi_x[k]), float(hi_y[k])),
                 )
             )
 
