@@ -27,6 +27,8 @@ _PARALLEL_EPS = 1e-15
 #: Segments shorter than this (mm) are rounding slivers (e.g. of an open mesh's gap closing):
 #: they are not sampled, their direction being noise.
 _MIN_LEN_MM = 1e-9
+#: Up to this many segments the crossing search tests every pair (no grid to build).
+_FEW = 96
 
 
 # ---------------------------------------------------------------- bucketing helpers
@@ -329,7 +331,11 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
     rec_t = np.empty(64)
     m = 0
     if n > 0:
-        h = _cell_size(max(sx.max(), ex.max()) - min(sx.min(), ex.min()), max(sy.max(), ey.max()) - min(sy.min(), ey.min()), n, cell_mm)
+        wx = max(sx.max(), ex.max()) - min(sx.min(), ex.min())
+        wy = max(sy.max(), ey.max()) - min(sy.min(), ey.min())
+        h = _cell_size(wx, wy, n, cell_mm)
+        if n <= _FEW:
+            h = max(h, 2.0 * max(wx, wy), 1e-9)  # few segments: one cell holds them all (every pair)
         xmin = min(sx.min(), ex.min()) - h
         ymin = min(sy.min(), ey.min()) - h
         xmax = max(sx.max(), ex.max()) + h

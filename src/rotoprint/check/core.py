@@ -520,6 +520,7 @@ def check_printability(
                 setattr(rep, attr, new)
         if on_layer is not None:
             on_layer(lc)
+        del lc  # the layer's image goes now, not when the next layer is done
     return rep
 
 
