@@ -1419,3 +1419,16 @@ def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow):  # pragma: no c
         wc[k] = m2p[0, 0] * mx[j] + m2p[0, 1] * my[j] + m2p[0, 2]
         wr[k] = m2p[1, 0] * mx[j] + m2p[1, 1] * my[j] + m2p[1, 2]
     return ch, g, ww, wx, wy, wc, wr, length, lo_x, lo_y, hi_x, hi_y
+
+
+@njit(cache=True, nogil=True)
+def layer_islands(start, end, m, n_fib, n_samp, evenodd, ps, p0, p1, below):  # pragma: no cover - jit
+    """:func:`section_runs` of a layer and, when ``below`` (the runs ``ps, p0, p1`` of the
+    layer below are given), its :func:`island_runs`, in one call."""
+    rs, r0, r1 = section_runs(start, end, m, n_fib, n_samp, evenodd)
+    if below and r0.shape[0] > 0:
+        cnt, srow, scol, rlo, rhi, clo, chi, isl = island_runs(rs, r0, r1, ps, p0, p1)
+    else:
+        z = np.zeros(0, np.int64)
+        cnt, srow, scol, rlo, rhi, clo, chi, isl = z, np.zeros(0), np.zeros(0), z, z, z, z, z
+    return rs, r0, r1, cnt, srow, scol, rlo, rhi, clo, chi, isl

@@ -205,6 +205,7 @@ class _LayerChecker:
         self.cell = _CELL_PX * min(g.pitch_x_mm, g.pitch_y_mm)
         # the slicer's own model-to-pixel affine (its fill's crossings are recomputed as runs)
         self.uv = np.ascontiguousarray(getattr(job, "_to_uv", g.model_to_pixel), dtype=np.float64)
+        self._no_runs = (np.zeros(g.height + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
         self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def run(self, index: int) -> LayerCheck:
@@ -244,9 +245,7 @@ class _LayerChecker:
                     self._emit(kind, cand[bad], width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
         island_mask = None
         if self.islands:
-            runs = self._runs(seg)
-            island_mask = self._islands(runs, img.shape, index, z, findings)
-            self.prev_runs = runs
+            island_mask = self._islands(seg, img.shape, index, z, findings)
         return LayerCheck(index, z, img, findings, chords, island_mask, thin_w, narrow_g)
 
     # -- helpers
@@ -293,24 +292,21 @@ class _LayerChecker:
                 )
             )
 
-    def _runs(self, seg) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The layer's material as runs per image row, from the section by the slicer's own
-        fill (same pixel coordinates, crossings and rule; equal to the image)."""
-        return K.section_runs(seg.start, seg.end, self.uv, self.grid.height, self.grid.width, self.evenodd)
-
-    def _islands(self, runs, shape, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
+    def _islands(self, seg, shape, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
         """Regions (8-connected) of this layer with no material pixel of the layer below.
 
-        Found on the runs of material of each image row (union-find over the runs of
-        neighbouring rows), so the work follows the outline, not the image size.
+        Found on the runs of material of each image row (from the section by the slicer's own
+        fill: same pixel coordinates, crossings and rule, equal to the image), by union-find
+        over the runs of neighbouring rows: the work follows the outline, not the image size.
         """
         prev = self.prev_runs
-        if prev is None:
-            return None  # the first layer stands on the platform
-        rs, r0, r1 = runs
-        if not r0.size:
-            return None
-        cnt, srow, scol, rlo, rhi, clo, chi, isl = K.island_runs(rs, r0, r1, *prev)
+        below = prev is not None  # the first layer stands on the platform
+        if not below:
+            prev = self._no_runs
+        rs, r0, r1, cnt, srow, scol, rlo, rhi, clo, chi, isl = K.layer_islands(
+            seg.start, seg.end, self.uv, self.grid.height, self.grid.width, self.evenodd, *prev, below
+        )
+        self.prev_runs = (rs, r0, r1)
         if not cnt.size:
             return None
         g = self.grid
