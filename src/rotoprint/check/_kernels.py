@@ -1343,7 +1343,8 @@ def _absent(cand, sgn, bx, by, ux, uy, width, image, want, p2m, m2p, half_along)
 
 @njit(cache=True, nogil=True)
 def layer_widths(start, end, image, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap, min_wall, min_gap, raster_lim, p2m, m2p, pmax):  # pragma: no cover - jit
-    """:func:`measure_widths` and what the check selects from it, in one call: the index of
+    """:func:`measure_widths` (as the rows of one ``(7, P)`` array) and what the check selects
+    from it, in one call: the index of
     the thinnest wall and of the narrowest gap (-1: none below ``max_mm``), the samples of
     walls below ``min_wall`` and gaps below ``min_gap``, and, among walls and gaps below
     ``raster_lim``, those the image loses (no material / no empty pixel centre across them,
@@ -1355,15 +1356,23 @@ def layer_widths(start, end, image, cell_mm, near_mm, evenodd, side_eps, spacing
     narrow = _below(gap, min_gap)
     vanished = _absent(_below(wall, raster_lim), 1.0, bx, by, ux, uy, wall, image, 255, p2m, m2p, pmax)
     closed = _absent(_below(gap, raster_lim), -1.0, bx, by, ux, uy, gap, image, 0, p2m, m2p, pmax)
-    return bx, by, ux, uy, ln, wall, gap, iw, ig, thin, narrow, vanished, closed
+    S = np.empty((7, bx.shape[0]))
+    S[0] = bx
+    S[1] = by
+    S[2] = ux
+    S[3] = uy
+    S[4] = ln
+    S[5] = wall
+    S[6] = gap
+    return S, iw, ig, thin, narrow, vanished, closed
 
 
 @njit(cache=True, nogil=True)
 def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow):  # pragma: no cover - jit
     """Everything a finding needs for the samples ``idx``: their chords ``(n, 4)`` in pixel
     indices, their regions (:func:`group_chords` on a canvas padded by ``grow + 1``), and
-    per region (:func:`group_stats`) the narrowest sample, the length, the bounding box, and
-    the middle of the narrowest chord in model mm and in pixels."""
+    ``(10, regions)`` per region (:func:`group_stats`): the narrowest width, the middle of
+    that chord in model mm and in pixels, the length, and the bounding box (x0, y0, x1, y1)."""
     n = idx.shape[0]
     w = np.empty(n)
     x0 = np.empty(n)
@@ -1406,29 +1415,45 @@ def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow):  # pragma: no c
     r1 = int(math.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
     g, ng = group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow)
     worst, length, lo_x, lo_y, hi_x, hi_y = group_stats(g, ng, w, l_, x0, y0, x1, y1)
-    wx = np.empty(ng)
-    wy = np.empty(ng)
-    wc = np.empty(ng)
-    wr = np.empty(ng)
-    ww = np.empty(ng)
+    st = np.empty((10, ng))  # per region: width, x, y, col, row (its narrowest chord), length, bbox
     for k in range(ng):
         j = worst[k]
-        wx[k] = mx[j]
-        wy[k] = my[j]
-        ww[k] = w[j]
-        wc[k] = m2p[0, 0] * mx[j] + m2p[0, 1] * my[j] + m2p[0, 2]
-        wr[k] = m2p[1, 0] * mx[j] + m2p[1, 1] * my[j] + m2p[1, 2]
-    return ch, g, ww, wx, wy, wc, wr, length, lo_x, lo_y, hi_x, hi_y
+        st[0, k] = w[j]
+        st[1, k] = mx[j]
+        st[2, k] = my[j]
+        st[3, k] = m2p[0, 0] * mx[j] + m2p[0, 1] * my[j] + m2p[0, 2]
+        st[4, k] = m2p[1, 0] * mx[j] + m2p[1, 1] * my[j] + m2p[1, 2]
+        st[5, k] = length[k]
+        st[6, k] = lo_x[k]
+        st[7, k] = lo_y[k]
+        st[8, k] = hi_x[k]
+        st[9, k] = hi_y[k]
+    return ch, g, st
 
 
 @njit(cache=True, nogil=True)
 def layer_islands(start, end, m, n_fib, n_samp, evenodd, ps, p0, p1, below):  # pragma: no cover - jit
     """:func:`section_runs` of a layer and, when ``below`` (the runs ``ps, p0, p1`` of the
-    layer below are given), its :func:`island_runs`, in one call."""
+    layer below are given), its :func:`island_runs`, in one call: the runs, ``(7, I)`` per
+    island (pixels, mean row, mean column, first and last row, first and last column) and the
+    island of every run (-1: supported)."""
     rs, r0, r1 = section_runs(start, end, m, n_fib, n_samp, evenodd)
     if below and r0.shape[0] > 0:
         cnt, srow, scol, rlo, rhi, clo, chi, isl = island_runs(rs, r0, r1, ps, p0, p1)
     else:
-        z = np.zeros(0, np.int64)
-        cnt, srow, scol, rlo, rhi, clo, chi, isl = z, np.zeros(0), np.zeros(0), z, z, z, z, z
-    return rs, r0, r1, cnt, srow, scol, rlo, rhi, clo, chi, isl
+        cnt = np.zeros(0, np.int64)
+        srow = np.zeros(0)
+        scol = np.zeros(0)
+        rlo = rhi = clo = chi = cnt
+        isl = np.full(r0.shape[0], -1, np.int64)
+    ni = cnt.shape[0]
+    st = np.empty((7, ni))  # per island: pixels, mean row, mean column, rows and columns spanned
+    for i in range(ni):
+        st[0, i] = cnt[i]
+        st[1, i] = srow[i] / cnt[i]
+        st[2, i] = scol[i] / cnt[i]
+        st[3, i] = rlo[i]
+        st[4, i] = rhi[i]
+        st[5, i] = clo[i]
+        st[6, i] = chi[i]
+    return rs, r0, r1, st, isl

@@ -216,10 +216,11 @@ class _LayerChecker:
         chords: dict[str, np.ndarray] = {}
         thin_w = narrow_g = None
         if len(seg):
-            bx, by, ux, uy, ln, wall, gap, iw, ig, thin, narrow, vanished, closed = K.layer_widths(
+            S, iw, ig, thin, narrow, vanished, closed = K.layer_widths(
                 seg.start, seg.end, img, self.cell, _NEAR_MM, self.evenodd, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
                 self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
             )
+            bx, by, ux, uy, ln, wall, gap = S
             thin_w = self._extreme(iw, wall, bx, by, ux, uy, +1.0, index, z)
             narrow_g = self._extreme(ig, gap, bx, by, ux, uy, -1.0, index, z)
             # widths against the thresholds, then against the raster
@@ -269,26 +270,27 @@ class _LayerChecker:
         closer than ``_GROUP_PX`` pixels join), one finding per region."""
         if not idx.size:
             return
-        ch, g, ww, wx, wy, wc, wr, length, lo_x, lo_y, hi_x, hi_y = K.emit_groups(idx, width, sgn, bx, by, ux, uy, ln, self.m2p, _GROUP_PX)
+        ch, g, st = K.emit_groups(idx, width, sgn, bx, by, ux, uy, ln, self.m2p, _GROUP_PX)
         chords[kind] = ch
+        ng = st.shape[1]
         val = None
         if values is not None:
             v = values[idx]
-            val = [v[g == k].max() if kind == "underexposed" else v[g == k].min() for k in range(ww.size)]
-        for k in range(ww.size):
+            val = [v[g == k].max() if kind == "underexposed" else v[g == k].min() for k in range(ng)]
+        for k, (w, x, y, c, r, length, x0, y0, x1, y1) in enumerate(st.T.tolist()):
             findings.append(
                 Finding(
                     kind=kind,
                     layer=index,
                     z_mm=z,
-                    x_mm=float(wx[k]),
-                    y_mm=float(wy[k]),
-                    col=float(wc[k]),
-                    row=float(wr[k]),
-                    width_mm=float(ww[k]),
-                    length_mm=float(length[k]),
+                    x_mm=x,
+                    y_mm=y,
+                    col=c,
+                    row=r,
+                    width_mm=w,
+                    length_mm=length,
                     value=None if val is None else float(val[k]),
-                    bbox_mm=(float(lo_x[k]), float(lo_y[k]), float(hi_x[k]), float(hi_y[k])),
+                    bbox_mm=(x0, y0, x1, y1),
                 )
             )
 
@@ -303,16 +305,13 @@ class _LayerChecker:
         below = prev is not None  # the first layer stands on the platform
         if not below:
             prev = self._no_runs
-        rs, r0, r1, cnt, srow, scol, rlo, rhi, clo, chi, isl = K.layer_islands(
-            seg.start, seg.end, self.uv, self.grid.height, self.grid.width, self.evenodd, *prev, below
-        )
+        rs, r0, r1, st, isl = K.layer_islands(seg.start, seg.end, self.uv, self.grid.height, self.grid.width, self.evenodd, *prev, below)
         self.prev_runs = (rs, r0, r1)
-        if not cnt.size:
+        if not st.shape[1]:
             return None
         g = self.grid
         px_area = g.pitch_x_mm * g.pitch_y_mm
-        cr = srow / cnt
-        cc = scol / cnt
+        cnt, cr, cc, rlo, rhi, clo, chi = st
         x, y = _affine_apply(self.p2m, cc, cr)
         for i in range(cnt.size):
             corners_c = np.array([clo[i] - 0.5, chi[i] + 0.5])
