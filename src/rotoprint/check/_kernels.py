@@ -12,6 +12,14 @@ Geometry is done in model millimetres on the exact cross-section (the slicer's s
 
 The raster kernels (:func:`paint_chords`, :func:`chord_presence`, :func:`chord_extreme`) work
 on the device image in pixel indices ``(col, row)``.
+
+What the check runs per layer is two calls: :func:`layer_widths` (the crossing search, chains,
+classification, then :func:`sample_widths`, which measures only the widths the findings need,
+and the selections against the thresholds and the image) and :func:`layer_islands` (the
+layer's material as runs per row by the slicer's own fill, :func:`fill_runs`, and islands by
+union-find over the runs, :func:`island_runs`). :func:`boundary_samples` with
+:func:`cast_rays` (every width), :func:`runs_to_image` and :func:`paint_chords` are the plain
+references the tests compare them with.
 """
 
 from __future__ import annotations
