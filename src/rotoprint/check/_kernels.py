@@ -36,7 +36,7 @@ _PARALLEL_EPS = 1e-15
 #: they are not sampled, their direction being noise.
 _MIN_LEN_MM = 1e-9
 #: Up to this many segments the crossing search tests every pair (no grid to build).
-_FEW = 96
+_FEW = 256
 #: Margin (mm) by which the strip a segment's rays sweep is grown before testing it clear.
 _STRIP_MARGIN_MM = 1e-6
 
@@ -358,13 +358,42 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
         bx1 = np.maximum(sx, ex) + g
         by0 = np.minimum(sy, ey) - g
         by1 = np.maximum(sy, ey) + g
+        # each cell's pieces by the left edge of their segment's box: a pair is looked at only
+        # while the boxes can overlap in x (a sweep; the same pairs meet, fewer are tried)
+        key = np.empty(idx.shape[0])
+        for j in range(idx.shape[0]):
+            key[j] = bx0[par[idx[j]]]
+        for c in range(ncx * ncy):
+            a0 = start[c]
+            a1 = start[c + 1]
+            if a1 - a0 > 32:
+                o = np.argsort(key[a0:a1], kind="mergesort")
+                tmp_i = idx[a0:a1][o]
+                tmp_k = key[a0:a1][o]
+                idx[a0:a1] = tmp_i
+                key[a0:a1] = tmp_k
+            else:
+                for j in range(a0 + 1, a1):  # insertion sort: cells hold few pieces
+                    pi = idx[j]
+                    kv = key[j]
+                    q = j - 1
+                    while q >= a0 and key[q] > kv:
+                        idx[q + 1] = idx[q]
+                        key[q + 1] = key[q]
+                        q -= 1
+                    idx[q + 1] = pi
+                    key[q + 1] = kv
         for c in range(ncx * ncy):
             for a in range(start[c], start[c + 1]):
-                A = par[idx[a]]
+                A0 = par[idx[a]]
                 for b in range(a + 1, start[c + 1]):
-                    B = par[idx[b]]
-                    if A == B:
+                    B0 = par[idx[b]]
+                    if bx0[B0] > bx1[A0]:
+                        break  # this and every later box start right of A's box
+                    if A0 == B0:
                         continue
+                    A = min(A0, B0)  # the lower segment first, as without the sweep
+                    B = max(A0, B0)
                     if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
                         continue
                     d0x = ex[A] - sx[A]
@@ -977,6 +1006,8 @@ def fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd):  # pragma: no cover - jit
     columns increasing. Work is proportional to the crossings, not to the image."""
     n_seg = ua.shape[0]
     per = np.zeros(n_fib + 1, np.int64)
+    jlo = n_fib
+    jhi = 0
     for s in range(n_seg):
         v0 = va[s]
         v1 = vb[s]
@@ -987,14 +1018,18 @@ def fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd):  # pragma: no cover - jit
         if j0 < j1:
             per[j0] += 1
             per[j1] -= 1
-    start = np.empty(n_fib + 1, np.int64)
+            jlo = min(jlo, j0)
+            jhi = max(jhi, j1)
+    jhi = max(jhi, jlo)
+    # only the rows the section crosses hold crossings (the others: no runs)
+    start = np.zeros(n_fib + 1, np.int64)
     acc = 0
     run = 0
-    for j in range(n_fib):
+    for j in range(jlo, jhi):
         run += per[j]
         start[j] = acc
         acc += run
-    start[n_fib] = acc
+    start[jhi:] = acc
     pos = np.empty(acc, np.int64)
     sgn = np.empty(acc, np.int8)
     cur = start[:n_fib].copy()
@@ -1027,7 +1062,7 @@ def fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd):  # pragma: no cover - jit
     r0 = np.empty(acc, np.int64)  # a row's runs are at most its crossings
     r1 = np.empty(acc, np.int64)
     nr = 0
-    for j in range(n_fib):
+    for j in range(jlo, jhi):
         rs[j] = nr
         a = start[j]
         b = start[j + 1]
@@ -1058,7 +1093,7 @@ def fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd):  # pragma: no cover - jit
             if k < b:
                 w += sgn[k]
                 prev = i
-    rs[n_fib] = nr
+    rs[jhi:] = nr
     return rs, r0[:nr].copy(), r1[:nr].copy()
 
 
@@ -1086,7 +1121,10 @@ def island_runs(rs, r0, r1, ps, p0, p1):  # pragma: no cover - jit
     n = r0.shape[0]
     parent = np.arange(n)
     sup = np.zeros(n, np.bool_)
-    for j in range(H):
+    # the rows that hold runs
+    jlo = np.searchsorted(rs, 1) - 1 if n else 0
+    jhi = np.searchsorted(rs, n) if n else 0
+    for j in range(max(jlo, 0), jhi):
         # support: overlap with a run of the layer below in the same row (both sorted)
         q = ps[j]
         qe = ps[j + 1]
@@ -1136,7 +1174,7 @@ def island_runs(rs, r0, r1, ps, p0, p1):  # pragma: no cover - jit
     rhi = np.full(ni, -1, np.int64)
     clo = np.full(ni, np.iinfo(np.int64).max, np.int64)
     chi = np.full(ni, -1, np.int64)
-    for j in range(H):
+    for j in range(max(jlo, 0), jhi):
         for k in range(rs[j], rs[j + 1]):
             i = isl[k]
             if i < 0:
