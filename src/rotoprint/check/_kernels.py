@@ -12,6 +12,14 @@ Geometry is done in model millimetres on the exact cross-section (the slicer's s
 
 The raster kernels (:func:`paint_chords`, :func:`chord_presence`, :func:`chord_extreme`) work
 on the device image in pixel indices ``(col, row)``.
+
+What the check runs per layer is two calls: :func:`layer_widths` (the crossing search, chains,
+classification, then :func:`sample_widths`, which measures only the widths the findings need,
+and the selections against the thresholds and the image) and :func:`layer_islands` (the
+layer's material as runs per row by the slicer's own fill, :func:`fill_runs`, and islands by
+union-find over the runs, :func:`island_runs`). :func:`boundary_samples` with
+:func:`cast_rays` (every width), :func:`runs_to_image` and :func:`paint_chords` are the plain
+references the tests compare them with.
 """
 
 from __future__ import annotations
@@ -21,10 +29,16 @@ import math
 import numpy as np
 from numba import njit
 
+from ..slicing._kernels import _fibre_range
+
 _PARALLEL_EPS = 1e-15
 #: Segments shorter than this (mm) are rounding slivers (e.g. of an open mesh's gap closing):
 #: they are not sampled, their direction being noise.
 _MIN_LEN_MM = 1e-9
+#: Up to this many segments the crossing search tests every pair (no grid to build).
+_FEW = 256
+#: Margin (mm) by which the strip a segment's rays sweep is grown before testing it clear.
+_STRIP_MARGIN_MM = 1e-6
 
 
 # ---------------------------------------------------------------- bucketing helpers
@@ -327,7 +341,11 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
     rec_t = np.empty(64)
     m = 0
     if n > 0:
-        h = _cell_size(max(sx.max(), ex.max()) - min(sx.min(), ex.min()), max(sy.max(), ey.max()) - min(sy.min(), ey.min()), n, cell_mm)
+        wx = max(sx.max(), ex.max()) - min(sx.min(), ex.min())
+        wy = max(sy.max(), ey.max()) - min(sy.min(), ey.min())
+        h = _cell_size(wx, wy, n, cell_mm)
+        if n <= _FEW:
+            h = max(h, 2.0 * max(wx, wy), 1e-9)  # few segments: one cell holds them all (every pair)
         xmin = min(sx.min(), ex.min()) - h
         ymin = min(sy.min(), ey.min()) - h
         xmax = max(sx.max(), ex.max()) + h
@@ -340,13 +358,42 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
         bx1 = np.maximum(sx, ex) + g
         by0 = np.minimum(sy, ey) - g
         by1 = np.maximum(sy, ey) + g
+        # each cell's pieces by the left edge of their segment's box: a pair is looked at only
+        # while the boxes can overlap in x (a sweep; the same pairs meet, fewer are tried)
+        key = np.empty(idx.shape[0])
+        for j in range(idx.shape[0]):
+            key[j] = bx0[par[idx[j]]]
+        for c in range(ncx * ncy):
+            a0 = start[c]
+            a1 = start[c + 1]
+            if a1 - a0 > 32:
+                o = np.argsort(key[a0:a1], kind="mergesort")
+                tmp_i = idx[a0:a1][o]
+                tmp_k = key[a0:a1][o]
+                idx[a0:a1] = tmp_i
+                key[a0:a1] = tmp_k
+            else:
+                for j in range(a0 + 1, a1):  # insertion sort: cells hold few pieces
+                    pi = idx[j]
+                    kv = key[j]
+                    q = j - 1
+                    while q >= a0 and key[q] > kv:
+                        idx[q + 1] = idx[q]
+                        key[q + 1] = key[q]
+                        q -= 1
+                    idx[q + 1] = pi
+                    key[q + 1] = kv
         for c in range(ncx * ncy):
             for a in range(start[c], start[c + 1]):
-                A = par[idx[a]]
+                A0 = par[idx[a]]
                 for b in range(a + 1, start[c + 1]):
-                    B = par[idx[b]]
-                    if A == B:
+                    B0 = par[idx[b]]
+                    if bx0[B0] > bx1[A0]:
+                        break  # this and every later box start right of A's box
+                    if A0 == B0:
                         continue
+                    A = min(A0, B0)  # the lower segment first, as without the sweep
+                    B = max(A0, B0)
                     if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
                         continue
                     d0x = ex[A] - sx[A]
@@ -499,21 +546,42 @@ def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
     ``key_s``, ``key_e`` are ``(Q,) int64`` hashes of the start and end points."""
     n = sx.shape[0]
     parent = np.arange(n)
-    order = np.argsort(key_s)
-    ks = key_s[order]
+    # hash table of start keys (open addressing), each slot heading a list of the starts
+    # with that key
+    bits = 1
+    while (1 << bits) < 2 * n:
+        bits += 1
+    size = 1 << bits
+    slot_key = np.empty(size, np.int64)
+    slot_head = np.full(size, -1, np.int64)
+    nxt = np.full(n, -1, np.int64)
+    shift = np.uint64(64 - bits)
+    mul = np.uint64(0x9E3779B97F4A7C15)
+    mask = size - 1
+    for i in range(n):
+        k = key_s[i]
+        h = np.int64((np.uint64(k) * mul) >> shift)
+        while slot_head[h] >= 0 and slot_key[h] != k:
+            h = (h + 1) & mask
+        if slot_head[h] < 0:
+            slot_key[h] = k
+        nxt[i] = slot_head[h]
+        slot_head[h] = i
     for i in range(n):
         if not join_e[i]:
             continue
-        lo = np.searchsorted(ks, key_e[i])
-        j = lo
-        while j < n and ks[j] == key_e[i]:
-            o = order[j]
+        k = key_e[i]
+        h = np.int64((np.uint64(k) * mul) >> shift)
+        while slot_head[h] >= 0 and slot_key[h] != k:
+            h = (h + 1) & mask
+        o = slot_head[h]
+        while o >= 0:
             if join_s[o] and sx[o] == ex[i] and sy[o] == ey[i]:
                 a = _find(parent, i)
                 b = _find(parent, o)
                 if a != b:
                     parent[a] = b
-            j += 1
+            o = nxt[o]
     lab = np.empty(n, np.int64)
     root_lab = np.full(n, -1, np.int64)
     k = 0
@@ -527,21 +595,76 @@ def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
 
 
 @njit(cache=True, nogil=True)
-def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):  # pragma: no cover - jit
-    """Distance from every sample along ``+u`` (into the material: wall width) and ``-u``
-    (out of it: gap width) to the first other boundary segment, or ``inf`` beyond ``max_mm``.
+def _ray(ox, oy, dx, dy, own, best, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
+    """Distance along unit ``(dx, dy)`` from ``(ox, oy)`` to the first piece (not of segment
+    ``own``) hit beyond ``tmin`` and at most ``best``; ``inf`` if none. The ray walks the
+    cells it crosses in order (a 2-D DDA) and stops as soon as its nearest hit lies before
+    the cell it would enter next."""
+    cx = int(math.floor((ox - xmin) / h))
+    cy = int(math.floor((oy - ymin) / h))
+    if dx > 0.0:
+        stx = 1
+        tmx = (xmin + (cx + 1) * h - ox) / dx
+        tdx = h / dx
+    elif dx < 0.0:
+        stx = -1
+        tmx = (xmin + cx * h - ox) / dx
+        tdx = -h / dx
+    else:
+        stx = 0
+        tmx = np.inf
+        tdx = np.inf
+    if dy > 0.0:
+        sty = 1
+        tmy = (ymin + (cy + 1) * h - oy) / dy
+        tdy = h / dy
+    elif dy < 0.0:
+        sty = -1
+        tmy = (ymin + cy * h - oy) / dy
+        tdy = -h / dy
+    else:
+        sty = 0
+        tmy = np.inf
+        tdy = np.inf
+    hit = False
+    while True:
+        if 0 <= cx < ncx and 0 <= cy < ncy:
+            c = cy * ncx + cx
+            for j in range(start[c], start[c + 1]):
+                p = idx[j]
+                if par[p] == own:
+                    continue
+                e0 = px1[p] - px0[p]
+                e1 = py1[p] - py0[p]
+                den = dx * e1 - dy * e0
+                if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
+                    continue
+                w0 = px0[p] - ox
+                w1 = py0[p] - oy
+                t = (w0 * e1 - w1 * e0) / den
+                if t <= tmin or t > best:
+                    continue
+                s = (w0 * dy - w1 * dx) / den
+                if s < 0.0 or s > 1.0:
+                    continue
+                best = t
+                hit = True
+        else:
+            break
+        texit = min(tmx, tmy)
+        if texit >= best:
+            break
+        if tmx < tmy:
+            cx += stx
+            tmx += tdx
+        else:
+            cy += sty
+            tmy += tdy
+    return best if hit else np.inf
 
-    Segments are cut into pieces no longer than ``cell_mm`` and listed in a uniform grid of
-    cells of that size; every ray walks the cells it crosses in order (a 2-D DDA) and stops as
-    soon as its nearest hit lies before the cell it would enter next.
 
-    Returns ``(P,) float64`` wall widths and ``(P,) float64`` gap widths.
-    """
-    P = bx.shape[0]
-    wall = np.full(P, np.inf)
-    gap = np.full(P, np.inf)
-    if P == 0:
-        return wall, gap
+@njit(cache=True, nogil=True)
+def _grid(sx, sy, ex, ey, keep, cell_mm):  # pragma: no cover - jit
     nk = 0
     for k in range(keep.shape[0]):
         if keep[k]:
@@ -553,81 +676,242 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
     ymax = max(sy.max(), ey.max()) + h
     ncx = int((xmax - xmin) / h) + 1
     ncy = int((ymax - ymin) / h) + 1
+    return h, xmin, ymin, ncx, ncy
+
+
+@njit(cache=True, nogil=True)
+def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):  # pragma: no cover - jit
+    """Distance from every sample along ``+u`` (into the material: wall width) and ``-u``
+    (out of it: gap width) to the first other boundary segment, or ``inf`` beyond ``max_mm``:
+    every width up to ``max_mm``, the reference for :func:`sample_widths`.
+
+    Segments are cut into pieces no longer than ``cell_mm`` and listed in a uniform grid of
+    cells of that size; every ray walks the cells it crosses (:func:`_ray`).
+
+    Returns ``(P,) float64`` wall widths and ``(P,) float64`` gap widths.
+    """
+    P = bx.shape[0]
+    wall = np.full(P, np.inf)
+    gap = np.full(P, np.inf)
+    if P == 0:
+        return wall, gap
+    h, xmin, ymin, ncx, ncy = _grid(sx, sy, ex, ey, keep, cell_mm)
     px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
     for i in range(P):
-        for side in range(2):
-            sgn = 1.0 if side == 0 else -1.0
-            dx = sgn * ux[i]
-            dy = sgn * uy[i]
-            ox = bx[i]
-            oy = by[i]
-            cx = int(math.floor((ox - xmin) / h))
-            cy = int(math.floor((oy - ymin) / h))
-            if dx > 0.0:
-                stx = 1
-                tmx = (xmin + (cx + 1) * h - ox) / dx
-                tdx = h / dx
-            elif dx < 0.0:
-                stx = -1
-                tmx = (xmin + cx * h - ox) / dx
-                tdx = -h / dx
-            else:
-                stx = 0
-                tmx = np.inf
-                tdx = np.inf
-            if dy > 0.0:
-                sty = 1
-                tmy = (ymin + (cy + 1) * h - oy) / dy
-                tdy = h / dy
-            elif dy < 0.0:
-                sty = -1
-                tmy = (ymin + cy * h - oy) / dy
-                tdy = -h / dy
-            else:
-                sty = 0
-                tmy = np.inf
-                tdy = np.inf
-            best = max_mm
-            hit = False
-            while True:
-                if 0 <= cx < ncx and 0 <= cy < ncy:
-                    c = cy * ncx + cx
-                    for j in range(start[c], start[c + 1]):
-                        p = idx[j]
-                        if par[p] == seg[i]:
-                            continue
-                        e0 = px1[p] - px0[p]
-                        e1 = py1[p] - py0[p]
-                        den = dx * e1 - dy * e0
-                        if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
-                            continue
-                        w0 = px0[p] - ox
-                        w1 = py0[p] - oy
-                        t = (w0 * e1 - w1 * e0) / den
-                        if t <= tmin or t > best:
-                            continue
-                        s = (w0 * dy - w1 * dx) / den
-                        if s < 0.0 or s > 1.0:
-                            continue
-                        best = t
-                        hit = True
-                else:
-                    break
-                texit = min(tmx, tmy)
-                if texit >= best:
-                    break
-                if tmx < tmy:
-                    cx += stx
-                    tmx += tdx
-                else:
-                    cy += sty
-                    tmy += tdy
-            if hit:
-                if side == 0:
-                    wall[i] = best
-                else:
-                    gap[i] = best
+        wall[i] = _ray(bx[i], by[i], ux[i], uy[i], seg[i], max_mm, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy)
+        gap[i] = _ray(bx[i], by[i], -ux[i], -uy[i], seg[i], max_mm, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy)
     return wall, gap
+
+
+@njit(cache=True, nogil=True)
+def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap):  # pragma: no cover - jit
+    """The samples of :func:`boundary_samples` with the widths of :func:`cast_rays`, measuring
+    only what the check uses: every width below ``need_wall`` (``need_gap``) exactly, and the
+    smallest width up to ``max_mm``; any other width may come back as ``inf``.
+
+    A ray looks no further than ``max(need, smallest width found so far)``, and a segment
+    whose strip of rays (on a side) meets no other piece casts none there
+    (tested exactly, with a nanometre's margin); a segment clear on both sides gives no samples at all (none of
+    them could be a finding or the thinnest). Samples keep their order.
+
+    Returns ``(P,)`` x, y, inward normal x, y, length each stands for, wall and gap widths.
+    """
+    n = sx.shape[0]
+    total = 0
+    for k in range(n):
+        if keep[k]:
+            L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+            total += max(1, int(math.ceil(L / spacing)))
+    bx = np.empty(total)
+    by = np.empty(total)
+    ux = np.empty(total)
+    uy = np.empty(total)
+    ln = np.empty(total)
+    wall = np.empty(total)
+    gap = np.empty(total)
+    if total == 0:
+        return bx, by, ux, uy, ln, wall, gap
+    h, xmin, ymin, ncx, ncy = _grid(sx, sy, ex, ey, keep, cell_mm)
+    px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+    low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
+    need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
+    skip = np.zeros(2, np.bool_)
+    p = 0
+    for k in range(n):
+        if not keep[k]:
+            continue
+        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        m = max(1, int(math.ceil(L / spacing)))
+        skip[0] = False
+        skip[1] = False
+        if m >= 4:
+            # a long segment: does the strip its rays sweep on a side (from the first to the
+            # last sample, up to the ray length) meet any other piece? Conservative: a piece
+            # within a nanometre of the strip counts, and a strip over more cells than its
+            # rays would visit is not tested.
+            tx = (ex[k] - sx[k]) / L
+            ty = (ey[k] - sy[k]) / L
+            ox = sx[k]
+            oy = sy[k]
+            f = 0.5 / m
+            ax = sx[k] + f * (ex[k] - sx[k])
+            ay = sy[k] + f * (ey[k] - sy[k])
+            f = (m - 0.5) / m
+            zx = sx[k] + f * (ex[k] - sx[k])
+            zy = sy[k] + f * (ey[k] - sy[k])
+            a_lo = (ax - ox) * tx + (ay - oy) * ty
+            a_hi = (zx - ox) * tx + (zy - oy) * ty
+            if a_lo > a_hi:
+                a_lo, a_hi = a_hi, a_lo
+            a_lo -= _STRIP_MARGIN_MM
+            a_hi += _STRIP_MARGIN_MM
+            for side in range(2):
+                sgn = 1.0 if side == 0 else -1.0
+                dx = sgn * nx[k]
+                dy = sgn * ny[k]
+                Lr = max(need[side], low[side])
+                c_lo = -_STRIP_MARGIN_MM
+                c_hi = Lr + _STRIP_MARGIN_MM
+                # corners (along, across) = (lo, lo), (lo, hi), (hi, hi), (hi, lo)
+                q0x = ox + a_lo * tx + c_lo * dx
+                q0y = oy + a_lo * ty + c_lo * dy
+                q1x = ox + a_lo * tx + c_hi * dx
+                q1y = oy + a_lo * ty + c_hi * dy
+                q2x = ox + a_hi * tx + c_hi * dx
+                q2y = oy + a_hi * ty + c_hi * dy
+                q3x = ox + a_hi * tx + c_lo * dx
+                q3y = oy + a_hi * ty + c_lo * dy
+                gc0 = max(0, int(math.floor((min(q0x, q1x, q2x, q3x) - xmin) / h)))
+                gc1 = min(ncx - 1, int(math.floor((max(q0x, q1x, q2x, q3x) - xmin) / h)))
+                gr0 = max(0, int(math.floor((min(q0y, q1y, q2y, q3y) - ymin) / h)))
+                gr1 = min(ncy - 1, int(math.floor((max(q0y, q1y, q2y, q3y) - ymin) / h)))
+                if (gc1 - gc0 + 1) * (gr1 - gr0 + 1) > m * (int(Lr / h) + 2):
+                    continue  # the rays are cheaper
+                clear = True
+                for gr in range(gr0, gr1 + 1):
+                    if not clear:
+                        break
+                    for gc in range(gc0, gc1 + 1):
+                        if not clear:
+                            break
+                        cell = gr * ncx + gc
+                        for q in range(start[cell], start[cell + 1]):
+                            pc = idx[q]
+                            if par[pc] == k:
+                                continue
+                            # separating axes: the strip's own (along, across), then the piece's normal
+                            ua_ = (px0[pc] - ox) * tx + (py0[pc] - oy) * ty
+                            ub_ = (px1[pc] - ox) * tx + (py1[pc] - oy) * ty
+                            if max(ua_, ub_) < a_lo or min(ua_, ub_) > a_hi:
+                                continue
+                            va_ = (px0[pc] - ox) * dx + (py0[pc] - oy) * dy
+                            vb_ = (px1[pc] - ox) * dx + (py1[pc] - oy) * dy
+                            if max(va_, vb_) < c_lo or min(va_, vb_) > c_hi:
+                                continue
+                            e0 = px1[pc] - px0[pc]
+                            e1 = py1[pc] - py0[pc]
+                            w0 = e0 * (q0y - py0[pc]) - e1 * (q0x - px0[pc])
+                            w1 = e0 * (q1y - py0[pc]) - e1 * (q1x - px0[pc])
+                            w2 = e0 * (q2y - py0[pc]) - e1 * (q2x - px0[pc])
+                            w3 = e0 * (q3y - py0[pc]) - e1 * (q3x - px0[pc])
+                            if min(w0, w1, w2, w3) <= 0.0 <= max(w0, w1, w2, w3):
+                                clear = False
+                                break
+                skip[side] = clear
+            if skip[0] and skip[1]:
+                continue
+        for j in range(m):
+            f = (j + 0.5) / m
+            bx[p] = sx[k] + f * (ex[k] - sx[k])
+            by[p] = sy[k] + f * (ey[k] - sy[k])
+            ux[p] = nx[k]
+            uy[p] = ny[k]
+            ln[p] = L / m
+            p += 1
+        for i in range(p - m, p):
+            for side in range(2):
+                if skip[side]:
+                    if side == 0:
+                        wall[i] = np.inf
+                    else:
+                        gap[i] = np.inf
+                    continue
+                sgn = 1.0 if side == 0 else -1.0
+                dx = sgn * ux[i]
+                dy = sgn * uy[i]
+                ox = bx[i]
+                oy = by[i]
+                cx = int(math.floor((ox - xmin) / h))
+                cy = int(math.floor((oy - ymin) / h))
+                if dx > 0.0:
+                    stx = 1
+                    tmx = (xmin + (cx + 1) * h - ox) / dx
+                    tdx = h / dx
+                elif dx < 0.0:
+                    stx = -1
+                    tmx = (xmin + cx * h - ox) / dx
+                    tdx = -h / dx
+                else:
+                    stx = 0
+                    tmx = np.inf
+                    tdx = np.inf
+                if dy > 0.0:
+                    sty = 1
+                    tmy = (ymin + (cy + 1) * h - oy) / dy
+                    tdy = h / dy
+                elif dy < 0.0:
+                    sty = -1
+                    tmy = (ymin + cy * h - oy) / dy
+                    tdy = -h / dy
+                else:
+                    sty = 0
+                    tmy = np.inf
+                    tdy = np.inf
+                best = max(need[side], low[side])
+                hit = False
+                while True:
+                    if 0 <= cx < ncx and 0 <= cy < ncy:
+                        c = cy * ncx + cx
+                        for q in range(start[c], start[c + 1]):
+                            pc = idx[q]
+                            if par[pc] == k:
+                                continue
+                            e0 = px1[pc] - px0[pc]
+                            e1 = py1[pc] - py0[pc]
+                            den = dx * e1 - dy * e0
+                            if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
+                                continue
+                            w0 = px0[pc] - ox
+                            w1 = py0[pc] - oy
+                            t = (w0 * e1 - w1 * e0) / den
+                            if t <= tmin or t > best:
+                                continue
+                            sp = (w0 * dy - w1 * dx) / den
+                            if sp < 0.0 or sp > 1.0:
+                                continue
+                            best = t
+                            hit = True
+                    else:
+                        break
+                    texit = min(tmx, tmy)
+                    if texit >= best:
+                        break
+                    if tmx < tmy:
+                        cx += stx
+                        tmx += tdx
+                    else:
+                        cy += sty
+                        tmy += tdy
+                t = np.inf
+                if hit:
+                    t = best
+                    if best < low[side]:
+                        low[side] = best
+                if side == 0:
+                    wall[i] = t
+                else:
+                    gap[i] = t
+    return bx[:p], by[:p], ux[:p], uy[:p], ln[:p], wall[:p], gap[:p]
 
 
 # ---------------------------------------------------------------- raster kernels
@@ -711,30 +995,511 @@ def chord_extreme(ac, ar, bc, br, grey, take_max):  # pragma: no cover - jit
     return out
 
 
+# ---------------------------------------------------------------- runs and islands
+
+
 @njit(cache=True, nogil=True)
-def loose_pixels(new, held):  # pragma: no cover - jit
-    """``(H, W) bool``: pixels of ``new`` with no pixel of ``held`` among their 8 neighbours
-    (both ``(H, W) bool``), and how many there are."""
-    H, W = new.shape
-    out = np.zeros((H, W), np.bool_)
-    n = 0
-    for r in range(H):
-        for c in range(W):
-            if not new[r, c]:
+def fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd):  # pragma: no cover - jit
+    """The slicer's fibre fill (:func:`rotoprint.slicing._kernels.fill_jit`, same crossings,
+    same rule) as maximal runs instead of an image: ``(n_fib + 1,) int64`` CSR row starts and
+    ``(R,) int64`` first and past-the-end columns of each run of material, rows in order and
+    columns increasing. Work is proportional to the crossings, not to the image."""
+    n_seg = ua.shape[0]
+    per = np.zeros(n_fib + 1, np.int64)
+    jlo = n_fib
+    jhi = 0
+    for s in range(n_seg):
+        v0 = va[s]
+        v1 = vb[s]
+        if v0 == v1:
+            continue
+        lv, hv = (v0, v1) if v0 < v1 else (v1, v0)
+        j0, j1 = _fibre_range(lv, hv, n_fib)
+        if j0 < j1:
+            per[j0] += 1
+            per[j1] -= 1
+            jlo = min(jlo, j0)
+            jhi = max(jhi, j1)
+    jhi = max(jhi, jlo)
+    # only the rows the section crosses hold crossings (the others: no runs)
+    start = np.zeros(n_fib + 1, np.int64)
+    acc = 0
+    run = 0
+    for j in range(jlo, jhi):
+        run += per[j]
+        start[j] = acc
+        acc += run
+    start[jhi:] = acc
+    pos = np.empty(acc, np.int64)
+    sgn = np.empty(acc, np.int8)
+    cur = start[:n_fib].copy()
+    for s in range(n_seg):
+        v0 = va[s]
+        v1 = vb[s]
+        if v0 == v1:
+            continue
+        if v0 < v1:
+            sign = -1
+            lu, lv, hu, hv = ua[s], v0, ub[s], v1
+        else:
+            sign = 1
+            lu, lv, hu, hv = ub[s], v1, ua[s], v0
+        j0, j1 = _fibre_range(lv, hv, n_fib)
+        slope = (hu - lu) / (hv - lv)
+        for j in range(j0, j1):
+            u = lu + (j - lv) * slope
+            if u <= 0.0:
+                i = 0
+            elif u >= n_samp:
+                i = n_samp
+            else:
+                i = math.ceil(u)
+            k = cur[j]
+            pos[k] = i
+            sgn[k] = sign
+            cur[j] = k + 1
+    rs = np.zeros(n_fib + 1, np.int64)
+    r0 = np.empty(acc, np.int64)  # a row's runs are at most its crossings
+    r1 = np.empty(acc, np.int64)
+    nr = 0
+    for j in range(jlo, jhi):
+        rs[j] = nr
+        a = start[j]
+        b = start[j + 1]
+        if a == b:
+            continue
+        for k in range(a + 1, b):  # insertion sort, as the slicer
+            p = pos[k]
+            q = sgn[k]
+            m = k - 1
+            while m >= a and pos[m] > p:
+                pos[m + 1] = pos[m]
+                sgn[m + 1] = sgn[m]
+                m -= 1
+            pos[m + 1] = p
+            sgn[m + 1] = q
+        w = 0
+        prev = 0
+        for k in range(a, b + 1):
+            i = pos[k] if k < b else n_samp
+            inside = (w & 1) != 0 if evenodd else w != 0
+            if inside and i > prev:
+                if nr > rs[j] and r1[nr - 1] == prev:
+                    r1[nr - 1] = i  # touching spans make one run
+                else:
+                    r0[nr] = prev
+                    r1[nr] = i
+                    nr += 1
+            if k < b:
+                w += sgn[k]
+                prev = i
+    rs[jhi:] = nr
+    return rs, r0[:nr].copy(), r1[:nr].copy()
+
+
+@njit(cache=True, nogil=True)
+def runs_to_image(rs, r0, r1, H, W):  # pragma: no cover - jit
+    """``(H, W) uint8`` image (255 in the runs), for tests."""
+    out = np.zeros((H, W), np.uint8)
+    for j in range(H):
+        for k in range(rs[j], rs[j + 1]):
+            out[j, r0[k] : r1[k]] = 255
+    return out
+
+
+@njit(cache=True, nogil=True)
+def island_runs(rs, r0, r1, ps, p0, p1):  # pragma: no cover - jit
+    """Islands of a layer given as runs (``rs, r0, r1``, see :func:`fill_runs`) over the layer
+    below (``ps, p0, p1``): the 8-connected regions of material none of whose pixels has
+    material directly below.
+
+    Returns, per island in raster order of its first pixel: ``(I,)`` pixel count, sums of the
+    rows and of the columns of its pixels (float64), first and last row, first and last
+    column; and ``(R,) int64`` the island (``0..I-1``) of every run, ``-1`` if supported.
+    """
+    H = rs.shape[0] - 1
+    n = r0.shape[0]
+    parent = np.arange(n)
+    sup = np.zeros(n, np.bool_)
+    # the rows that hold runs
+    jlo = np.searchsorted(rs, 1) - 1 if n else 0
+    jhi = np.searchsorted(rs, n) if n else 0
+    for j in range(max(jlo, 0), jhi):
+        # support: overlap with a run of the layer below in the same row (both sorted)
+        q = ps[j]
+        qe = ps[j + 1]
+        for k in range(rs[j], rs[j + 1]):
+            while q < qe and p1[q] <= r0[k]:
+                q += 1
+            if q < qe and p0[q] < r1[k]:
+                sup[k] = True
+        # 8-connection with the runs of the row above: columns within one
+        if j == 0:
+            continue
+        q = rs[j - 1]
+        qe = rs[j]
+        for k in range(rs[j], rs[j + 1]):
+            while q < qe and r1[q] < r0[k]:  # ends more than one column left of k
+                q += 1
+            t = q
+            while t < qe and r0[t] <= r1[k]:
+                a = _find(parent, k)
+                b = _find(parent, t)
+                if a != b:
+                    if a < b:
+                        parent[b] = a
+                    else:
+                        parent[a] = b
+                t += 1
+    root_sup = np.zeros(n, np.bool_)
+    for k in range(n):
+        if sup[k]:
+            root_sup[_find(parent, k)] = True
+    isl = np.full(n, -1, np.int64)
+    root_isl = np.full(n, -1, np.int64)
+    ni = 0
+    # raster order of the first pixel: the first run of each component, runs in raster order
+    for k in range(n):
+        r = _find(parent, k)
+        if root_sup[r]:
+            continue
+        if root_isl[r] < 0:
+            root_isl[r] = ni
+            ni += 1
+        isl[k] = root_isl[r]
+    cnt = np.zeros(ni, np.int64)
+    srow = np.zeros(ni)
+    scol = np.zeros(ni)
+    rlo = np.full(ni, H, np.int64)
+    rhi = np.full(ni, -1, np.int64)
+    clo = np.full(ni, np.iinfo(np.int64).max, np.int64)
+    chi = np.full(ni, -1, np.int64)
+    for j in range(max(jlo, 0), jhi):
+        for k in range(rs[j], rs[j + 1]):
+            i = isl[k]
+            if i < 0:
                 continue
-            ok = False
-            for dr in range(-1, 2):
-                rr = r + dr
-                if rr < 0 or rr >= H:
-                    continue
-                for dc in range(-1, 2):
-                    cc = c + dc
-                    if 0 <= cc < W and held[rr, cc]:
-                        ok = True
-                        break
-                if ok:
-                    break
-            if not ok:
-                out[r, c] = True
-                n += 1
-    return out, n
+            L = r1[k] - r0[k]
+            cnt[i] += L
+            srow[i] += float(j) * L
+            scol[i] += 0.5 * float(r0[k] + r1[k] - 1) * L
+            rlo[i] = min(rlo[i], j)
+            rhi[i] = max(rhi[i], j)
+            clo[i] = min(clo[i], r0[k])
+            chi[i] = max(chi[i], r1[k] - 1)
+    return cnt, srow, scol, rlo, rhi, clo, chi, isl
+
+
+@njit(cache=True, nogil=True)
+def group_chords(ac, ar, bc, br, c0, r0, Hc, Wc, grow):  # pragma: no cover - jit
+    """Group chords (pixel indices) into regions: each chord is painted on the pixels
+    nearest to points every quarter pixel along it (:func:`paint_chords`) on a canvas of
+    ``Hc`` x ``Wc`` pixels whose origin is pixel ``(c0, r0)``, the paint is dilated by
+    ``grow`` pixels (square), and the 8-connected regions are numbered in raster order of
+    their first pixel. A chord belongs to the region of the pixel nearest to its start.
+
+    Work follows the painted pixels, not the canvas. Returns ``(n,) int64`` regions and
+    their number."""
+    n = ac.shape[0]
+    canvas = np.zeros((Hc, Wc), np.int32)  # 0 empty, -1 painted, -2 dilated, k > 0 region k - 1
+    npix = 0
+    for i in range(n):
+        L = math.hypot(bc[i] - ac[i], br[i] - ar[i])
+        npix += max(1, int(math.ceil(L * 4.0))) + 1
+    pr = np.empty(npix, np.int64)
+    m_ = 0
+    for i in range(n):
+        a_c = ac[i] - c0
+        a_r = ar[i] - r0
+        b_c = bc[i] - c0
+        b_r = br[i] - r0
+        L = math.hypot(b_c - a_c, b_r - a_r)
+        m = max(1, int(math.ceil(L * 4.0)))
+        for j in range(m + 1):
+            f = j / m
+            c = int(math.floor(a_c + f * (b_c - a_c) + 0.5))
+            r = int(math.floor(a_r + f * (b_r - a_r) + 0.5))
+            if 0 <= r < Hc and 0 <= c < Wc and canvas[r, c] != -1:
+                canvas[r, c] = -1
+                pr[m_] = r * Wc + c
+                m_ += 1
+    pr = np.sort(pr[:m_])
+    nd = 0
+    for q in range(m_):
+        r = pr[q] // Wc
+        c = pr[q] % Wc
+        for rr in range(max(0, r - grow), min(Hc, r + grow + 1)):
+            for cc in range(max(0, c - grow), min(Wc, c + grow + 1)):
+                if canvas[rr, cc] == 0:
+                    canvas[rr, cc] = -2
+                    nd += 1
+    stack = np.empty(m_ + nd + 1, np.int64)
+    ng = 0
+    # the first painted pixel of a region in raster order is the first pixel of its
+    # dilation shifted by (grow, grow): regions are found in raster order
+    for q in range(m_):
+        r = pr[q] // Wc
+        c = pr[q] % Wc
+        if canvas[r, c] > 0:
+            continue
+        ng += 1
+        canvas[r, c] = ng
+        sp = 1
+        stack[0] = pr[q]
+        while sp > 0:
+            sp -= 1
+            v = stack[sp]
+            vr = v // Wc
+            vc = v % Wc
+            for rr in range(max(0, vr - 1), min(Hc, vr + 2)):
+                for cc in range(max(0, vc - 1), min(Wc, vc + 2)):
+                    if canvas[rr, cc] < 0:
+                        canvas[rr, cc] = ng
+                        stack[sp] = rr * Wc + cc
+                        sp += 1
+    g = np.empty(n, np.int64)
+    for i in range(n):
+        sc = np.int64(math.floor(ac[i] + 0.5)) - c0
+        sr = np.int64(math.floor(ar[i] + 0.5)) - r0
+        g[i] = canvas[sr, sc] - 1
+    return g, ng
+
+
+@njit(cache=True, nogil=True)
+def group_stats(g, ng, w, ln, x0, y0, x1, y1):  # pragma: no cover - jit
+    """Per region (``g`` from :func:`group_chords`): its narrowest chord (the first one of
+    that width), the summed lengths ``ln``, and the bounding box of the chords' ends."""
+    worst = np.full(ng, -1, np.int64)
+    length = np.zeros(ng)
+    lo_x = np.full(ng, np.inf)
+    lo_y = np.full(ng, np.inf)
+    hi_x = np.full(ng, -np.inf)
+    hi_y = np.full(ng, -np.inf)
+    for i in range(g.shape[0]):
+        k = g[i]
+        if worst[k] < 0 or w[i] < w[worst[k]]:
+            worst[k] = i
+        length[k] += ln[i]
+        lo_x[k] = min(lo_x[k], min(x0[i], x1[i]))
+        lo_y[k] = min(lo_y[k], min(y0[i], y1[i]))
+        hi_x[k] = max(hi_x[k], max(x0[i], x1[i]))
+        hi_y[k] = max(hi_y[k], max(y0[i], y1[i]))
+    return worst, length, lo_x, lo_y, hi_x, hi_y
+
+
+@njit(cache=True, nogil=True)
+def _keys(x, y):  # pragma: no cover - jit
+    """``(n,) int64`` hashes of points from their exact bits (equal points, equal keys)."""
+    return x.view(np.int64) * np.int64(-7046029254386353131) ^ y.view(np.int64)
+
+
+@njit(cache=True, nogil=True)
+def measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap):  # pragma: no cover - jit
+    """The whole width measurement of one section (``(S, 2)`` segment starts and ends, model
+    mm) in one call: :func:`split_at_crossings`, :func:`chain_components`,
+    :func:`classify_segments` and :func:`sample_widths` (see there for what is measured).
+
+    Returns the samples ``(P,)`` x, y, inward normal x, y, the boundary length each stands
+    for, and their wall and gap widths."""
+    sx = np.ascontiguousarray(start[:, 0])
+    sy = np.ascontiguousarray(start[:, 1])
+    ex = np.ascontiguousarray(end[:, 0])
+    ey = np.ascontiguousarray(end[:, 1])
+    sx, sy, ex, ey, _, join_s, join_e = split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm)
+    comp, ncomp = chain_components(sx, sy, ex, ey, join_s, join_e, _keys(sx, sy), _keys(ex, ey))
+    keep, nx, ny = classify_segments(sx, sy, ex, ey, comp, ncomp, evenodd, side_eps)
+    return sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap)
+
+
+@njit(cache=True, nogil=True)
+def section_runs(start, end, m, n_fib, n_samp, evenodd):  # pragma: no cover - jit
+    """:func:`fill_runs` of a section in model mm (``(S, 2)`` starts and ends) through the
+    ``(2, 3)`` model-to-pixel affine ``m``, evaluated with the slicer's operations in the
+    slicer's order (``(m00 x + m01 y) + m02``), so the crossings are the image's."""
+    n = start.shape[0]
+    ua = np.empty(n)
+    va = np.empty(n)
+    ub = np.empty(n)
+    vb = np.empty(n)
+    for k in range(n):
+        ua[k] = (m[0, 0] * start[k, 0] + m[0, 1] * start[k, 1]) + m[0, 2]
+        va[k] = (m[1, 0] * start[k, 0] + m[1, 1] * start[k, 1]) + m[1, 2]
+        ub[k] = (m[0, 0] * end[k, 0] + m[0, 1] * end[k, 1]) + m[0, 2]
+        vb[k] = (m[1, 0] * end[k, 0] + m[1, 1] * end[k, 1]) + m[1, 2]
+    return fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd)
+
+
+@njit(cache=True, nogil=True)
+def _below(width, lim):  # pragma: no cover - jit
+    n = 0
+    for i in range(width.shape[0]):
+        if width[i] < lim:
+            n += 1
+    out = np.empty(n, np.int64)
+    n = 0
+    for i in range(width.shape[0]):
+        if width[i] < lim:
+            out[n] = i
+            n += 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _argmin_finite(width):  # pragma: no cover - jit
+    """Index of the first smallest finite width, or -1 (as ``np.argmin`` on finite data)."""
+    best = np.inf
+    k = -1
+    for i in range(width.shape[0]):
+        if width[i] < best:
+            best = width[i]
+            k = i
+    return k
+
+
+@njit(cache=True, nogil=True)
+def _absent(cand, sgn, bx, by, ux, uy, width, image, want, p2m, m2p, half_along):  # pragma: no cover - jit
+    """The candidates whose chord has no pixel centre with ``image == want``
+    (:func:`chord_presence`)."""
+    n = cand.shape[0]
+    cx = np.empty(n)
+    cy = np.empty(n)
+    dx = np.empty(n)
+    dy = np.empty(n)
+    w = np.empty(n)
+    for q in range(n):
+        i = cand[q]
+        cx[q] = bx[i]
+        cy[q] = by[i]
+        dx[q] = sgn * ux[i]
+        dy[q] = sgn * uy[i]
+        w[q] = width[i]
+    present = chord_presence(cx, cy, dx, dy, w, image, want, p2m, m2p, half_along)
+    m = 0
+    for q in range(n):
+        if not present[q]:
+            m += 1
+    out = np.empty(m, np.int64)
+    m = 0
+    for q in range(n):
+        if not present[q]:
+            out[m] = cand[q]
+            m += 1
+    return out
+
+
+@njit(cache=True, nogil=True)
+def layer_widths(start, end, image, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap, min_wall, min_gap, raster_lim, p2m, m2p, pmax):  # pragma: no cover - jit
+    """:func:`measure_widths` (as the rows of one ``(7, P)`` array) and what the check selects
+    from it, in one call: the index of
+    the thinnest wall and of the narrowest gap (-1: none below ``max_mm``), the samples of
+    walls below ``min_wall`` and gaps below ``min_gap``, and, among walls and gaps below
+    ``raster_lim``, those the image loses (no material / no empty pixel centre across them,
+    :func:`chord_presence`)."""
+    bx, by, ux, uy, ln, wall, gap = measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap)
+    iw = _argmin_finite(wall)
+    ig = _argmin_finite(gap)
+    thin = _below(wall, min_wall)
+    narrow = _below(gap, min_gap)
+    vanished = _absent(_below(wall, raster_lim), 1.0, bx, by, ux, uy, wall, image, 255, p2m, m2p, pmax)
+    closed = _absent(_below(gap, raster_lim), -1.0, bx, by, ux, uy, gap, image, 0, p2m, m2p, pmax)
+    S = np.empty((7, bx.shape[0]))
+    S[0] = bx
+    S[1] = by
+    S[2] = ux
+    S[3] = uy
+    S[4] = ln
+    S[5] = wall
+    S[6] = gap
+    return S, iw, ig, thin, narrow, vanished, closed
+
+
+@njit(cache=True, nogil=True)
+def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow):  # pragma: no cover - jit
+    """Everything a finding needs for the samples ``idx``: their chords ``(n, 4)`` in pixel
+    indices, their regions (:func:`group_chords` on a canvas padded by ``grow + 1``), and
+    ``(10, regions)`` per region (:func:`group_stats`): the narrowest width, the middle of
+    that chord in model mm and in pixels, the length, and the bounding box (x0, y0, x1, y1)."""
+    n = idx.shape[0]
+    w = np.empty(n)
+    x0 = np.empty(n)
+    y0 = np.empty(n)
+    x1 = np.empty(n)
+    y1 = np.empty(n)
+    mx = np.empty(n)
+    my = np.empty(n)
+    l_ = np.empty(n)
+    ch = np.empty((n, 4))
+    ac = np.empty(n)
+    ar = np.empty(n)
+    bc = np.empty(n)
+    br = np.empty(n)
+    for q in range(n):
+        i = idx[q]
+        wi = width[i]
+        dx = sgn * ux[i]
+        dy = sgn * uy[i]
+        w[q] = wi
+        x0[q] = bx[i]
+        y0[q] = by[i]
+        x1[q] = bx[i] + wi * dx
+        y1[q] = by[i] + wi * dy
+        mx[q] = bx[i] + 0.5 * wi * dx
+        my[q] = by[i] + 0.5 * wi * dy
+        l_[q] = ln[i]
+        ac[q] = m2p[0, 0] * x0[q] + m2p[0, 1] * y0[q] + m2p[0, 2]
+        ar[q] = m2p[1, 0] * x0[q] + m2p[1, 1] * y0[q] + m2p[1, 2]
+        bc[q] = m2p[0, 0] * x1[q] + m2p[0, 1] * y1[q] + m2p[0, 2]
+        br[q] = m2p[1, 0] * x1[q] + m2p[1, 1] * y1[q] + m2p[1, 2]
+        ch[q, 0] = ac[q]
+        ch[q, 1] = ar[q]
+        ch[q, 2] = bc[q]
+        ch[q, 3] = br[q]
+    pad = grow + 1
+    c0 = int(math.floor(min(ac.min(), bc.min()) + 0.5)) - pad
+    r0 = int(math.floor(min(ar.min(), br.min()) + 0.5)) - pad
+    c1 = int(math.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
+    r1 = int(math.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
+    g, ng = group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow)
+    worst, length, lo_x, lo_y, hi_x, hi_y = group_stats(g, ng, w, l_, x0, y0, x1, y1)
+    st = np.empty((10, ng))  # per region: width, x, y, col, row (its narrowest chord), length, bbox
+    for k in range(ng):
+        j = worst[k]
+        st[0, k] = w[j]
+        st[1, k] = mx[j]
+        st[2, k] = my[j]
+        st[3, k] = m2p[0, 0] * mx[j] + m2p[0, 1] * my[j] + m2p[0, 2]
+        st[4, k] = m2p[1, 0] * mx[j] + m2p[1, 1] * my[j] + m2p[1, 2]
+        st[5, k] = length[k]
+        st[6, k] = lo_x[k]
+        st[7, k] = lo_y[k]
+        st[8, k] = hi_x[k]
+        st[9, k] = hi_y[k]
+    return ch, g, st
+
+
+@njit(cache=True, nogil=True)
+def layer_islands(start, end, m, n_fib, n_samp, evenodd, ps, p0, p1, below):  # pragma: no cover - jit
+    """:func:`section_runs` of a layer and, when ``below`` (the runs ``ps, p0, p1`` of the
+    layer below are given), its :func:`island_runs`, in one call: the runs, ``(7, I)`` per
+    island (pixels, mean row, mean column, first and last row, first and last column) and the
+    island of every run (-1: supported)."""
+    rs, r0, r1 = section_runs(start, end, m, n_fib, n_samp, evenodd)
+    if below and r0.shape[0] > 0:
+        cnt, srow, scol, rlo, rhi, clo, chi, isl = island_runs(rs, r0, r1, ps, p0, p1)
+    else:
+        cnt = np.zeros(0, np.int64)
+        srow = np.zeros(0)
+        scol = np.zeros(0)
+        rlo = rhi = clo = chi = cnt
+        isl = np.full(r0.shape[0], -1, np.int64)
+    ni = cnt.shape[0]
+    st = np.empty((7, ni))  # per island: pixels, mean row, mean column, rows and columns spanned
+    for i in range(ni):
+        st[0, i] = cnt[i]
+        st[1, i] = srow[i] / cnt[i]
+        st[2, i] = scol[i] / cnt[i]
+        st[3, i] = rlo[i]
+        st[4, i] = rhi[i]
+        st[5, i] = clo[i]
+        st[6, i] = chi[i]
+    return rs, r0, r1, st, isl

@@ -27,7 +27,6 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from ..errors import ConfigError
 from ..mesh import Mesh
@@ -172,12 +171,6 @@ def _positive(name: str, value, *, allow_none: bool = True) -> float | None:
     return v
 
 
-def _point_keys(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """``(n,) int64`` hashes of points from their exact bits (equal points, equal keys)."""
-    with np.errstate(over="ignore"):
-        return x.view(np.int64) * np.int64(-7046029254386353131) ^ y.view(np.int64)
-
-
 def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return m[0, 0] * x + m[0, 1] * y + m[0, 2], m[1, 0] * x + m[1, 1] * y + m[1, 2]
 
@@ -203,41 +196,37 @@ class _LayerChecker:
         self.thr = cure_threshold
         self.islands = islands
         self.evenodd = job.fill == "evenodd"
-        self.prev: np.ndarray | None = None
+        # widths the findings need exactly (the smallest one is measured up to the cap)
+        lim = _RASTER_TEST_PX * self.pmax
+        if grey_fn is not None:
+            lim = max(lim, _EXPOSURE_TEST_PX * self.pmax)
+        self.need_wall = max(min_wall_mm, lim)
+        self.need_gap = max(min_gap_mm, lim)
+        self.cell = _CELL_PX * min(g.pitch_x_mm, g.pitch_y_mm)
+        # the slicer's own model-to-pixel affine (its fill's crossings are recomputed as runs)
+        self.uv = np.ascontiguousarray(getattr(job, "_to_uv", g.model_to_pixel), dtype=np.float64)
+        self._no_runs = (np.zeros(g.height + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
+        self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def run(self, index: int) -> LayerCheck:
         layer, seg = self.job.layer_and_segments(index)
         img = layer.image
         z = layer.z_mm
-        sx = np.ascontiguousarray(seg.start[:, 0])
-        sy = np.ascontiguousarray(seg.start[:, 1])
-        ex = np.ascontiguousarray(seg.end[:, 0])
-        ey = np.ascontiguousarray(seg.end[:, 1])
         findings: list[Finding] = []
         chords: dict[str, np.ndarray] = {}
         thin_w = narrow_g = None
-        if sx.size:
-            sx, sy, ex, ey, _, join_s, join_e = K.split_at_crossings(sx, sy, ex, ey, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm), _NEAR_MM)
-            comp, ncomp = K.chain_components(sx, sy, ex, ey, join_s, join_e, _point_keys(sx, sy), _point_keys(ex, ey))
-            keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, ncomp, self.evenodd, _SIDE_EPS_MM)
-            bx, by, ux, uy, sid, ln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, self.spacing)
-            wall, gap = K.cast_rays(bx, by, ux, uy, sid, sx, sy, ex, ey, keep, self.cap, _RAY_TMIN_MM, _CELL_PX * min(self.grid.pitch_x_mm, self.grid.pitch_y_mm))
-            thin_w = self._extreme(wall, bx, by, ux, uy, +1.0, index, z)
-            narrow_g = self._extreme(gap, bx, by, ux, uy, -1.0, index, z)
-            # widths against the thresholds
-            self._emit("thin_wall", wall < self.min_wall, wall, +1.0, bx, by, ux, uy, ln, index, z, findings, chords)
-            self._emit("narrow_gap", gap < self.min_gap, gap, -1.0, bx, by, ux, uy, ln, index, z, findings, chords)
-            # widths against the raster
-            lim = _RASTER_TEST_PX * self.pmax
-            for kind, width, sgn, want in (("vanished_wall", wall, 1.0, 255), ("closed_gap", gap, -1.0, 0)):
-                cand = np.flatnonzero(width < lim)
-                if cand.size:
-                    present = K.chord_presence(
-                        bx[cand], by[cand], sgn * ux[cand], sgn * uy[cand], width[cand], img, want, self.p2m, self.m2p, self.pmax
-                    )
-                    sel = np.zeros(width.shape, bool)
-                    sel[cand[~present]] = True
-                    self._emit(kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords)
+        if len(seg):
+            S, iw, ig, thin, narrow, vanished, closed = K.layer_widths(
+                seg.start, seg.end, img, self.cell, _NEAR_MM, self.evenodd, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
+                self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
+            )
+            bx, by, ux, uy, ln, wall, gap = S
+            thin_w = self._extreme(iw, wall, bx, by, ux, uy, +1.0, index, z)
+            narrow_g = self._extreme(ig, gap, bx, by, ux, uy, -1.0, index, z)
+            # widths against the thresholds, then against the raster
+            for kind, idx, width, sgn in (("thin_wall", thin, wall, 1.0), ("narrow_gap", narrow, gap, -1.0), ("vanished_wall", vanished, wall, 1.0), ("closed_gap", closed, gap, -1.0)):
+                if idx.size:
+                    self._emit(kind, idx, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords)
             # widths against the exposure
             if self.grey_fn is not None:
                 grey = np.asarray(self.grey_fn(index, img))
@@ -252,15 +241,12 @@ class _LayerChecker:
                     ac, ar, bc, br = self._chord_px(bx[cand], by[cand], sgn * ux[cand], sgn * uy[cand], width[cand])
                     ext = K.chord_extreme(ac, ar, bc, br, grey, take_max)
                     bad = ext < level if take_max else ext >= level
-                    sel = np.zeros(width.shape, bool)
-                    sel[cand[bad]] = True
                     vals = np.full(width.shape, np.nan)
                     vals[cand] = ext / 255.0
-                    self._emit(kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
+                    self._emit(kind, cand[bad], width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
         island_mask = None
         if self.islands:
-            island_mask = self._islands(img, index, z, findings)
-        self.prev = img
+            island_mask = self._islands(seg, img.shape, index, z, findings)
         return LayerCheck(index, z, img, findings, chords, island_mask, thin_w, narrow_g)
 
     # -- helpers
@@ -270,142 +256,84 @@ class _LayerChecker:
         bc, br = _affine_apply(self.m2p, bx + w * ux, by + w * uy)
         return (np.ascontiguousarray(a) for a in (ac, ar, bc, br))
 
-    def _extreme(self, width, bx, by, ux, uy, sgn, index, z) -> dict | None:
-        if not width.size or not np.isfinite(width).any():
+    def _extreme(self, i, width, bx, by, ux, uy, sgn, index, z) -> dict | None:
+        if i < 0:
             return None
-        i = int(np.argmin(width))
         w = float(width[i])
         mx = bx[i] + 0.5 * w * sgn * ux[i]
         my = by[i] + 0.5 * w * sgn * uy[i]
         c, r = _affine_apply(self.m2p, mx, my)
         return {"width_mm": w, "layer": index, "z_mm": z, "x_mm": float(mx), "y_mm": float(my), "col": float(c), "row": float(r)}
 
-    def _emit(self, kind, sel, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=None) -> None:
-        """Group the selected samples' chords into pixel regions (chords closer than
-        ``_GROUP_PX`` pixels join), one finding per region."""
-        idx = np.flatnonzero(sel)
+    def _emit(self, kind, idx, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=None) -> None:
+        """Group the chords of the samples ``idx`` (increasing) into pixel regions (chords
+        closer than ``_GROUP_PX`` pixels join), one finding per region."""
         if not idx.size:
             return
-        w = width[idx]
-        x0, y0 = bx[idx], by[idx]
-        dx, dy = sgn * ux[idx], sgn * uy[idx]
-        ac, ar, bc, br = self._chord_px(x0, y0, dx, dy, w)
-        chords[kind] = np.stack([ac, ar, bc, br], axis=1)
-        pad = _GROUP_PX + 1
-        c0 = int(math.floor(min(ac.min(), bc.min()) + 0.5)) - pad
-        r0 = int(math.floor(min(ar.min(), br.min()) + 0.5)) - pad
-        c1 = int(math.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
-        r1 = int(math.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
-        canvas = np.zeros((r1 - r0, c1 - c0), np.uint8)
-        K.paint_chords(ac - c0, ar - r0, bc - c0, br - r0, canvas, 1)
-        if _GROUP_PX:
-            canvas = ndimage.binary_dilation(canvas, structure=np.ones((3, 3), bool), iterations=_GROUP_PX)
-        lab, n = ndimage.label(canvas, structure=np.ones((3, 3), bool))
-        sc = np.floor(ac + 0.5).astype(np.int64) - c0
-        sr = np.floor(ar + 0.5).astype(np.int64) - r0
-        g = lab[sr, sc] - 1
-        ng = int(g.max()) + 1
-        mx, my = x0 + 0.5 * w * dx, y0 + 0.5 * w * dy
-        x1, y1 = x0 + w * dx, y0 + w * dy
-        order = np.lexsort((w, g))  # by group, narrowest first
-        first = np.ones(order.size, bool)
-        first[1:] = g[order][1:] != g[order][:-1]
-        worst = order[first]  # one sample per group, in group order
-        length = np.bincount(g, weights=ln[idx], minlength=ng)
-        lo_x = np.full(ng, np.inf)
-        lo_y = np.full(ng, np.inf)
-        hi_x = np.full(ng, -np.inf)
-        hi_y = np.full(ng, -np.inf)
-        np.minimum.at(lo_x, g, np.minimum(x0, x1))
-        np.minimum.at(lo_y, g, np.minimum(y0, y1))
-        np.maximum.at(hi_x, g, np.maximum(x0, x1))
-        np.maximum.at(hi_y, g, np.maximum(y0, y1))
+        ch, g, st = K.emit_groups(idx, width, sgn, bx, by, ux, uy, ln, self.m2p, _GROUP_PX)
+        chords[kind] = ch
+        ng = st.shape[1]
         val = None
         if values is not None:
             v = values[idx]
-            if kind == "underexposed":
-                val = np.full(ng, -np.inf)
-                np.maximum.at(val, g, v)
-            else:
-                val = np.full(ng, np.inf)
-                np.minimum.at(val, g, v)
-        cols, rows = _affine_apply(self.m2p, mx[worst], my[worst])
-        for k, j in enumerate(worst):
-            gi = g[j]
+            val = [v[g == k].max() if kind == "underexposed" else v[g == k].min() for k in range(ng)]
+        for k, (w, x, y, c, r, length, x0, y0, x1, y1) in enumerate(st.T.tolist()):
             findings.append(
                 Finding(
                     kind=kind,
                     layer=index,
                     z_mm=z,
-                    x_mm=float(mx[j]),
-                    y_mm=float(my[j]),
-                    col=float(cols[k]),
-                    row=float(rows[k]),
-                    width_mm=float(w[j]),
-                    length_mm=float(length[gi]),
-                    value=None if val is None else float(val[gi]),
-                    bbox_mm=(float(lo_x[gi]), float(lo_y[gi]), float(hi_x[gi]), float(hi_y[gi])),
+                    x_mm=x,
+                    y_mm=y,
+                    col=c,
+                    row=r,
+                    width_mm=w,
+                    length_mm=length,
+                    value=None if val is None else float(val[k]),
+                    bbox_mm=(x0, y0, x1, y1),
                 )
             )
 
-    def _islands(self, img: np.ndarray, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
+    def _islands(self, seg, shape, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
         """Regions (8-connected) of this layer with no material pixel of the layer below.
 
-        Such a region lies wholly in ``new = material & ~below``; a connected part of ``new``
-        is one when none of its pixels is next to a pixel of ``material & below``.
+        Found on the runs of material of each image row (from the section by the slicer's own
+        fill: same pixel coordinates, crossings and rule, equal to the image), by union-find
+        over the runs of neighbouring rows: the work follows the outline, not the image size.
         """
-        prev = self.prev
-        if prev is None:
-            return None  # the first layer stands on the platform
-        new = (img > 0) & (prev == 0)
-        rows = np.flatnonzero(new.any(axis=1))
-        if not rows.size:
+        prev = self.prev_runs
+        below = prev is not None  # the first layer stands on the platform
+        if not below:
+            prev = self._no_runs
+        rs, r0, r1, st, isl = K.layer_islands(seg.start, seg.end, self.uv, self.grid.height, self.grid.width, self.evenodd, *prev, below)
+        self.prev_runs = (rs, r0, r1)
+        if not st.shape[1]:
             return None
-        cols = np.flatnonzero(new.any(axis=0))
-        r0, r1 = max(rows[0] - 1, 0), min(rows[-1] + 2, img.shape[0])
-        c0, c1 = max(cols[0] - 1, 0), min(cols[-1] + 2, img.shape[1])
-        sub_new = np.ascontiguousarray(new[r0:r1, c0:c1])
-        held = np.ascontiguousarray((img[r0:r1, c0:c1] > 0) & (prev[r0:r1, c0:c1] > 0))
-        loose, n_loose = K.loose_pixels(sub_new, held)
-        if n_loose == 0:
-            return None  # every new pixel touches one that stands on the layer below
-        eight = np.ones((3, 3), bool)
-        lab, n = ndimage.label(sub_new, structure=eight)
-        touched = np.zeros(n + 1, bool)
-        touched[lab[sub_new & ~loose]] = True
-        touched[0] = True
-        if touched.all():
-            return None
-        bad = np.flatnonzero(~touched)
         g = self.grid
         px_area = g.pitch_x_mm * g.pitch_y_mm
-        areas = np.bincount(lab.ravel(), minlength=n + 1)
-        slices = ndimage.find_objects(lab)
-        out = np.zeros(img.shape, bool)
-        for b in bad:
-            sl = slices[b - 1]
-            part = lab[sl] == b
-            rr, cc = np.nonzero(part)
-            cr = rr.mean() + sl[0].start + r0
-            ccn = cc.mean() + sl[1].start + c0
-            x, y = _affine_apply(self.p2m, ccn, cr)
-            corners_c = np.array([sl[1].start - 0.5, sl[1].stop - 0.5]) + c0
-            corners_r = np.array([sl[0].start - 0.5, sl[0].stop - 0.5]) + r0
+        cnt, cr, cc, rlo, rhi, clo, chi = st
+        x, y = _affine_apply(self.p2m, cc, cr)
+        for i in range(cnt.size):
+            corners_c = np.array([clo[i] - 0.5, chi[i] + 0.5])
+            corners_r = np.array([rlo[i] - 0.5, rhi[i] + 0.5])
             X, Y = _affine_apply(self.p2m, np.repeat(corners_c, 2), np.tile(corners_r, 2))
             findings.append(
                 Finding(
                     kind="island",
                     layer=index,
                     z_mm=z,
-                    x_mm=float(x),
-                    y_mm=float(y),
-                    col=float(ccn),
-                    row=float(cr),
-                    area_mm2=float(areas[b] * px_area),
+                    x_mm=float(x[i]),
+                    y_mm=float(y[i]),
+                    col=float(cc[i]),
+                    row=float(cr[i]),
+                    area_mm2=float(cnt[i] * px_area),
                     bbox_mm=(float(X.min()), float(Y.min()), float(X.max()), float(Y.max())),
                 )
             )
-            out[r0 + sl[0].start : r0 + sl[0].stop, c0 + sl[1].start : c0 + sl[1].stop] |= part
+        out = np.zeros(shape, bool)
+        row = np.repeat(np.arange(shape[0]), np.diff(rs))
+        for k in np.flatnonzero(isl >= 0):
+            out[row[k], r0[k] : r1[k]] = True
         return out
 
 
@@ -587,6 +515,7 @@ def check_printability(
                 setattr(rep, attr, new)
         if on_layer is not None:
             on_layer(lc)
+        del lc  # the layer's image goes now, not when the next layer is done
     return rep
 
 

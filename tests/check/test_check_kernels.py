@@ -1,0 +1,164 @@
+"""The fast kernels of the check against plain references: runs against the slicer's image,
+islands on runs against labelling the image, the limited width measurement against measuring
+every width, chord grouping against painting and labelling a canvas."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import ndimage
+
+from rotoprint import load_mesh
+from rotoprint.check import _kernels as K
+from rotoprint.devices import load_device
+from rotoprint.mesh import Mesh
+from rotoprint.pieces import feature_test_piece
+from rotoprint.slicing import slice_mesh
+from rotoprint.testing import box_triangles
+
+SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "meshes"
+
+
+@pytest.fixture(scope="module")
+def piece_mesh():
+    return Mesh.from_triangles(feature_test_piece()[0])
+
+
+def _runs_of(img: np.ndarray):
+    """Runs of an image by plain numpy (row starts, first and past-the-end columns)."""
+    b = np.pad(img > 0, ((0, 0), (1, 1))).astype(np.int8)
+    d = np.diff(b, axis=1)
+    r_on, c_on = np.nonzero(d == 1)
+    r_off, c_off = np.nonzero(d == -1)
+    rs = np.searchsorted(r_on, np.arange(img.shape[0] + 1))
+    return rs.astype(np.int64), c_on.astype(np.int64), c_off.astype(np.int64)
+
+
+def _jobs(piece_mesh, shared_meshes=SHARED):
+    yield slice_mesh(piece_mesh, load_device("omnidot760"), layer_height_mm=0.3)
+    yield slice_mesh(piece_mesh, load_device("perfactory-sxga"), layer_height_mm=0.5, fibre_angle_deg=33.0, fill="evenodd")
+    yield slice_mesh(piece_mesh, load_device("omnidot760"), layer_height_mm=0.5, fibre_angle_deg=-71.0, backend="numpy")
+    if shared_meshes.exists():
+        yield slice_mesh(load_mesh(shared_meshes / "teapot_open.stl"), load_device("omnidot760"), layer_height_mm=4.0)
+        yield slice_mesh(load_mesh(shared_meshes / "half_donut_ascii.stl"), load_device("perfactory-sxga"), layer_height_mm=0.3, fill="evenodd")
+
+
+def test_section_runs_equal_the_slicers_image(piece_mesh):
+    n = 0
+    for job in _jobs(piece_mesh):
+        for i in range(len(job)):
+            layer, seg = job.layer_and_segments(i)
+            rs, r0, r1 = K.section_runs(seg.start, seg.end, job._to_uv, job.grid.height, job.grid.width, job.fill == "evenodd")
+            assert np.array_equal(K.runs_to_image(rs, r0, r1, job.grid.height, job.grid.width), layer.image)
+            want = _runs_of(layer.image)
+            assert all(np.array_equal(a, b) for a, b in zip((rs, r0, r1), want))  # maximal runs
+            n += 1
+    assert n > 10
+
+
+def _islands_reference(img: np.ndarray, below: np.ndarray):
+    """The 8-connected regions of ``img`` with no pixel of ``below`` under them, in the order
+    ``ndimage.label`` numbers them."""
+    lab, n = ndimage.label(img > 0, structure=np.ones((3, 3), bool))
+    held = np.unique(lab[(img > 0) & (below > 0)])
+    out = []
+    for k in range(1, n + 1):
+        if k in held:
+            continue
+        rr, cc = np.nonzero(lab == k)
+        out.append((rr.size, rr.mean(), cc.mean(), rr.min(), rr.max(), cc.min(), cc.max()))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_island_runs_match_labelling(seed):
+    rng = np.random.default_rng(seed)
+    H, W = rng.integers(1, 40, 2)
+    density = rng.uniform(0.1, 0.7)
+    img = (rng.random((H, W)) < density).astype(np.uint8) * 255
+    below = (rng.random((H, W)) < rng.uniform(0.0, 0.5)).astype(np.uint8) * 255
+    cnt, srow, scol, rlo, rhi, clo, chi, isl = K.island_runs(*_runs_of(img), *_runs_of(below))
+    ref = _islands_reference(img, below)
+    assert cnt.size == len(ref)
+    for i, (n, mr, mc, a, b, c, d) in enumerate(ref):
+        assert cnt[i] == n and (rlo[i], rhi[i], clo[i], chi[i]) == (a, b, c, d)
+        assert srow[i] / cnt[i] == pytest.approx(mr, abs=1e-12) and scol[i] / cnt[i] == pytest.approx(mc, abs=1e-12)
+    # the run labels paint exactly the island pixels
+    rs, r0, r1 = _runs_of(img)
+    mask = np.zeros((H, W), bool)
+    rows = np.repeat(np.arange(H), np.diff(rs))
+    for k in np.flatnonzero(isl >= 0):
+        mask[rows[k], r0[k] : r1[k]] = True
+    lab, _ = ndimage.label(img > 0, structure=np.ones((3, 3), bool))
+    held = np.unique(lab[(img > 0) & (below > 0)])
+    assert np.array_equal(mask, (img > 0) & ~np.isin(lab, held))
+
+
+def _sections(piece_mesh, shared_meshes=SHARED):
+    dev = load_device("perfactory-sxga")
+    job = slice_mesh(piece_mesh, dev, layer_height_mm=0.3)
+    for i in (0, 2, 4):
+        yield job.segments(i)[0], dev
+    dev = load_device("omnidot760")
+    yield slice_mesh(piece_mesh, dev, layer_height_mm=0.3).segments(3)[0], dev
+    tabs = np.concatenate([box_triangles((1.0, 1.0, 0.2)), box_triangles((0.3, 0.05, 0.2), (1.0, 0.5, 0.0)), box_triangles((2.0, 0.03, 0.2), (-0.5, 1.06, 0.0))])
+    yield slice_mesh(Mesh.from_triangles(tabs), dev, layer_height_mm=0.2).segments(0)[0], dev
+    if shared_meshes.exists():
+        for name, dname, lh, k in (("teapot_open.stl", "omnidot760", 3.0, 7), ("sphere_openscad.stl", "omnidot760", 10.0, 4), ("half_donut_ascii.stl", "perfactory-sxga", 0.5, 3)):
+            dev = load_device(dname)
+            yield slice_mesh(load_mesh(shared_meshes / name), dev, layer_height_mm=lh).segments(k)[0], dev
+
+
+def test_sample_widths_measure_what_the_check_uses(piece_mesh):
+    """Against measuring every width of every sample: the same samples below the thresholds
+    with the same widths, the same smallest width, no sample dropped that could matter."""
+    n = dropped = 0
+    for seg, dev in _sections(piece_mesh):
+        p = max(dev.pitch_x_mm, dev.pitch_y_mm)
+        cell = spacing = 0.5 * min(dev.pitch_x_mm, dev.pitch_y_mm)
+        cap, need_w, need_g = 8 * p, 2 * p, 2.5 * p
+        sx, sy, ex, ey = (np.ascontiguousarray(a) for a in (seg.start[:, 0], seg.start[:, 1], seg.end[:, 0], seg.end[:, 1]))
+        sx, sy, ex, ey, _, js, je = K.split_at_crossings(sx, sy, ex, ey, cell, 1e-5)
+        comp, nc = K.chain_components(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
+        keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)
+        rx, ry, rux, ruy, rsid, rln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing)
+        rw, rg = K.cast_rays(rx, ry, rux, ruy, rsid, sx, sy, ex, ey, keep, cap, 1e-9, cell)
+        bx, by, ux, uy, ln, w, g = K.sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, cap, 1e-9, cell, need_w, need_g)
+        # the kept samples are reference samples (the same points, bit for bit), in order
+        pos = np.flatnonzero(np.isin(rx + 1j * ry, bx + 1j * by))
+        assert pos.size == bx.size and np.array_equal(rx[pos], bx) and np.array_equal(ry[pos], by)
+        assert np.array_equal(rux[pos], ux) and np.array_equal(rln[pos], ln)
+        for ref, got, need in ((rw, w, need_w), (rg, g, need_g)):
+            below = ref < need
+            assert set(np.flatnonzero(below)) <= set(pos)  # nothing that matters dropped
+            np.testing.assert_allclose(got[ref[pos] < need], ref[pos][ref[pos] < need], rtol=0, atol=1e-12)
+            assert not np.any(got[ref[pos] >= need] < need)
+            if np.isfinite(ref).any():
+                assert got.min() == pytest.approx(ref.min(), abs=1e-12)
+            else:
+                assert not np.isfinite(got).any()
+        n += 1
+        dropped += rx.size - bx.size
+    assert n >= 5 and dropped > 0
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_group_chords_match_canvas_labelling(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 60))
+    ac, ar = rng.uniform(0, 50, n), rng.uniform(0, 40, n)
+    bc, br = ac + rng.normal(0, 3, n), ar + rng.normal(0, 3, n)
+    grow, pad = 1, 2
+    c0 = int(np.floor(min(ac.min(), bc.min()) + 0.5)) - pad
+    r0 = int(np.floor(min(ar.min(), br.min()) + 0.5)) - pad
+    c1 = int(np.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
+    r1 = int(np.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
+    g, ng = K.group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow)
+    canvas = np.zeros((r1 - r0, c1 - c0), np.uint8)
+    K.paint_chords(ac - c0, ar - r0, bc - c0, br - r0, canvas, 1)
+    canvas = ndimage.binary_dilation(canvas, structure=np.ones((3, 3), bool), iterations=grow)
+    lab, m = ndimage.label(canvas, structure=np.ones((3, 3), bool))
+    want = lab[np.floor(ar + 0.5).astype(int) - r0, np.floor(ac + 0.5).astype(int) - c0] - 1
+    assert ng == m and np.array_equal(g, want)
