@@ -1,7 +1,8 @@
 """Fibre slicing against trimesh (section_multiplane + Path2D.rasterize) on the same grid.
 
 Per-layer time includes finding the section and filling the image, for both; PNG encoding
-is excluded for both. Each side runs three times, alternating, and its best run is kept. Accuracy: pixels whose value differs from point-in-polygon of the
+is excluded for both, and both drop each image once it is made (as a streaming writer does).
+Each side runs three times, alternating, and its best run is kept. Accuracy: pixels whose value differs from point-in-polygon of the
 exact cross-section (trimesh section + shapely) at the pixel centre, farther than 1e-6 mm
 from the boundary, summed over every 10th measured layer whose section is closed (for an
 open mesh, layers where gaps had to be closed have no exact reference and are skipped).
@@ -31,8 +32,9 @@ SHARED = ROOT.parent / "shared" / "data" / "meshes"
 ROUNDS = 3
 
 
-def _trimesh_layers(mesh, job, layers):
-    """trimesh's images on rotoprint's grid; returns (seconds, images in rotoprint's orientation)."""
+def _trimesh_layers(mesh, job, layers, *, keep: bool):
+    """trimesh's images on rotoprint's grid; returns (seconds, images in rotoprint's
+    orientation if ``keep``, else []). Timed like a streaming writer: images are dropped."""
     g = job.grid
     m = g.pixel_to_model
     assert abs(m[0, 1]) < 1e-12 and abs(m[1, 0]) < 1e-12, "bench uses unrotated grids"
@@ -41,17 +43,17 @@ def _trimesh_layers(mesh, job, layers):
     pitch = np.array([g.pitch_x_mm, g.pitch_y_mm])
     tm = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False)
     heights = job.plan.z_slice_mm[layers]
+    kept = []
     t0 = time.perf_counter()
     sections = tm.section_multiplane(plane_origin=[0, 0, 0], plane_normal=[0, 0, 1], heights=heights)
-    images = []
     for sec in sections:
         if sec is None:
-            images.append(np.zeros(g.shape, bool))
-            continue
-        im = sec.rasterize(pitch=pitch, origin=origin, resolution=(g.width, g.height), fill=True)
-        images.append(np.asarray(im, dtype=bool))
-    dt = time.perf_counter() - t0
-    return dt, [im[::-1] for im in images]
+            im = np.zeros(g.shape, bool)
+        else:
+            im = np.asarray(sec.rasterize(pitch=pitch, origin=origin, resolution=(g.width, g.height), fill=True), dtype=bool)
+        if keep:
+            kept.append(im[::-1])
+    return time.perf_counter() - t0, kept
 
 
 def _case(name, mesh, device, layer_height, n_layers_measured, check_every):
@@ -62,20 +64,23 @@ def _case(name, mesh, device, layer_height, n_layers_measured, check_every):
     for _ in range(ROUNDS):  # alternate the two and keep each one's best: the machine is noisy
         fresh = slice_mesh(mesh, device, layer_height_mm=layer_height)
         t0 = time.perf_counter()
-        done = [fresh.layer(int(i)) for i in layers]
+        for i in layers:  # like a streaming writer: each image is dropped once made
+            fresh.layer(int(i)).image
         t_ours = min(t_ours, time.perf_counter() - t0)
-        t, theirs = _trimesh_layers(mesh, job, layers)
+        t, _ = _trimesh_layers(mesh, job, layers, keep=False)
         t_tm = min(t_tm, t)
-    ours = [L.image for L in done]
+    # accuracy, untimed, on every check_every-th measured layer
+    checked_idx = layers[::check_every]
+    _, theirs = _trimesh_layers(mesh, job, checked_idx, keep=True)
     bad_ours = bad_tm = checked = 0
-    for k in range(0, len(layers), check_every):
-        g = done[k].gaps
+    for k, li in enumerate(checked_idx):
+        layer = job.layer(int(li))
+        g = layer.gaps
         if g.closed or g.left_open:
             continue  # an open section has no exact reference: trimesh drops open chains
         checked += 1
-        z = float(job.plan.z_slice_mm[layers[k]])
-        geom = exact_section(mesh.triangles, z, per_shell=False)
-        bad_ours += len(mismatches_beyond(ours[k], job.grid, geom))
+        geom = exact_section(mesh.triangles, layer.z_mm, per_shell=False)
+        bad_ours += len(mismatches_beyond(layer.image, job.grid, geom))
         bad_tm += len(mismatches_beyond(theirs[k].astype(np.uint8), job.grid, geom))
     n = len(layers)
     return {

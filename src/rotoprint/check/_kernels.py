@@ -29,7 +29,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..slicing._kernels import _fibre_range
+from ..slicing._kernels import bucket_crossings
 
 _PARALLEL_EPS = 1e-15
 #: Segments shorter than this (mm) are rounding slivers (e.g. of an open mesh's gap closing):
@@ -1004,60 +1004,8 @@ def fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd):  # pragma: no cover - jit
     same rule) as maximal runs instead of an image: ``(n_fib + 1,) int64`` CSR row starts and
     ``(R,) int64`` first and past-the-end columns of each run of material, rows in order and
     columns increasing. Work is proportional to the crossings, not to the image."""
-    n_seg = ua.shape[0]
-    per = np.zeros(n_fib + 1, np.int64)
-    jlo = n_fib
-    jhi = 0
-    for s in range(n_seg):
-        v0 = va[s]
-        v1 = vb[s]
-        if v0 == v1:
-            continue
-        lv, hv = (v0, v1) if v0 < v1 else (v1, v0)
-        j0, j1 = _fibre_range(lv, hv, n_fib)
-        if j0 < j1:
-            per[j0] += 1
-            per[j1] -= 1
-            jlo = min(jlo, j0)
-            jhi = max(jhi, j1)
-    jhi = max(jhi, jlo)
-    # only the rows the section crosses hold crossings (the others: no runs)
-    start = np.zeros(n_fib + 1, np.int64)
-    acc = 0
-    run = 0
-    for j in range(jlo, jhi):
-        run += per[j]
-        start[j] = acc
-        acc += run
-    start[jhi:] = acc
-    pos = np.empty(acc, np.int64)
-    sgn = np.empty(acc, np.int8)
-    cur = start[:n_fib].copy()
-    for s in range(n_seg):
-        v0 = va[s]
-        v1 = vb[s]
-        if v0 == v1:
-            continue
-        if v0 < v1:
-            sign = -1
-            lu, lv, hu, hv = ua[s], v0, ub[s], v1
-        else:
-            sign = 1
-            lu, lv, hu, hv = ub[s], v1, ua[s], v0
-        j0, j1 = _fibre_range(lv, hv, n_fib)
-        slope = (hu - lu) / (hv - lv)
-        for j in range(j0, j1):
-            u = lu + (j - lv) * slope
-            if u <= 0.0:
-                i = 0
-            elif u >= n_samp:
-                i = n_samp
-            else:
-                i = math.ceil(u)
-            k = cur[j]
-            pos[k] = i
-            sgn[k] = sign
-            cur[j] = k + 1
+    start, pos, sgn, jlo, jhi = bucket_crossings(ua, va, ub, vb, n_fib, n_samp)
+    acc = pos.shape[0]
     rs = np.zeros(n_fib + 1, np.int64)
     r0 = np.empty(acc, np.int64)  # a row's runs are at most its crossings
     r1 = np.empty(acc, np.int64)
@@ -1068,16 +1016,6 @@ def fill_runs(ua, va, ub, vb, n_fib, n_samp, evenodd):  # pragma: no cover - jit
         b = start[j + 1]
         if a == b:
             continue
-        for k in range(a + 1, b):  # insertion sort, as the slicer
-            p = pos[k]
-            q = sgn[k]
-            m = k - 1
-            while m >= a and pos[m] > p:
-                pos[m + 1] = pos[m]
-                sgn[m + 1] = sgn[m]
-                m -= 1
-            pos[m + 1] = p
-            sgn[m + 1] = q
         w = 0
         prev = 0
         for k in range(a, b + 1):

@@ -20,10 +20,19 @@ def _fibre_range(lv, hv, n_fib):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
-def _fill_spans(ua, va, ub, vb, n_fib, n_samp, evenodd, out):  # pragma: no cover - jit
+def bucket_crossings(ua, va, ub, vb, n_fib, n_samp):  # pragma: no cover - jit
+    """Every crossing of a segment with a fibre, bucketed per fibre and sorted along it.
+
+    Returns ``start`` ``(n_fib + 1,) int64`` (fibre ``j``'s crossings are
+    ``start[j]:start[j + 1]``), ``pos`` ``(C,) int64`` (the first sample each crossing counts
+    for, clipped to ``0..n_samp``), ``sgn`` ``(C,) int8`` (its winding sign), and ``jlo``,
+    ``jhi``: the fibres ``jlo <= j < jhi`` that hold any crossing.
+    """
     n_seg = ua.shape[0]
     # pass 1: crossings per fibre, by a difference array over fibres
     per = np.zeros(n_fib + 1, np.int64)
+    jlo = n_fib
+    jhi = 0
     for s in range(n_seg):
         v0 = va[s]
         v1 = vb[s]
@@ -34,14 +43,17 @@ def _fill_spans(ua, va, ub, vb, n_fib, n_samp, evenodd, out):  # pragma: no cove
         if j0 < j1:
             per[j0] += 1
             per[j1] -= 1
-    start = np.empty(n_fib + 1, np.int64)
+            jlo = min(jlo, j0)
+            jhi = max(jhi, j1)
+    jhi = max(jhi, jlo)
+    start = np.zeros(n_fib + 1, np.int64)
     acc = 0
     run = 0
-    for j in range(n_fib):
+    for j in range(jlo, jhi):
         run += per[j]
         start[j] = acc
         acc += run
-    start[n_fib] = acc
+    start[jhi:] = acc
     pos = np.empty(acc, np.int64)
     sgn = np.empty(acc, np.int8)
     cur = start[:n_fib].copy()
@@ -71,13 +83,11 @@ def _fill_spans(ua, va, ub, vb, n_fib, n_samp, evenodd, out):  # pragma: no cove
             pos[k] = i
             sgn[k] = sign
             cur[j] = k + 1
-    # pass 3: per fibre, sort its crossings and write the inside spans
-    for j in range(n_fib):
+    # pass 3: sort each fibre's crossings along it (insertion sort: fibres hold few)
+    for j in range(jlo, jhi):
         a = start[j]
         b = start[j + 1]
-        if a == b:
-            continue
-        for k in range(a + 1, b):  # insertion sort: fibres hold few crossings
+        for k in range(a + 1, b):
             p = pos[k]
             q = sgn[k]
             m = k - 1
@@ -87,6 +97,16 @@ def _fill_spans(ua, va, ub, vb, n_fib, n_samp, evenodd, out):  # pragma: no cove
                 m -= 1
             pos[m + 1] = p
             sgn[m + 1] = q
+    return start, pos, sgn, jlo, jhi
+
+
+@njit(cache=True, nogil=True)
+def _fill_spans(ua, va, ub, vb, n_fib, n_samp, evenodd, out):  # pragma: no cover - jit
+    start, pos, sgn, jlo, jhi = bucket_crossings(ua, va, ub, vb, n_fib, n_samp)
+    # per fibre, write the spans the fill rule puts inside
+    for j in range(jlo, jhi):
+        a = start[j]
+        b = start[j + 1]
         w = 0
         prev = 0
         for k in range(a, b):
