@@ -209,3 +209,48 @@ def test_a_new_task_never_gets_an_old_tasks_job():
         for t in (task, bare):
             assert runner.render_layer(t, n - 1).index == n - 1  # the last layer exists for this job
         del task, bare
+
+
+# ---------------------------------------------------------------- direct rotary slicing
+def test_rotary_slices_identical_bytes_with_workers_and_resumable(run_cli, torus_stl, tmp_path, monkeypatch):
+    base = ["slice", torus_stl, "-d", "omnidot760", "--rotary", "--tilt", "20", "--radius", "40",
+            "--layer-height", "0.5", "--reference-images", "-q"]
+    outs = {}
+    for name, extra in (("w1", []), ("w2", ["--workers", "2"])):
+        (tmp_path / name).mkdir()
+        outs[name] = tmp_path / name / "rot"  # same folder name: sidecars name the reference image's path
+        code, _, err = run_cli(*base, "-o", outs[name], *extra)
+        assert code == 0, err
+    a, b = folder_bytes(outs["w1"]), folder_bytes(outs["w2"])
+    assert len(a) == 8 * 3 + 1  # per layer: print image, sidecar, reference image; and the manifest
+    assert a == b
+    # interrupt a run after a few layers, then resume it
+    from rotoprint.io import resumable
+
+    real_record = resumable.PartialOutput.record
+    calls = {"n": 0}
+
+    def record_then_crash(self, index, files, **payload):
+        rec = real_record(self, index, files, **payload)
+        calls["n"] += 1
+        if calls["n"] == 3:
+            raise KeyboardInterrupt  # stands for a kill: nothing is cleaned up
+        return rec
+
+    (tmp_path / "r").mkdir()
+    out = tmp_path / "r" / "rot"
+    monkeypatch.setattr(resumable.PartialOutput, "record", record_then_crash)
+    code, _, _ = run_cli(*base, "-o", out)
+    assert code == 130  # interrupted: the CLI aborts and leaves the journal for --resume
+    monkeypatch.setattr(resumable.PartialOutput, "record", real_record)
+    assert not out.exists() and partial_path(out).exists()
+    code, _, err = run_cli(*base, "-o", out, "--resume")
+    assert code == 0, err
+    assert folder_bytes(out) == a
+    assert not partial_path(out).exists()
+    # the folder can be moved: simulate finds the reference image next to the sidecar
+    moved = tmp_path / "moved"
+    out.rename(moved)
+    code, stdout, err = run_cli("simulate", moved / "layer_00003.png", "-o", tmp_path / "ov.png", "--json")
+    assert code == 0, err
+    assert json.loads(stdout)["iou"] > 0.9

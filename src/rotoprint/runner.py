@@ -23,7 +23,7 @@ import numpy as np
 
 from .errors import ConfigError
 
-__all__ = ["LayerTask", "LayerResult", "MaskLayerResult", "produce_layers", "task_fingerprint"]
+__all__ = ["LayerTask", "LayerResult", "MaskLayerResult", "RotaryLayerResult", "produce_layers", "task_fingerprint"]
 
 #: Seconds to wait for a Dask scheduler before giving up.
 DASK_CONNECT_TIMEOUT_S = 10.0
@@ -52,6 +52,15 @@ class MaskLayerResult:
 
 
 @dataclass(frozen=True)
+class RotaryLayerResult:
+    """One layer of direct rotary slicing: its files as bytes and its manifest entry."""
+
+    index: int
+    files: dict
+    record: dict
+
+
+@dataclass(frozen=True)
 class LayerTask:
     """Everything a worker needs to make layers, and nothing that is not picklable.
 
@@ -67,6 +76,7 @@ class LayerTask:
     slice_options: dict
     compress_level: int = 3
     mask_options: dict | None = None  # set: DLP masks (MaskOptions fields) instead of plain layers
+    rotary: dict | None = None  # set: direct rotary slicing (options, device name, reference images)
     face_edges: np.ndarray | None = field(default=None, compare=False)
     suspect_edges: np.ndarray | None = field(default=None, compare=False)
     _key: str = field(default="", compare=False)
@@ -82,7 +92,12 @@ class LayerTask:
 
             object.__setattr__(mesh, "_topology", PrebuiltTopology(self.face_edges, self.suspect_edges))
         device = _validate(self.device, "task device")
-        job = slice_mesh(mesh, device, **self.slice_options)
+        if self.rotary is not None:
+            from .rotary.direct import slice_rotary
+
+            job = slice_rotary(mesh, device, **self.rotary["options"])
+        else:
+            job = slice_mesh(mesh, device, **self.slice_options)
         from ._resources import release_free_memory
 
         release_free_memory()
@@ -97,7 +112,7 @@ def task_fingerprint(task: LayerTask, extra: dict | None = None) -> str:
     h.update(np.ascontiguousarray(task.vertices, dtype="<f8").tobytes())
     h.update(np.ascontiguousarray(task.faces, dtype="<i8").tobytes())
     meta = {"device": task.device, "options": task.slice_options, "png": task.compress_level,
-            "masks": task.mask_options, "version": __version__, "extra": extra or {}}
+            "masks": task.mask_options, "rotary": task.rotary, "version": __version__, "extra": extra or {}}
     h.update(json.dumps(meta, sort_keys=True, default=str).encode())
     return h.hexdigest()
 
@@ -125,6 +140,13 @@ def render_layer(task: LayerTask, index: int) -> LayerResult | MaskLayerResult:
 
     if task.mask_options is not None:
         return _render_masks(task, index)
+    if task.rotary is not None:
+        from .rotary.direct import rotary_layer_files
+
+        r = task.rotary
+        files, record = rotary_layer_files(_job_for(task), index, device_name=r["device_name"],
+                                           reference_images=r["reference_images"])
+        return RotaryLayerResult(index, files, record)
     layer = _job_for(task).layer(index)
     data = png_bytes(layer.image, compress_level=task.compress_level)
     return LayerResult(index, data, hashlib.sha256(data).hexdigest(), int(np.count_nonzero(layer.image)),

@@ -275,8 +275,6 @@ def _write_stl(path, tri):
     "extra,pattern",
     [
         (["--rotary", "--radius", "40"], "--tilt"),
-        (["--rotary", "--tilt", "20", "--radius", "40", "--workers", "2"], "--workers"),
-        (["--rotary", "--tilt", "20", "--radius", "40", "--resume"], "--resume"),
         (["--tilt", "20"], "need --rotary"),
         (["--rotary", "--tilt", "86", "--radius", "40"], "maximum tilt"),
         (["--rotary", "--tilt", "0", "--radius", "-3"], "radius"),

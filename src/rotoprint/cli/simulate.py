@@ -44,6 +44,8 @@ def simulate_command(
     dinfo = side.get("design", {})
     if design is None:
         cand = Path(dinfo.get("path", ""))
+        if dinfo.get("path") and not cand.is_absolute():
+            cand = sp.parent / cand  # a path relative to the sidecar's folder
         if not dinfo.get("path") or not cand.exists():
             raise InputFileError("the design named in the sidecar is not available; give --design IMAGE", path=sp)
         if hashlib.sha256(cand.read_bytes()).hexdigest() != dinfo.get("sha256"):

@@ -74,7 +74,7 @@ def slice_command(
     if rotary:
         _slice_rotary(m, mesh, dev, out, layer_height=layer_height, tilt=tilt, radius=radius, angle=angle, direction=direction,
                       ref_radius=ref_radius, max_swathes=max_swathes, equalise=equalise, reference_images=reference_images,
-                      fill=fill, gap_radius=gap_radius, quiet=quiet,
+                      fill=fill, gap_radius=gap_radius, quiet=quiet, workers=workers, scheduler=scheduler, resume=resume,
                       options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate})
         return
     job = slice_mesh(
@@ -128,15 +128,13 @@ def slice_command(
 def _check_rotary_options(*, tilt, radius, workers, scheduler, resume, fibre_angle, offset) -> None:
     if tilt is None or radius is None:
         raise ConfigError("--rotary needs --tilt DEG and --radius MM (the radius of the part's inner edge)")
-    refused = [name for name, bad in (("--workers", workers != 1), ("--scheduler", scheduler is not None), ("--resume", resume),
-                                      ("--fibre-angle", fibre_angle is not None), ("--offset", offset is not None)) if bad]
+    refused = [name for name, bad in (("--fibre-angle", fibre_angle is not None), ("--offset", offset is not None)) if bad]
     if refused:
-        raise ConfigError(f"{', '.join(refused)} cannot be used with --rotary (place the part with --radius/--angle and --rotate; "
-                          "layers are made in this process)")
+        raise ConfigError(f"{', '.join(refused)} cannot be used with --rotary (place the part with --radius/--angle and --rotate)")
 
 
 def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, radius, angle, direction, ref_radius, max_swathes,
-                  equalise, reference_images, fill, gap_radius, quiet, options) -> None:
+                  equalise, reference_images, fill, gap_radius, quiet, options, workers=1, scheduler=None, resume=False) -> None:
     from ..devices import InkjetDevice
     from ..rotary.direct import slice_rotary, write_rotary_slices
 
@@ -152,7 +150,8 @@ def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, rad
     with progress(quiet) as bar:
         task = bar.add_task("slicing (rotary)", total=len(job))
         manifest = write_rotary_slices(job, out, device_name=dev.name, options=opts, mesh_info=mesh_info,
-                                       reference_images=reference_images, on_layer=lambda i: bar.advance(task))
+                                       reference_images=reference_images, on_layer=lambda i: bar.advance(task),
+                                       workers=workers, scheduler=scheduler, resume=resume)
     if not quiet:
         ds = manifest["density_spread"]
         console.print(

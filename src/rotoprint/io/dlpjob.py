@@ -55,7 +55,8 @@ def write_dlp_job(
             if on_mask is not None:
                 for c in range(copies):
                     on_mask(i * copies + c)
-        for res in run_layers(job, task, partial, workers=workers, scheduler=scheduler, copies_on_disk=2):
+        px = job.grid.width * job.grid.height
+        for res in run_layers(len(job), px, task, partial, workers=workers, scheduler=scheduler, copies_on_disk=2):
             assert isinstance(res, MaskLayerResult)  # noqa: S101 - the task asks for masks
             names = [_mask_name(res.index * copies + c) for c in range(copies)]
             partial.record(res.index, dict(zip(names, res.pngs, strict=True)), plain_sums=list(res.plain_sums))

@@ -44,18 +44,26 @@ def task_from_job(job: SliceJob, *, mask_options: dict | None = None) -> LayerTa
     return dataclasses.replace(task, _key=task_fingerprint(task))
 
 
-def run_layers(job: SliceJob, task: LayerTask, partial: PartialOutput, *, workers: int, scheduler: str | None,
+def _result_bytes(r) -> int:
+    if hasattr(r, "pngs"):
+        return sum(len(p) for p in r.pngs)
+    if hasattr(r, "files"):
+        return sum(len(b) for b in r.files.values())
+    return len(r.png)
+
+
+def run_layers(n_layers: int, px: int, task: LayerTask, partial: PartialOutput, *, workers: int, scheduler: str | None,
                copies_on_disk: int = 1) -> Iterator:
     """Size the run (three sample layers made first), then yield the results of every layer
-    not already done, in order. Nothing is written before the size check passes."""
-    todo = [i for i in range(len(job)) if i not in partial.done]
+    not already done, in order. ``px`` is the pixel count of one layer's raster(s). Nothing
+    is written before the size check passes."""
+    todo = [i for i in range(n_layers) if i not in partial.done]
     sample_idx = sorted({todo[0], todo[len(todo) // 2], todo[-1]}) if todo else []
     samples = {i: render_layer(task, i) for i in sample_idx}
-    sizes = [sum(len(p) for p in getattr(r, "pngs", (getattr(r, "png", b""),))) for r in samples.values()]
-    px = job.grid.width * job.grid.height
+    sizes = [_result_bytes(r) for r in samples.values()]
     procs = 1 if (scheduler is not None or workers == 1) else workers + 1
     check_resources(
-        n_layers=len(job),
+        n_layers=n_layers,
         bytes_per_layer=sum(sizes) / max(1, len(sizes)),
         copies_on_disk=copies_on_disk,
         per_process_bytes=task.vertices.nbytes + task.faces.nbytes * 6 + 8 * px + 150 * 2**20,
@@ -98,7 +106,7 @@ def write_layer_folder(
         for i in partial.done:
             if on_layer is not None:
                 on_layer(i)
-        for res in run_layers(job, task, partial, workers=workers, scheduler=scheduler):
+        for res in run_layers(len(job), job.grid.width * job.grid.height, task, partial, workers=workers, scheduler=scheduler):
             partial.record(res.index, {layer_filename(res.index): res.png}, pixels_on=res.pixels_on, gaps=res.gaps)
             if on_layer is not None:
                 on_layer(res.index)

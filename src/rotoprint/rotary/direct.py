@@ -466,7 +466,61 @@ def slice_rotary(
             )
         )
     log.debug("direct rotary slicing: %d layers, %d swathe(s)", len(job), len(tracks))
-    return DirectSliceJob(job, head, part, design, plan, tuple(tracks), dpi_y=dpi_y, fill=fill, equalise=bool(equalise), kernel=kernel)
+    djob = DirectSliceJob(job, head, part, design, plan, tuple(tracks), dpi_y=dpi_y, fill=fill, equalise=bool(equalise), kernel=kernel)
+    djob.rotary_options = {
+        "layer_height_mm": float(layer_height_mm), "tilt_deg": float(tilt_deg), "inner_radius_mm": float(inner_radius_mm),
+        "angle_deg": float(angle_deg), "dpi_y": dpi_y, "ref_radius_mm": ref_radius_mm, "direction": int(direction),
+        "max_swathes": max_swathes, "equalise": bool(equalise), "fill": fill, "gap_radius_mm": float(gap_radius_mm),
+        "kernel": kernel,
+    }
+    return djob
+
+
+def rotary_layer_files(job: DirectSliceJob, index: int, *, device_name: str,
+                       reference_images: bool) -> tuple[dict[str, bytes], dict]:
+    """Layer ``index``'s files as bytes (swathe PNGs, the sidecar, optionally the reference
+    image, named in the sidecar relative to it) and its manifest entry; the same bytes
+    wherever it runs and wherever the folder is put."""
+    from ..io.images import png_bytes
+    from .files import print_files
+
+    seg, rep = job.slice_job.segments(index)
+    pr = job.print_from_segments(seg, layer_index=index)
+    stem = f"layer_{index:05d}"
+    design = {"source": "mesh cross-section (direct rotary slicing)", "layer": index, "invert": False,
+              "design_dpi_x": 25.4 / job.design.pitch_x_mm, "design_dpi_y": 25.4 / job.design.pitch_y_mm}
+    files: dict[str, bytes] = {}
+    if reference_images:
+        ref = png_bytes(rasterize_section(seg, job.part, job.design, fill=job.fill))
+        files[f"{stem}-design.png"] = ref
+        design.update(path=f"{stem}-design.png", sha256=hashlib.sha256(ref).hexdigest())
+    blobs, side = print_files(pr, f"{stem}.png", device_name=device_name, design=design)
+    files.update(blobs)
+    plan_layers = job.layers
+    record = {
+        "index": index,
+        "z_mm": float(plan_layers.z_slice_mm[index]),
+        "z_bottom_mm": float(plan_layers.z_bottom_mm[index]),
+        "z_top_mm": float(plan_layers.z_top_mm[index]),
+        "sidecar": f"{stem}.json",
+        "reference_image": f"{stem}-design.png" if reference_images else None,
+        "gaps": rep.to_json(),
+        "images": [
+            {
+                "head": 0,
+                "swathe": sw["index"],
+                "file": sw["file"],
+                "first_firing_index": sw["first_firing_index"],
+                "firings": sw["firings"],
+                "angle_per_firing_deg": sw["angle_per_firing_deg"],
+                "pivot_radius_mm": sw["pivot_radius_mm"],
+                "drops": sw["drops"],
+                "sha256": sw["sha256"],
+            }
+            for sw in side["swathes"]
+        ],
+    }
+    return files, record
 
 
 def write_rotary_slices(
@@ -478,6 +532,9 @@ def write_rotary_slices(
     mesh_info: dict | None = None,
     reference_images: bool = False,
     on_layer: Callable[[int], None] | None = None,
+    workers: int = 1,
+    scheduler: str | None = None,
+    resume: bool = False,
 ) -> dict:
     """Write every layer of ``job`` into ``out_dir``; returns the manifest.
 
@@ -486,54 +543,37 @@ def write_rotary_slices(
     ``reference_images`` also ``layer_00000-design.png``, the Cartesian cross-section on the
     sidecar's design grid (named in the sidecar, so ``rotoprint simulate`` finds it).
     ``manifest.json`` lists every image with its head, tilt, placement, swathe, angle per
-    firing and first firing index. The folder is built under a temporary name and renamed when
-    complete; nothing partial is left on error.
+    firing and first firing index. Layers are made in threads, ``workers`` processes or on a
+    Dask ``scheduler``, journalled in ``<out>.partial`` (``resume`` continues a killed run)
+    and the folder is renamed into place only when complete; the bytes are the same whichever
+    way they were made.
     """
-    from ..io.atomic import atomic_dir
-    from ..io.images import png_bytes
-    from .files import write_print
+    import dataclasses
+
+    from ..io.layers import run_layers
+    from ..io.resumable import PartialOutput, check_target
+    from ..runner import LayerTask, task_fingerprint
 
     out = Path(out_dir)
-    layers = []
-    final = out.resolve()
-    with atomic_dir(out) as tmp:
-        for i in range(len(job)):
-            seg, rep = job.slice_job.segments(i)
-            pr = job.print_from_segments(seg, layer_index=i)
-            stem = f"layer_{i:05d}"
-            design = {"source": "mesh cross-section (direct rotary slicing)", "layer": i, "invert": False,
-                      "design_dpi_x": 25.4 / job.design.pitch_x_mm, "design_dpi_y": 25.4 / job.design.pitch_y_mm}
-            if reference_images:
-                ref = png_bytes(rasterize_section(seg, job.part, job.design, fill=job.fill))
-                (tmp / f"{stem}-design.png").write_bytes(ref)
-                design.update(path=str(final / f"{stem}-design.png"), sha256=hashlib.sha256(ref).hexdigest())
-            side = write_print(pr, tmp / f"{stem}.png", device_name=device_name, design=design)
-            plan_layers = job.layers
-            layers.append({
-                "index": i,
-                "z_mm": float(plan_layers.z_slice_mm[i]),
-                "z_bottom_mm": float(plan_layers.z_bottom_mm[i]),
-                "z_top_mm": float(plan_layers.z_top_mm[i]),
-                "sidecar": f"{stem}.json",
-                "reference_image": f"{stem}-design.png" if reference_images else None,
-                "gaps": rep.to_json(),
-                "images": [
-                    {
-                        "head": 0,
-                        "swathe": s["index"],
-                        "file": s["file"],
-                        "first_firing_index": s["first_firing_index"],
-                        "firings": s["firings"],
-                        "angle_per_firing_deg": s["angle_per_firing_deg"],
-                        "pivot_radius_mm": s["pivot_radius_mm"],
-                        "drops": s["drops"],
-                        "sha256": s["sha256"],
-                    }
-                    for s in side["swathes"]
-                ],
-            })
+    check_target(out, is_dir=True)
+    mesh = job.slice_job.mesh
+    task = LayerTask(
+        vertices=mesh.vertices, faces=mesh.faces, source=mesh.source,
+        device=job.slice_job.device.model_dump(mode="json"), slice_options={},
+        face_edges=mesh.topology.face_edges, suspect_edges=mesh.topology.suspect_edges,
+        rotary={"options": job.rotary_options, "device_name": device_name, "reference_images": bool(reference_images)},
+    )
+    task = dataclasses.replace(task, _key=task_fingerprint(task))
+    partial = PartialOutput(out, task._key, len(job), resume=resume)
+    px = sum(job.head.nozzles * t.firings for t in job.tracks)
+    try:
+        for i in partial.done:
             if on_layer is not None:
                 on_layer(i)
+        for res in run_layers(len(job), px, task, partial, workers=workers, scheduler=scheduler):
+            partial.record(res.index, res.files, entry=res.record)
+            if on_layer is not None:
+                on_layer(res.index)
         manifest = {
             "format": MANIFEST_FORMAT,
             "version": 1,
@@ -546,7 +586,10 @@ def write_rotary_slices(
             "options": options,
             "landing": "nozzle k at firing i lands at (r_k, phi_k - direction * i * dphi_rad) in the platform frame; "
             "row b of a swathe image is firing first_firing_index + b (rotary-geometry.md s. 3)",
-            "layers": layers,
+            "layers": [partial.done[i]["entry"] for i in range(len(job))],
         }
-        (tmp / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+        (partial.dir / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    finally:
+        partial.close()
+    partial.finish_as_folder()
     return manifest

@@ -33,23 +33,28 @@ def swathe_filenames(out_png: Path, n: int) -> list[Path]:
     return [out_png.with_name(f"{out_png.stem}-s{j + 1}{out_png.suffix}") for j in range(n)]
 
 
+def print_files(pr: RotaryPrint, png_name: str, *, device_name: str = "", design: dict | None = None) -> tuple[dict[str, bytes], dict]:
+    """The files of a print as bytes, ``{name: bytes}`` (swathe PNGs, then the sidecar JSON
+    named like ``png_name`` with ``.json``), and the sidecar dict."""
+    files = swathe_filenames(Path(png_name), len(pr.swathes))
+    blobs = [png_bytes(levels_to_png(s.levels, pr.head.grey_levels)) for s in pr.swathes]
+    side = pr.to_json(files=[f.name for f in files], device_name=device_name, design=design)
+    for d, b in zip(side["swathes"], blobs):
+        d["sha256"] = hashlib.sha256(b).hexdigest()
+    out = {f.name: b for f, b in zip(files, blobs)}
+    out[Path(png_name).with_suffix(".json").name] = (json.dumps(side, indent=2) + "\n").encode("utf-8")
+    return out, side
+
+
 def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", design: dict | None = None) -> dict:
     """Write the swathe images and the sidecar; returns the sidecar dict."""
     out_png = Path(out_png)
     if out_png.suffix.lower() != ".png":
         raise InputFileError("output must be a .png file", path=out_png)
-    files = swathe_filenames(out_png, len(pr.swathes))
-    blobs = [png_bytes(levels_to_png(s.levels, pr.head.grey_levels)) for s in pr.swathes]
-    side = pr.to_json(files=[f.name for f in files], device_name=device_name, design=design)
-    for d, b in zip(side["swathes"], blobs):
-        d["sha256"] = hashlib.sha256(b).hexdigest()
-    text = json.dumps(side, indent=2) + "\n"
+    blobs, side = print_files(pr, out_png.name, device_name=device_name, design=design)
     with contextlib.ExitStack() as stack:
-        handles = [stack.enter_context(atomic_file(f)) for f in files]
-        side_fh = stack.enter_context(atomic_file(out_png.with_suffix(".json"), "w"))
-        for fh, b in zip(handles, blobs):
-            fh.write(b)
-        side_fh.write(text)
+        for name, data in blobs.items():
+            stack.enter_context(atomic_file(out_png.parent / name)).write(data)
     return side
 
 
