@@ -255,6 +255,14 @@ def _ordered(submit, indices: list[int], window: int) -> Iterator[LayerResult]:
             pending.append(submit(nxt))
 
 
+def check_scheduler_address(address: str) -> None:
+    """Refuse, before any work, a scheduler address that is not ``[tcp://]host:port``."""
+    import re
+
+    if not re.fullmatch(r"(tcp|tls|inproc|ws|wss)://[^\s:/]+:\d{1,5}|[^\s:/]+:\d{1,5}", address or ""):
+        raise ConfigError(f"scheduler address must look like tcp://HOST:PORT, got {address!r}")
+
+
 def _produce_dask(task: LayerTask, indices: list[int], address: str, window: int | None) -> Iterator[LayerResult]:
     try:
         from distributed import Client
@@ -262,7 +270,7 @@ def _produce_dask(task: LayerTask, indices: list[int], address: str, window: int
         raise ConfigError("--scheduler needs Dask distributed: pip install 'rotoprint[dask]'") from None
     try:
         client = Client(address, timeout=f"{DASK_CONNECT_TIMEOUT_S}s", set_as_default=False)
-    except (OSError, TimeoutError) as exc:
+    except (OSError, TimeoutError, ValueError, TypeError) as exc:
         raise ConfigError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     try:
         threads = sum(client.nthreads().values()) or 1

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import logging
 import sys
 from pathlib import Path
@@ -10,12 +11,15 @@ from typing import Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.text import Text
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from ..errors import ConfigError
 
-console = Console(stderr=True, highlight=False)
-out_console = Console(highlight=False)
+# No markup and no emoji codes: paths and option values are printed as they are (a "[" or
+# ":b:" in a file name must not be read as rich markup). Styles go through rich.text.Text.
+console = Console(stderr=True, highlight=False, markup=False, emoji=False)
+out_console = Console(highlight=False, markup=False, emoji=False)
 
 EXIT_BAD_INPUT = 2
 
@@ -33,8 +37,8 @@ def parse_triple(text: str | None, name: str, default: tuple[float, float, float
         vals = tuple(float(t) for t in text.split(","))
     except ValueError:
         raise ConfigError(f"{name} must be three numbers 'X,Y,Z', got {text!r}") from None
-    if len(vals) != 3:
-        raise ConfigError(f"{name} must be three numbers 'X,Y,Z', got {text!r}")
+    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
+        raise ConfigError(f"{name} must be three finite numbers 'X,Y,Z', got {text!r}")
     return vals  # type: ignore[return-value]
 
 
@@ -45,8 +49,8 @@ def parse_pair(text: str | None, name: str) -> tuple[float, float]:
         vals = tuple(float(t) for t in text.split(","))
     except ValueError:
         raise ConfigError(f"{name} must be two numbers 'X,Y', got {text!r}") from None
-    if len(vals) != 2:
-        raise ConfigError(f"{name} must be two numbers 'X,Y', got {text!r}")
+    if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
+        raise ConfigError(f"{name} must be two finite numbers 'X,Y', got {text!r}")
     return vals  # type: ignore[return-value]
 
 
@@ -85,3 +89,8 @@ def load_mesh_from_options(path: Path, units: str, scale: float, rotate: str | N
 ScaleOpt = Annotated[float, typer.Option("--scale", help="Uniform scale applied after unit conversion.")]
 RotateOpt = Annotated[str | None, typer.Option("--rotate", help="Rotation 'X,Y,Z' in degrees (applied X, then Y, then Z).")]
 TranslateOpt = Annotated[str | None, typer.Option("--translate", help="Translation 'X,Y,Z' in mm, applied last.")]
+
+
+def styled(*parts: str | tuple[str, str]) -> Text:
+    """A line of plain pieces and ``(text, style)`` pieces; nothing in it is read as markup."""
+    return Text.assemble(*parts)

@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from ._common import JsonOpt, console, out_console, print_json, progress
+from ._common import JsonOpt, console, out_console, print_json, progress, styled
 
 EXIT_SHORT = 3
 
@@ -29,7 +29,7 @@ def report_summary(res, *, label: str = "") -> None:
     s = res.summary
     console.print(f"{label}{s['layers']} layers, {s['heads']} heads, estimated printing time {_fmt_time(s['estimated_print_time_s'])}")
     for w in s["warnings"]:
-        console.print(f"[yellow]warning:[/yellow] {w}", soft_wrap=True)
+        console.print(styled(("warning:", "yellow"), f" {w}"), soft_wrap=True)
     if s["resistance"]:
         t = Table(title="Resistance estimates", title_justify="left")
         for c in ("part", "terminals", "exact region", "printed pixels", "hand check"):
@@ -47,7 +47,7 @@ def report_summary(res, *, label: str = "") -> None:
                       ohm(hc["resistance_ohm"]) if hc else "-")
         console.print(t)
     if s["printability_ok"] is False:
-        console.print("[red]printability: some features fall short[/red] (see the report)")
+        console.print(styled(("printability: some features fall short", "red"), " (see the report)"))
     out_console.print(f"report: {res.report_path}")
     out_console.print(f"plan:   {res.plan_path}")
 

@@ -13,10 +13,12 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
+from rich.text import Text
 
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
 from ._common import (
+    styled,
     DeviceOpt,
     JsonOpt,
     RotateOpt,
@@ -63,7 +65,8 @@ def _limits_table(lim: dict):
     t.add_column("gap (um)", justify="right")
     t.add_row("across columns (x)", _um(lim.get("min_wall_x_mm")), _um(lim.get("min_gap_x_mm")))
     t.add_row("across rows (y)", _um(lim.get("min_wall_y_mm")), _um(lim.get("min_gap_y_mm")))
-    t.add_row("[bold]any direction", f"[bold]{_um(lim.get('min_wall_mm'))}", f"[bold]{_um(lim.get('min_gap_mm'))}")
+    t.add_row(Text("any direction", style="bold"), Text(_um(lim.get("min_wall_mm")), style="bold"),
+              Text(_um(lim.get("min_gap_mm")), style="bold"))
     return t
 
 
@@ -105,7 +108,7 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
         if k == "island" and not st["islands"]:
             continue
         if not fs:
-            t.add_row(k.replace("_", " "), "[green]0", "0", "", "")
+            t.add_row(k.replace("_", " "), Text("0", style="green"), "0", "", "")
             continue
         if k == "island":
             w = max(fs, key=lambda f: f.area_mm2)
@@ -113,7 +116,8 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
         else:
             w = min(fs, key=lambda f: f.width_mm)
             worst = f"{w.width_mm * 1000:.1f} um"
-        t.add_row(k.replace("_", " "), f"[red]{len(fs)}", str(len({f.layer for f in fs})), worst, f"{w.layer}, {w.x_mm:.3f}, {w.y_mm:.3f}")
+        t.add_row(k.replace("_", " "), Text(str(len(fs)), style="red"), str(len({f.layer for f in fs})), worst,
+                  f"{w.layer}, {w.x_mm:.3f}, {w.y_mm:.3f}")
     out_console.print(t)
     for name, key in (("thinnest wall", "thinnest_wall"), ("narrowest gap", "narrowest_gap")):
         v = j[key]
@@ -130,9 +134,9 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
             ot.add_row(f"{r['angle_deg']:g}{best}", f"{r['loss_mm']:.3f}", f"{r['island_area_mm2']:.4g}", str(sum(r["counts"].values())))
         out_console.print(ot)
         out_console.print(f"least loss at fibre angle {orient['best_angle_deg']:g} deg")
-    verdict = "[green]nothing falls short[/green]" if rep.ok else f"[red]{len(rep.findings)} problem(s)[/red]"
+    verdict = ("nothing falls short", "green") if rep.ok else (f"{len(rep.findings)} problem(s)", "red")
     where = f" -> {out}/ ({REPORT_NAME}, {n_overlays} overlay(s))" if out is not None else ""
-    out_console.print(f"{verdict}{where}")
+    out_console.print(styled(verdict, where))
 
 
 def check_command(

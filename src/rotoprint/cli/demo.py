@@ -22,6 +22,13 @@ def demo(
     from ..process.examples import write_example
     from .build import report_summary
 
+    from ..errors import ConfigError, InputFileError
+    from ..process.examples import EXAMPLES
+
+    if example not in EXAMPLES:
+        raise ConfigError(f"unknown example {example!r}; examples: {', '.join(EXAMPLES)}")
+    if out.exists() and not out.is_dir():
+        raise InputFileError("output exists and is not a folder", path=out)
     t0 = time.perf_counter()
     out.mkdir(parents=True, exist_ok=True)
     job_path = write_example(example, out / "job")

@@ -7,7 +7,7 @@ import sys
 import typer
 
 from ..errors import RotoprintError
-from ._common import EXIT_BAD_INPUT, console
+from ._common import EXIT_BAD_INPUT, console, styled
 
 app = typer.Typer(
     name="rotoprint",
@@ -48,7 +48,12 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(result, int) and not isinstance(result, bool):  # typer.Exit(code) lands here
             return result
     except RotoprintError as exc:
-        console.print(f"[red]rotoprint: error:[/red] {exc}", soft_wrap=True)
+        console.print(styled(("rotoprint: error:", "red"), f" {exc}"), soft_wrap=True)
+        return EXIT_BAD_INPUT
+    except OSError as exc:  # a file system refusal we did not foresee: still one line, exit 2
+        where = exc.filename if exc.filename is not None else ""
+        what = exc.strerror or str(exc)
+        console.print(styled(("rotoprint: error:", "red"), f" {where}: {what}" if where else f" {what}"), soft_wrap=True)
         return EXIT_BAD_INPUT
     except typer.Exit as exc:
         return int(exc.exit_code or 0)

@@ -10,6 +10,7 @@ import typer
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
 from ._common import (
+    styled,
     DeviceOpt,
     LayerHeightOpt,
     RotateOpt,
@@ -120,8 +121,8 @@ def slice_command(
         )
         if closed or left_open:
             console.print(
-                f"[yellow]open mesh:[/yellow] {closed} gap(s) closed within {gap_radius} mm; "
-                f"{left_open} layer(s) had chains left open and closed by a chord (see manifest 'gaps')"
+                styled(("open mesh:", "yellow"), f" {closed} gap(s) closed within {gap_radius} mm; "
+                       f"{left_open} layer(s) had chains left open and closed by a chord (see manifest 'gaps')")
             )
 
 

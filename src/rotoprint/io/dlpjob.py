@@ -67,6 +67,10 @@ def write_dlp_job(
             if on_mask is not None:
                 for c in range(copies):
                     on_mask(res.index * copies + c)
+    except BaseException:  # clean up, then re-raise: a run that finished no layer leaves nothing
+        partial.close()
+        partial.discard_if_empty()
+        raise
     finally:
         partial.close()
 

@@ -15,7 +15,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from .. import __version__
-from ..runner import LayerTask, produce_layers, render_layer, task_fingerprint
+from ..errors import ConfigError
+from ..runner import LayerTask, check_scheduler_address, produce_layers, render_layer, task_fingerprint
 from ..slicing.fibres import SliceJob
 from .atomic import MANIFEST_NAME
 from .resumable import PartialOutput, check_resources, check_target, partial_path
@@ -57,6 +58,10 @@ def run_layers(n_layers: int, px: int, task: LayerTask, partial: PartialOutput, 
     """Size the run (three sample layers made first), then yield the results of every layer
     not already done, in order. ``px`` is the pixel count of one layer's raster(s). Nothing
     is written before the size check passes."""
+    if workers < 1:
+        raise ConfigError(f"workers must be at least 1, got {workers}")
+    if scheduler is not None:
+        check_scheduler_address(scheduler)
     todo = [i for i in range(n_layers) if i not in partial.done]
     sample_idx = sorted({todo[0], todo[len(todo) // 2], todo[-1]}) if todo else []
     samples = {i: render_layer(task, i) for i in sample_idx}
@@ -112,6 +117,10 @@ def write_layer_folder(
                 on_layer(res.index)
         manifest = _manifest(job, partial.done, device_name, device, options)
         (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    except BaseException:  # clean up, then re-raise: a run that finished no layer leaves nothing
+        partial.close()
+        partial.discard_if_empty()
+        raise
     finally:
         partial.close()
     partial.finish_as_folder()

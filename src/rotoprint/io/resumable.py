@@ -80,6 +80,9 @@ class PartialOutput:
         self.n_layers = n_layers
         self.done: dict[int, dict] = {}
         if self.dir.exists():
+            if not (self.dir / JOURNAL).is_file():
+                raise InputFileError(f"{self.dir.name} exists but holds no {JOURNAL}: not a run of ours; refusing to delete it",
+                                     path=self.dir)
             if resume:
                 self.done = self._verified()
                 log.info("resuming: %d of %d layers verified in %s", len(self.done), n_layers, self.dir)
@@ -141,6 +144,11 @@ class PartialOutput:
         self.close()
         (self.dir / JOURNAL).unlink()
         replace_path(self.dir, self.out)
+
+    def discard_if_empty(self) -> None:
+        """After a failure: remove the folder if no layer was finished (nothing to resume)."""
+        if not self.done:
+            self.discard()
 
     def discard(self) -> None:
         self.close()

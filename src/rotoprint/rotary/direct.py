@@ -589,6 +589,10 @@ def write_rotary_slices(
             "layers": [partial.done[i]["entry"] for i in range(len(job))],
         }
         (partial.dir / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    except BaseException:  # clean up, then re-raise: a run that finished no layer leaves nothing
+        partial.close()
+        partial.discard_if_empty()
+        raise
     finally:
         partial.close()
     partial.finish_as_folder()

@@ -54,6 +54,8 @@ class Placement:
             raise ConfigError(f"design size must be positive, got {self.width_px} x {self.height_px} px")
         if not (self.pitch_x_mm > 0 and self.pitch_y_mm > 0):
             raise ConfigError(f"design pixel pitch must be positive, got {self.pitch_x_mm} x {self.pitch_y_mm} mm")
+        if not math.isfinite(self.angle_deg):
+            raise ConfigError(f"placement angle must be a finite number of degrees, got {self.angle_deg}")
         if not (math.isfinite(self.inner_radius_mm) and self.inner_radius_mm > 0):
             raise GeometryError(
                 f"design radius must be > 0 mm (the design would cover the axis of rotation), got {self.inner_radius_mm}"

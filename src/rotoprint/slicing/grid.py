@@ -125,6 +125,8 @@ def make_grid(
     lo = np.array([rx.min(), ry.min()])
     hi = np.array([rx.max(), ry.max()])
     off = np.asarray(offset_mm, dtype=np.float64)
+    if off.shape != (2,) or not np.isfinite(off).all():
+        raise GeometryError(f"offset must be two finite numbers of mm, got {tuple(np.ravel(off).tolist())}")
     t = off - (lo + hi) / 2.0 if centre else off
     plo, phi = lo + t, hi + t  # platform footprint
     if field_px is not None:
