@@ -733,6 +733,12 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
         return bx, by, ux, uy, ln, wall, gap
     h, xmin, ymin, ncx, ncy = _grid(sx, sy, ex, ey, keep, cell_mm)
     px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+    # the pieces in cell order: a cell's pieces are read one after another (same pieces, same order)
+    px0 = px0[idx]
+    py0 = py0[idx]
+    px1 = px1[idx]
+    py1 = py1[idx]
+    par = par[idx]
     low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
     need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
     skip = np.zeros(2, np.bool_)
@@ -796,7 +802,7 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
                             break
                         cell = gr * ncx + gc
                         for q in range(start[cell], start[cell + 1]):
-                            pc = idx[q]
+                            pc = q
                             if par[pc] == k:
                                 continue
                             # separating axes: the strip's own (along, across), then the piece's normal
@@ -873,7 +879,7 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
                     if 0 <= cx < ncx and 0 <= cy < ncy:
                         c = cy * ncx + cx
                         for q in range(start[c], start[c + 1]):
-                            pc = idx[q]
+                            pc = q
                             if par[pc] == k:
                                 continue
                             e0 = px1[pc] - px0[pc]
