@@ -162,3 +162,44 @@ def test_group_chords_match_canvas_labelling(seed):
     lab, m = ndimage.label(canvas, structure=np.ones((3, 3), bool))
     want = lab[np.floor(ar + 0.5).astype(int) - r0, np.floor(ac + 0.5).astype(int) - c0] - 1
     assert ng == m and np.array_equal(g, want)
+
+
+def test_check_layer_equals_widths_on_the_image_and_islands(piece_mesh):
+    """The one-call layer check (raster tests on the runs, no image) gives exactly what the
+    widths measured against the slicer's image and the islands on the runs give."""
+    n = tested = 0
+    for job in _jobs(piece_mesh):
+        g = job.grid
+        p = max(g.pitch_x_mm, g.pitch_y_mm)
+        cell = spacing = 0.5 * min(g.pitch_x_mm, g.pitch_y_mm)
+        m2p, p2m = np.ascontiguousarray(g.model_to_pixel), np.ascontiguousarray(g.pixel_to_model)
+        evenodd = job.fill == "evenodd"
+        prev = (np.zeros(g.height + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
+        for i in range(len(job)):
+            layer, seg = job.layer_and_segments(i)
+            below = i > 0
+            # widths well above a pixel so that the raster tests have candidates
+            rest = (spacing, 8 * p, 1e-9, 3 * p, 3 * p, 1.5 * p, 1.5 * p, 3 * p, p2m, m2p, p)
+            got = K.check_layer(seg.start, seg.end, job._to_uv, g.height, g.width, evenodd, *prev, below, cell, 1e-5, 1e-7, *rest)
+            rs, r0, r1, st, isl = K.layer_islands(seg.start, seg.end, job._to_uv, g.height, g.width, evenodd, *prev, below)
+            for a, b in zip(got[7:], (rs, r0, r1, st, isl)):
+                assert np.array_equal(a, b)
+            if len(seg):
+                want = K.layer_widths(seg.start, seg.end, layer.image, cell, 1e-5, evenodd, 1e-7, *rest)
+                assert np.array_equal(got[0], want[0])
+                assert got[1] == want[1] and got[2] == want[2]
+                for a, b in zip(got[3:7], want[3:7]):
+                    assert np.array_equal(a, b)
+                tested += got[5].size + got[6].size
+                # presence on runs against presence on the image, every candidate
+                S = got[0]
+                for sgn, width, want_px in ((1.0, S[5], 255), (-1.0, S[6], 0)):
+                    c = np.flatnonzero(np.isfinite(width))
+                    if c.size:
+                        args_c = (S[0][c], S[1][c], sgn * S[2][c], sgn * S[3][c], width[c])
+                        ref = K.chord_presence(*args_c, layer.image, want_px, p2m, m2p, p)
+                        new = K.chord_presence_runs(*args_c, rs, r0, r1, g.height, g.width, want_px, p2m, m2p, p)
+                        assert np.array_equal(ref, new)
+            prev = (rs, r0, r1)
+            n += 1
+    assert n > 10 and tested > 0

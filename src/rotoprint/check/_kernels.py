@@ -733,6 +733,12 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
         return bx, by, ux, uy, ln, wall, gap
     h, xmin, ymin, ncx, ncy = _grid(sx, sy, ex, ey, keep, cell_mm)
     px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+    # the pieces in cell order: a cell's pieces are read one after another (same pieces, same order)
+    px0 = px0[idx]
+    py0 = py0[idx]
+    px1 = px1[idx]
+    py1 = py1[idx]
+    par = par[idx]
     low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
     need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
     skip = np.zeros(2, np.bool_)
@@ -796,7 +802,7 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
                             break
                         cell = gr * ncx + gc
                         for q in range(start[cell], start[cell + 1]):
-                            pc = idx[q]
+                            pc = q
                             if par[pc] == k:
                                 continue
                             # separating axes: the strip's own (along, across), then the piece's normal
@@ -873,7 +879,7 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
                     if 0 <= cx < ncx and 0 <= cy < ncy:
                         c = cy * ncx + cx
                         for q in range(start[c], start[c + 1]):
-                            pc = idx[q]
+                            pc = q
                             if par[pc] == k:
                                 continue
                             e0 = px1[pc] - px0[pc]
@@ -964,6 +970,49 @@ def chord_presence(bx, by, ux, uy, width, image, want, p2m, m2p, half_along):  #
                 along = -qx * uy[i] + qy * ux[i]
                 if across >= 0.0 and across <= w and abs(along) <= half_along:
                     if (image[r, c] != 0) == (want != 0):
+                        found = True
+                        break
+        out[i] = found
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _runs_at(rs, r0, r1, r, c):  # pragma: no cover - jit
+    """Whether pixel ``(r, c)`` is in a run of row ``r`` (runs sorted, disjoint)."""
+    for k in range(rs[r], rs[r + 1]):
+        if c < r0[k]:
+            return False
+        if c < r1[k]:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def chord_presence_runs(bx, by, ux, uy, width, rs, r0, r1, H, W, want, p2m, m2p, half_along):  # pragma: no cover - jit
+    """:func:`chord_presence` on the image given as runs (:func:`fill_runs`, ``H`` x ``W``):
+    the same pixel centres in the same order, material where a run covers the pixel."""
+    n = bx.shape[0]
+    out = np.zeros(n, np.bool_)
+    wm = want != 0
+    for i in range(n):
+        w = width[i]
+        mx = bx[i] + 0.5 * w * ux[i]
+        my = by[i] + 0.5 * w * uy[i]
+        mc = m2p[0, 0] * mx + m2p[0, 1] * my + m2p[0, 2]
+        mr = m2p[1, 0] * mx + m2p[1, 1] * my + m2p[1, 2]
+        c0 = int(math.floor(mc)) - 2
+        r0_ = int(math.floor(mr)) - 2
+        found = False
+        for r in range(max(0, r0_), min(H, r0_ + 6)):
+            if found:
+                break
+            for c in range(max(0, c0), min(W, c0 + 6)):
+                qx = p2m[0, 0] * c + p2m[0, 1] * r + p2m[0, 2] - bx[i]
+                qy = p2m[1, 0] * c + p2m[1, 1] * r + p2m[1, 2] - by[i]
+                across = qx * ux[i] + qy * uy[i]
+                along = -qx * uy[i] + qy * ux[i]
+                if across >= 0.0 and across <= w and abs(along) <= half_along:
+                    if _runs_at(rs, r0, r1, r, c) == wm:
                         found = True
                         break
         out[i] = found
@@ -1326,6 +1375,37 @@ def _absent(cand, sgn, bx, by, ux, uy, width, image, want, p2m, m2p, half_along)
 
 
 @njit(cache=True, nogil=True)
+def _absent_runs(cand, sgn, bx, by, ux, uy, width, rs, r0, r1, H, W, want, p2m, m2p, half_along):  # pragma: no cover - jit
+    """The candidates whose chord has no pixel centre with ``image == want``
+    (:func:`chord_presence_runs` on the image as runs)."""
+    n = cand.shape[0]
+    cx = np.empty(n)
+    cy = np.empty(n)
+    dx = np.empty(n)
+    dy = np.empty(n)
+    w = np.empty(n)
+    for q in range(n):
+        i = cand[q]
+        cx[q] = bx[i]
+        cy[q] = by[i]
+        dx[q] = sgn * ux[i]
+        dy[q] = sgn * uy[i]
+        w[q] = width[i]
+    present = chord_presence_runs(cx, cy, dx, dy, w, rs, r0, r1, H, W, want, p2m, m2p, half_along)
+    m = 0
+    for q in range(n):
+        if not present[q]:
+            m += 1
+    out = np.empty(m, np.int64)
+    m = 0
+    for q in range(n):
+        if not present[q]:
+            out[m] = cand[q]
+            m += 1
+    return out
+
+
+@njit(cache=True, nogil=True)
 def layer_widths(start, end, image, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap, min_wall, min_gap, raster_lim, p2m, m2p, pmax):  # pragma: no cover - jit
     """:func:`measure_widths` (as the rows of one ``(7, P)`` array) and what the check selects
     from it, in one call: the index of
@@ -1416,12 +1496,10 @@ def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow):  # pragma: no c
 
 
 @njit(cache=True, nogil=True)
-def layer_islands(start, end, m, n_fib, n_samp, evenodd, ps, p0, p1, below):  # pragma: no cover - jit
-    """:func:`section_runs` of a layer and, when ``below`` (the runs ``ps, p0, p1`` of the
-    layer below are given), its :func:`island_runs`, in one call: the runs, ``(7, I)`` per
-    island (pixels, mean row, mean column, first and last row, first and last column) and the
-    island of every run (-1: supported)."""
-    rs, r0, r1 = section_runs(start, end, m, n_fib, n_samp, evenodd)
+def _island_stats(rs, r0, r1, ps, p0, p1, below):  # pragma: no cover - jit
+    """:func:`island_runs` when ``below`` (else no islands) as ``(7, I)`` per island (pixels,
+    mean row, mean column, first and last row, first and last column) and the island of
+    every run (-1: supported)."""
     if below and r0.shape[0] > 0:
         cnt, srow, scol, rlo, rhi, clo, chi, isl = island_runs(rs, r0, r1, ps, p0, p1)
     else:
@@ -1431,7 +1509,7 @@ def layer_islands(start, end, m, n_fib, n_samp, evenodd, ps, p0, p1, below):  # 
         rlo = rhi = clo = chi = cnt
         isl = np.full(r0.shape[0], -1, np.int64)
     ni = cnt.shape[0]
-    st = np.empty((7, ni))  # per island: pixels, mean row, mean column, rows and columns spanned
+    st = np.empty((7, ni))
     for i in range(ni):
         st[0, i] = cnt[i]
         st[1, i] = srow[i] / cnt[i]
@@ -1440,4 +1518,47 @@ def layer_islands(start, end, m, n_fib, n_samp, evenodd, ps, p0, p1, below):  # 
         st[4, i] = rhi[i]
         st[5, i] = clo[i]
         st[6, i] = chi[i]
+    return st, isl
+
+
+@njit(cache=True, nogil=True)
+def layer_islands(start, end, m, n_fib, n_samp, evenodd, ps, p0, p1, below):  # pragma: no cover - jit
+    """:func:`section_runs` of a layer and, when ``below`` (the runs ``ps, p0, p1`` of the
+    layer below are given), its :func:`island_runs`, in one call: the runs, ``(7, I)`` per
+    island (pixels, mean row, mean column, first and last row, first and last column) and the
+    island of every run (-1: supported)."""
+    rs, r0, r1 = section_runs(start, end, m, n_fib, n_samp, evenodd)
+    st, isl = _island_stats(rs, r0, r1, ps, p0, p1, below)
     return rs, r0, r1, st, isl
+
+
+@njit(cache=True, nogil=True)
+def check_layer(start, end, uv, H, W, evenodd, ps, p0, p1, below, cell_mm, near_mm, side_eps, spacing, max_mm, tmin, need_wall, need_gap, min_wall, min_gap, raster_lim, p2m, m2p, pmax):  # pragma: no cover - jit
+    """The whole check of one layer in one call, without the image: the layer's material as
+    runs (:func:`section_runs`, equal to the slicer's image), the widths and selections of
+    :func:`layer_widths` with the raster tests on the runs (:func:`chord_presence_runs`), and
+    the islands of :func:`layer_islands` (when ``below``).
+
+    Returns ``S, iw, ig, thin, narrow, vanished, closed`` as :func:`layer_widths`, then the
+    runs ``rs, r0, r1``, and ``st, isl`` as :func:`layer_islands`."""
+    rs, r0, r1 = section_runs(start, end, uv, H, W, evenodd)
+    if start.shape[0] > 0:
+        bx, by, ux, uy, ln, wall, gap = measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap)
+    else:
+        bx = by = ux = uy = ln = wall = gap = np.zeros(0)
+    iw = _argmin_finite(wall)
+    ig = _argmin_finite(gap)
+    thin = _below(wall, min_wall)
+    narrow = _below(gap, min_gap)
+    vanished = _absent_runs(_below(wall, raster_lim), 1.0, bx, by, ux, uy, wall, rs, r0, r1, H, W, 255, p2m, m2p, pmax)
+    closed = _absent_runs(_below(gap, raster_lim), -1.0, bx, by, ux, uy, gap, rs, r0, r1, H, W, 0, p2m, m2p, pmax)
+    S = np.empty((7, bx.shape[0]))
+    S[0] = bx
+    S[1] = by
+    S[2] = ux
+    S[3] = uy
+    S[4] = ln
+    S[5] = wall
+    S[6] = gap
+    st, isl = _island_stats(rs, r0, r1, ps, p0, p1, below)
+    return S, iw, ig, thin, narrow, vanished, closed, rs, r0, r1, st, isl

@@ -87,22 +87,53 @@ class Finding:
         return d
 
 
-@dataclass
 class LayerCheck:
     """What one layer's check found, with what an overlay needs.
 
-    ``chords[kind]`` is ``(n, 4) float64`` pixel-index chords ``(col0, row0, col1, row1)``
-    across each problem wall or gap; ``islands`` the ``(H, W) bool`` unsupported pixels.
+    ``image`` is the layer's ``(H, W) uint8`` device image (the slicer's), ``chords[kind]``
+    ``(n, 4) float64`` pixel-index chords ``(col0, row0, col1, row1)`` across each problem
+    wall or gap; ``islands`` the ``(H, W) bool`` unsupported pixels (``None``: no island).
+    The check itself works on the exact section and the layer's runs of material; the two
+    images are made when they are first read.
     """
 
-    index: int
-    z_mm: float
-    image: np.ndarray
-    findings: list[Finding]
-    chords: dict[str, np.ndarray]
-    islands: np.ndarray | None
-    thinnest_wall: dict | None
-    narrowest_gap: dict | None
+    __slots__ = ("index", "z_mm", "_image", "findings", "chords", "_islands", "thinnest_wall", "narrowest_gap")
+
+    def __init__(self, index, z_mm, image, findings, chords, islands, thinnest_wall, narrowest_gap) -> None:
+        self.index = index
+        self.z_mm = z_mm
+        self._image = image  # an array, or a function making it
+        self.findings = findings
+        self.chords = chords
+        self._islands = islands  # None, an array, or a function making it
+        self.thinnest_wall = thinnest_wall
+        self.narrowest_gap = narrowest_gap
+
+    @property
+    def image(self) -> np.ndarray:
+        if callable(self._image):
+            self._image = self._image()
+        return self._image
+
+    @image.setter
+    def image(self, value) -> None:
+        self._image = value
+
+    @property
+    def islands(self) -> np.ndarray | None:
+        if callable(self._islands):
+            self._islands = self._islands()
+        return self._islands
+
+    @islands.setter
+    def islands(self, value) -> None:
+        self._islands = value
+
+    def __repr__(self) -> str:
+        return (
+            f"LayerCheck(index={self.index}, z_mm={self.z_mm}, findings={len(self.findings)}, "
+            f"thinnest_wall={self.thinnest_wall}, narrowest_gap={self.narrowest_gap})"
+        )
 
 
 @dataclass
@@ -209,17 +240,28 @@ class _LayerChecker:
         self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
 
     def run(self, index: int) -> LayerCheck:
-        layer, seg = self.job.layer_and_segments(index)
-        img = layer.image
-        z = layer.z_mm
+        job = self.job
+        g = self.grid
+        seg, _ = job.segments(index)
+        z = float(job.plan.z_slice_mm[index])
         findings: list[Finding] = []
         chords: dict[str, np.ndarray] = {}
+        prev = self.prev_runs
+        below = self.islands and prev is not None  # the first layer stands on the platform
+        if prev is None:
+            prev = self._no_runs
+        # one call: the layer's runs of material (equal to the slicer's image, which the
+        # check does not need), widths and selections, raster tests on the runs, islands
+        S, iw, ig, thin, narrow, vanished, closed, rs, r0, r1, ist, isl = K.check_layer(
+            seg.start, seg.end, self.uv, g.height, g.width, self.evenodd, *prev, below,
+            self.cell, _NEAR_MM, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
+            self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
+        )
+        if self.islands:
+            self.prev_runs = (rs, r0, r1)
+        image = lambda: job._fill(seg)  # noqa: E731 - the slicer's image, made when read
         thin_w = narrow_g = None
         if len(seg):
-            S, iw, ig, thin, narrow, vanished, closed = K.layer_widths(
-                seg.start, seg.end, img, self.cell, _NEAR_MM, self.evenodd, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
-                self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
-            )
             bx, by, ux, uy, ln, wall, gap = S
             thin_w = self._extreme(iw, wall, bx, by, ux, uy, +1.0, index, z)
             narrow_g = self._extreme(ig, gap, bx, by, ux, uy, -1.0, index, z)
@@ -229,6 +271,7 @@ class _LayerChecker:
                     self._emit(kind, idx, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords)
             # widths against the exposure
             if self.grey_fn is not None:
+                img = image = image()
                 grey = np.asarray(self.grey_fn(index, img))
                 if grey.shape != img.shape or grey.dtype != np.uint8:
                     raise ConfigError(f"the mask function must return {img.shape} uint8, got {grey.shape} {grey.dtype}")
@@ -245,9 +288,9 @@ class _LayerChecker:
                     vals[cand] = ext / 255.0
                     self._emit(kind, cand[bad], width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
         island_mask = None
-        if self.islands:
-            island_mask = self._islands(seg, img.shape, index, z, findings)
-        return LayerCheck(index, z, img, findings, chords, island_mask, thin_w, narrow_g)
+        if self.islands and ist.shape[1]:
+            island_mask = self._islands(ist, isl, rs, r0, r1, index, z, findings)
+        return LayerCheck(index, z, image, findings, chords, island_mask, thin_w, narrow_g)
 
     # -- helpers
 
@@ -294,21 +337,14 @@ class _LayerChecker:
                 )
             )
 
-    def _islands(self, seg, shape, index: int, z: float, findings: list[Finding]) -> np.ndarray | None:
-        """Regions (8-connected) of this layer with no material pixel of the layer below.
+    def _islands(self, st, isl, rs, r0, r1, index: int, z: float, findings: list[Finding]):
+        """Findings for the regions (8-connected) of this layer with no material pixel of the
+        layer below, and a function making their ``(H, W) bool`` mask.
 
         Found on the runs of material of each image row (from the section by the slicer's own
         fill: same pixel coordinates, crossings and rule, equal to the image), by union-find
         over the runs of neighbouring rows: the work follows the outline, not the image size.
         """
-        prev = self.prev_runs
-        below = prev is not None  # the first layer stands on the platform
-        if not below:
-            prev = self._no_runs
-        rs, r0, r1, st, isl = K.layer_islands(seg.start, seg.end, self.uv, self.grid.height, self.grid.width, self.evenodd, *prev, below)
-        self.prev_runs = (rs, r0, r1)
-        if not st.shape[1]:
-            return None
         g = self.grid
         px_area = g.pitch_x_mm * g.pitch_y_mm
         cnt, cr, cc, rlo, rhi, clo, chi = st
@@ -330,11 +366,16 @@ class _LayerChecker:
                     bbox_mm=(float(X.min()), float(Y.min()), float(X.max()), float(Y.max())),
                 )
             )
-        out = np.zeros(shape, bool)
-        row = np.repeat(np.arange(shape[0]), np.diff(rs))
-        for k in np.flatnonzero(isl >= 0):
-            out[row[k], r0[k] : r1[k]] = True
-        return out
+        shape = (g.height, g.width)
+
+        def mask() -> np.ndarray:
+            out = np.zeros(shape, bool)
+            row = np.repeat(np.arange(shape[0]), np.diff(rs))
+            for k in np.flatnonzero(isl >= 0):
+                out[row[k], r0[k] : r1[k]] = True
+            return out
+
+        return mask
 
 
 # ----------------------------------------------------------------------------- public API
