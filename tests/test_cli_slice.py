@@ -103,6 +103,7 @@ def test_bad_input_one_line_exit_2_nothing_written(run_cli, tmp_path, args, frag
     _one_line_error(code, out, err, *fragments)
     assert not (tmp_path / "out").exists()
     assert not list(tmp_path.glob(".out*"))  # no temporary left behind
+    assert not (tmp_path / "out.partial").exists()  # nor a journal folder
 
 
 def test_refuses_to_replace_a_foreign_folder(run_cli, tmp_path):

@@ -44,7 +44,7 @@ def test_identical_bytes_1_and_2_workers(job, tmp_path):
 
 
 def test_identical_bytes_on_a_dask_local_cluster(job, tmp_path):
-    distributed = pytest.importorskip("distributed", reason="Dask distributed is a test dependency")
+    import distributed  # a test dependency: a broken install must fail, not skip
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                   dashboard_address=None) as cluster:
         d = tmp_path / "dask"
@@ -55,7 +55,6 @@ def test_identical_bytes_on_a_dask_local_cluster(job, tmp_path):
 
 
 def test_unreachable_scheduler_is_a_clear_error(job, tmp_path, monkeypatch):
-    pytest.importorskip("distributed", reason="Dask distributed is a test dependency")
     from rotoprint import ConfigError, runner
 
     monkeypatch.setattr(runner, "DASK_CONNECT_TIMEOUT_S", 1.0)
@@ -144,7 +143,7 @@ def torus_stl(tmp_path):
 
 @pytest.mark.parametrize("mode,erm", [("coverage", False), ("smooth", True)])
 def test_sl1_identical_bytes_1_2_workers_and_dask(run_cli, torus_stl, tmp_path, monkeypatch, mode, erm):
-    distributed = pytest.importorskip("distributed", reason="Dask distributed is a test dependency")
+    import distributed  # a test dependency: a broken install must fail, not skip
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
     base = ["dlp", torus_stl, "-d", "perfactory-sxga", "--layer-height", "0.5", "--mode", mode, "-q"] + (["--erm"] if erm else [])
     outs = {}

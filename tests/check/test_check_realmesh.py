@@ -4,6 +4,8 @@ the exact section (shapely: faces of the noded outline kept by their winding num
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import shapely
@@ -96,4 +98,7 @@ def test_check_real_mesh_against_shapely(shared_meshes, name, units, device_name
 
 def test_check_soup_completes(shared_meshes, run_cli, tmp_path):
     code, out, err = run_cli("check", shared_meshes / "soup.stl", "--device", "perfactory-sxga", "--layer-height", "0.2", "--out", tmp_path / "o")
-    assert code in (0, 2, 3), err
+    assert code in (0, 3), err
+    rep = json.loads((tmp_path / "o" / "report.json").read_text())
+    assert rep["n_layers"] == 5  # ceil(0.993 mm / 0.2 mm)
+    assert (code == 0) == rep["ok"] and len(rep["findings"]) == sum(rep["counts"].values())

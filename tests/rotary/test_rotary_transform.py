@@ -25,10 +25,11 @@ def _pl(n, r=60.0, dpi=360.0):
 def test_kernels_agree_and_hit_their_pixel(kernel, tilt):
     pl = _pl(80)
     m = exact_maps(HEAD, pl, tilt_deg=tilt, kernel=kernel)
-    ref = exact_maps(HEAD, pl, tilt_deg=tilt, kernel="numpy")
-    for a, b in zip(m.swathes, ref.swathes):
-        np.testing.assert_array_equal(a.index, b.index)
-        assert a.first_firing == b.first_firing
+    if kernel == "numba":  # the jit maps against the numpy reference
+        ref = exact_maps(HEAD, pl, tilt_deg=tilt, kernel="numpy")
+        for a, b in zip(m.swathes, ref.swathes):
+            np.testing.assert_array_equal(a.index, b.index)
+            assert a.first_firing == b.first_firing
     # forward check: the landing point of every mapped drop lies in the pixel it samples
     sm = m.swathes[0]
     i, k = np.nonzero(sm.index != pl.width_px * pl.height_px)

@@ -205,8 +205,8 @@ def slice_mesh(
     >>> job = slice_mesh(box_mesh((2, 1, 1)), load_device("perfactory-sxga"), layer_height_mm=0.5)
     >>> len(job), job.grid.shape
     (2, (1050, 1400))
-    >>> int((next(iter(job)).image > 0).sum())  # 2 x 1 mm at 19.84 um pixels
-    5082
+    >>> int((next(iter(job)).image > 0).sum())  # 2 mm / 19.836 um -> 100 columns, 1 mm / 19.838 um -> 50 rows
+    5000
     """
     if fill not in FILL_RULES:
         raise ConfigError(f"fill must be one of {', '.join(FILL_RULES)}, got {fill!r}")
