@@ -15,4 +15,4 @@ from rotoprint.process.examples import EXAMPLES, write_example
 if __name__ == "__main__":
     here = Path(__file__).resolve().parent
     for name in EXAMPLES:
-        print(write_example(name, here / name))
+        print(write_example(name, here / name, overwrite=True))  # these folders are ours

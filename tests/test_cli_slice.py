@@ -86,6 +86,12 @@ def _one_line_error(code, out, err, *fragments):
         (["slice", "{box}", "-d", "{baddev}", "--layer-height", "1", "-o", "{out}"], ["head.nozzles"]),
         (["slice", "{box}", "-d", "perfactory-sxga", "--layer-height", "1", "--offset", "1", "-o", "{out}"], ["--offset"]),
         (["info", "{box}", "--units", "furlong"], ["units must be one of"]),
+        (["slice", "{box}", "-d", "perfactory-sxga", "--layer-height", "1", "--dpi-y", "720", "-o", "{out}"],
+         ["--dpi-y applies to inkjet heads only; preset perfactory-sxga is a projector device"]),
+        (["slice", "{box}", "-d", "omnidot760", "--layer-height", "1", "--dpi-y", "nan", "-o", "{out}"],
+         ["--dpi-y must be a finite number of dpi, got nan"]),
+        (["slice", "{box}", "-d", "perfactory-sxga", "--layer-height", "1", "--rotate", "0,inf,0", "-o", "{out}"],
+         ["--rotate must be three finite numbers"]),
     ],
 )
 def test_bad_input_one_line_exit_2_nothing_written(run_cli, tmp_path, args, fragments):
@@ -138,3 +144,26 @@ def test_demo_runs(run_cli, tmp_path):
 def test_usage_error_exit_2(run_cli):
     code, _, _ = run_cli("slice")
     assert code == 2
+
+
+def test_library_warnings_are_logged_not_printed(run_cli, tmp_path, monkeypatch, caplog):
+    import logging
+    import warnings
+
+    import rotoprint.io.mesh as mesh_io
+
+    box = tmp_path / "box.stl"
+    write_binary_stl(box, box_triangles((2, 2, 2)))
+    real = mesh_io.load_mesh
+
+    def noisy(*a, **k):
+        warnings.warn("Attempting to set identical low and high xlims", UserWarning)  # what matplotlib said
+        return real(*a, **k)
+
+    monkeypatch.setattr(mesh_io, "load_mesh", noisy)
+    with caplog.at_level(logging.INFO, logger="rotoprint.warnings"), warnings.catch_warnings():
+        warnings.simplefilter("default")  # a user's filters (pytest here turns warnings into errors)
+        code, out, err = run_cli("info", box)
+    assert code == 0, err
+    assert "UserWarning" not in err and "xlims" not in err
+    assert any("UserWarning: Attempting to set identical low and high xlims" in r.getMessage() for r in caplog.records)

@@ -58,9 +58,12 @@ def test_ascii_matches_binary(tmp_path):
 
 def test_binary_header_starting_with_solid(shared_meshes):
     p = shared_meshes / "octagonal_pocket_solid_header_binary.stl"
-    assert p.read_bytes()[:5].lower() == b"solid"
+    data = p.read_bytes()
+    assert data[:5].lower() == b"solid"
+    n = int(np.frombuffer(data, dtype="<u4", count=1, offset=80)[0])  # the binary header's triangle count
+    assert len(data) == 84 + 50 * n  # ... which the file's size confirms: it is binary, not ASCII
     m = load_mesh(p)
-    assert m.report.triangles_in == 3262
+    assert m.report.triangles_in == n
 
 
 @pytest.mark.parametrize("units,factor", [("mm", 1), ("inch", 25.4), ("m", 1000), ("um", 1e-3), ("cm", 10)])
@@ -75,6 +78,33 @@ def test_transform_and_mirror_keep_solid_outward(box_stl):
     assert m.volume_mm3 == pytest.approx(24.0)
     # mirror x: [-2, 0]; rotate 90 about z: x <- -y, y <- x; then +10 in x
     np.testing.assert_allclose(m.bounds, [[7, -2, 0], [10, 0, 4]], atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"rotate_deg": (float("nan"), 0, 0)}, "rotate_deg (--rotate) must be three finite numbers, got (nan, 0.0, 0.0)"),
+        ({"translate_mm": (0, 0, float("inf"))}, "translate_mm (--translate) must be three finite numbers, got (0.0, 0.0, inf)"),
+        ({"scale": 0.0}, "scale (--scale) must be finite and non-zero"),
+    ],
+)
+def test_make_transform_names_the_option(kwargs, message):
+    from rotoprint.errors import ConfigError
+
+    with pytest.raises(ConfigError) as ei:
+        make_transform(**kwargs)
+    assert str(ei.value).startswith(message)
+
+
+def test_load_mesh_refuses_a_non_finite_transform(box_stl):
+    from rotoprint.errors import ConfigError
+
+    T = np.eye(4)
+    T[0, 3] = np.nan
+    with pytest.raises(ConfigError, match=r"^transform has NaN or infinite entries \(check --rotate, --translate and --scale\)$"):
+        load_mesh(box_stl, transform=T)
+    with pytest.raises(ConfigError, match=r"^transform must be a \(4, 4\) matrix, got shape \(3, 3\)$"):
+        load_mesh(box_stl, transform=np.eye(3))
 
 
 @pytest.mark.parametrize("fmt", ["obj", "ply", "off", "3mf"])

@@ -28,8 +28,8 @@ def gear_triangles() -> np.ndarray:
     return np.concatenate([plate, hub, bar])
 
 
-def write_binary_stl(path, triangles: np.ndarray) -> None:
-    """Write ``(N, 3, 3)`` triangles as a binary STL (normals from the winding)."""
+def binary_stl_bytes(triangles: np.ndarray) -> bytes:
+    """``(N, 3, 3)`` triangles (any float dtype, mm) as the bytes of a binary STL (normals from the winding)."""
     from .io.stl import BINARY_RECORD
 
     tri = np.asarray(triangles, dtype=np.float64)
@@ -40,7 +40,10 @@ def write_binary_stl(path, triangles: np.ndarray) -> None:
     rec["normal"] = np.divide(n, ln, out=np.zeros_like(n), where=np.isfinite(ln) & (ln > 0))
     rec["vertices"] = tri
     header = b"rotoprint binary STL".ljust(80, b" ")
+    return header + np.uint32(len(tri)).tobytes() + rec.tobytes()
+
+
+def write_binary_stl(path, triangles: np.ndarray) -> None:
+    """Write ``(N, 3, 3)`` triangles as a binary STL (normals from the winding)."""
     with open(path, "wb") as fh:
-        fh.write(header)
-        fh.write(np.uint32(len(tri)).tobytes())
-        fh.write(rec.tobytes())
+        fh.write(binary_stl_bytes(triangles))

@@ -336,10 +336,33 @@ def _signed_volumes(vertices: np.ndarray, faces: np.ndarray, labels: np.ndarray,
 def winding_number(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """Generalized winding number of ``(P, 3)`` points w.r.t. ``(T, 3, 3)`` triangles.
 
-    Returns ``(P,) float64``: 1 inside a closed outward mesh, 0 outside, -1 inside an
-    inward one (Van Oosterom and Strackee's solid angle, summed over the triangles).
+    The solid angle ``Omega`` of each triangle seen from a point is Van Oosterom and
+    Strackee's ``tan(Omega / 2) = a . (b x c) / (|a||b||c| + (a . b)|c| + (b . c)|a| +
+    (c . a)|b|)`` (``a, b, c`` the corners relative to the point); the winding number is
+    their sum over ``4 pi``.
+
+    Parameters
+    ----------
+    points : (P, 3) float array
+        Query points, mm.
+    triangles : (T, 3, 3) float array
+        Triangle corners, mm; counter-clockwise seen from outside for an outward mesh.
+
+    Returns
+    -------
+    (P,) float64
+        1 inside a closed outward mesh, 0 outside, -1 inside an inward one; fractional for
+        open meshes, undefined (any value) for points on the surface.
+
+    Examples
+    --------
+    >>> from rotoprint.testing import box_mesh
+    >>> m = box_mesh((2.0, 2.0, 2.0))
+    >>> np.round(winding_number(np.array([[1.0, 1.0, 1.0], [3.0, 1.0, 1.0]]), m.vertices[m.faces]), 12).tolist()
+    [1.0, 0.0]
     """
     pts = np.asarray(points, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.float64)
     out = np.zeros(len(pts))
     chunk = max(1, 2_000_000 // max(1, len(triangles)))
     for s in range(0, len(pts), chunk):

@@ -101,8 +101,12 @@ def test_check_cli_bad_mesh_and_device(run_cli, tmp_path):
     bad.write_bytes(b"garbage")
     code, _, err = run_cli("check", bad, "--device", "perfactory-sxga", "--layer-height", "0.2", "--out", tmp_path / "o")
     assert code == 2 and not (tmp_path / "o").exists()
+    assert err.startswith(f"rotoprint: error: {bad}: ") and "Traceback" not in err and len(err.strip().splitlines()) == 1
     code, _, err = run_cli("check", bad, "--device", "nosuchdevice", "--layer-height", "0.2")
     assert code == 2
+    assert err.startswith("rotoprint: error: unknown device 'nosuchdevice'") and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.stl"]
 
 
 def test_check_cli_orientations(run_cli, thin_part, tmp_path):

@@ -35,6 +35,18 @@ def nonzero_region(start: np.ndarray, end: np.ndarray):
     return unary_union([f for f, k in zip(faces, w) if k != 0])
 
 
+def winding_regions(start: np.ndarray, end: np.ndarray):
+    """``(nonzero, multiple)``: the nonzero-rule region of closed segments and the part of it
+    covered more than once (``|winding| >= 2``: overlapping shells), as shapely geometries."""
+    lines = shapely.linestrings(np.stack([start, end], axis=1))
+    faces = list(polygonize(unary_union(lines)))
+    if not faces:
+        return shapely.Polygon(), shapely.Polygon()
+    reps = np.array([[p.x, p.y] for p in (f.representative_point() for f in faces)])
+    w = np.abs(winding_at(reps, start, end))
+    return unary_union([f for f, k in zip(faces, w) if k != 0]), unary_union([f for f, k in zip(faces, w) if k >= 2])
+
+
 def pixel_boxes_area(region, shape) -> np.ndarray:
     """``(H, W)`` exact area of ``region`` inside every pixel ``[c-.5, c+.5] x [r-.5, r+.5]``."""
     h, w = shape

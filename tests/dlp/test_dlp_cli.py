@@ -43,7 +43,10 @@ def test_dlp_writes_and_reopens(run_cli, stl, tmp_path, out, extra, n, fmt):
     exposed = (255 - img) if "--invert" in extra else img
     area = exposed.sum(dtype=np.int64) / 255 * (0.05 * 0.05 if fmt == "sl1s" else (27.77 / 1400) * (20.83 / 1050))
     assert area == pytest.approx(6.0, rel=0.02)
-    assert f"{n} " in err  # summary line
+    mode = extra[extra.index("--mode") + 1] if "--mode" in extra else "coverage"
+    summary = " ".join(err.split())  # the console wraps long lines
+    assert summary.startswith(f"{n} {mode} masks (2 layers{' x 2, ERM' if '--erm' in extra else ''}) of "), err
+    assert f"-> {tmp_path / out} ({fmt})" in summary
 
 
 def test_dlp_first_layer_offset(run_cli, stl, tmp_path):
@@ -66,6 +69,14 @@ def test_dlp_first_layer_offset(run_cli, stl, tmp_path):
         (["--first-layer-offset", "50"], "--first-layers"),
         (["--layer-height", "-1"], "layer height must be a positive"),
         (["--format", "ctb"], "format must be one of"),
+        # the block is 3 x 2 mm: an inset above 1000 um would blank layer 0; 1e9 um is above the fixed maximum
+        (["--first-layers", "2", "--first-layer-offset", "1001"], "--first-layer-offset of 1001 um is more than half the part's smallest footprint dimension (2 mm)"),
+        (["--first-layers", "2", "--first-layer-offset", "1e9"], "--first-layer-offset must be at most 2000 um, got 1e+09 um"),
+        (["--offset", "nan,0"], "--offset must be two finite numbers 'X,Y', got 'nan,0'"),
+        (["--rotate", "nan,0,0"], "--rotate must be three finite numbers 'X,Y,Z', got 'nan,0,0'"),
+        (["--exposure", "nan"], "--exposure must be a finite number of seconds, got nan"),
+        (["--first-exposure", "inf"], "--first-exposure must be a finite number of seconds, got inf"),
+        (["--exposure", "4000"], "--exposure: Input should be less than or equal to 3600 (device preset perfactory-sxga)"),
     ],
 )
 def test_dlp_bad_options_exit_2(run_cli, stl, tmp_path, args, needle):
@@ -85,13 +96,15 @@ def test_dlp_bad_files_exit_2(run_cli, tmp_path):
     bad = tmp_path / "bad.stl"
     bad.write_bytes(b"\x00" * 10)
     code, _, err = run_cli("dlp", bad, "-d", "perfactory-sxga", "--layer-height", "0.1", "--out", tmp_path / "o.sl1")
-    assert code == 2 and "bad.stl" in err
+    assert code == 2 and err.startswith(f"rotoprint: error: {bad}: ")
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
     code, _, err = run_cli("dlp", tmp_path / "none.stl", "-d", "perfactory-sxga", "--layer-height", "0.1", "--out", tmp_path / "o.sl1")
-    assert code == 2 and "none.stl" in err
+    assert code == 2 and err.strip() == f"rotoprint: error: {tmp_path / 'none.stl'}: no such file"
     good = tmp_path / "good.stl"
     write_binary_stl(good, box_triangles((1.0, 1.0, 1.0)))
     code, _, err = run_cli("dlp", good, "-d", "perfactory-sxga", "--layer-height", "0.5", "--out", tmp_path / "nodir" / "o.sl1")
     assert code == 2 and "nodir" in err and "does not exist" in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.stl", "good.stl"]
 
 

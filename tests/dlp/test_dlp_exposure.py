@@ -76,7 +76,17 @@ def test_example_script_writes_the_committed_piece(tmp_path):
         return np.frombuffer(data[84:], dtype=BINARY_RECORD)["vertices"].astype(np.float64)
 
     new, committed = tris(out), tris(ROOT / "examples" / "test_piece.stl")
-    assert new.shape == committed.shape == (109680, 3, 3)
+    # the generator's parameters: a 12-triangle box for the plate, each wall and each of the
+    # w + 1 channel blocks; an 8 n-triangle ring prism for each of the w ring walls and the
+    # w + 1 walls around the ring gaps (n = ring_segments)
+    import inspect
+
+    from rotoprint.pieces import DEFAULT_WIDTHS_MM, feature_test_piece
+
+    w = len(DEFAULT_WIDTHS_MM)
+    n = inspect.signature(feature_test_piece).parameters["ring_segments"].default
+    expected = 12 * (1 + w + (w + 1)) + 8 * n * (w + (w + 1))
+    assert new.shape == committed.shape == (expected, 3, 3)
     # float32 in the file; sin/cos may differ in the last bit between numpy builds
     assert np.abs(new - committed).max() <= 1e-6
     assert (tmp_path / "piece_features.json").exists()

@@ -88,6 +88,12 @@ def test_build_demo_builds_the_coil_and_says_where_the_report_is(run_cli, tmp_pa
         (lambda d: d.update(resistance=[{"part": "pad", "between": ["a", "b"]}]), "resistance[0].between: part 'pad' has no terminal 'a'"),
         (lambda d: d["printer"].update(tilt_deg=89.0), "printer.tilt_deg: tilt 89 deg is at or beyond the maximum"),
         (lambda d: d.update(extra={"x": 1}), "extra: Extra inputs are not permitted"),
+        (lambda d: d["printer"].update(clock={"dpi_y": 1e-6}), "printer.clock.dpi_y: must be 25 to 100000 drops per inch"),
+        (lambda d: d["printer"].update(clock={"dpi_y": 2e5}), "printer.clock.dpi_y: must be 25 to 100000 drops per inch"),
+        (lambda d: d["printer"].update(clock={"frequency_hz": 1e7}), "printer.clock.frequency_hz: Input should be less than or equal to"),
+        (lambda d: d["placement"].update(inner_radius_mm=float("inf")), "placement.inner_radius_mm: Input should be a finite number"),
+        (lambda d: d["placement"].update(inner_radius_mm=float("nan")), "placement.inner_radius_mm: Input should be a finite number"),
+        (lambda d: d["placement"].update(angle_deg=float("inf")), "placement.angle_deg: Input should be a finite number"),
     ],
 )
 def test_build_job_errors_name_the_field(change, where):

@@ -25,6 +25,7 @@ from _reference import exact_section  # noqa: E402
 
 from rotoprint.rotary import simulate, transform_exact  # noqa: E402
 from rotoprint.rotary.direct import rasterize_section  # noqa: E402
+from rotoprint.rotary.head import Mount, nozzle_layout  # noqa: E402
 
 
 def section_geom(job, index):
@@ -32,8 +33,29 @@ def section_geom(job, index):
     return exact_section(m.vertices[m.faces], float(job.layers.z_slice_mm[index]))
 
 
+def check_track_geometry(job, ts, swathe=None):
+    """Assert that the track set's radii and angles are those of an independent
+    ``nozzle_layout`` of its swathe (pivot, the job's tilt and direction, head 0's mount), so
+    that the "exact" checks, which place drops with ``ts.r_mm`` / ``ts.psi0_rad``, cannot pass
+    on a wrong track geometry. ``swathe``: the print's swathe, whose pivot and clock must match."""
+    lay = nozzle_layout(job.head, Mount(ts.pivot_radius_mm, tilt_deg=job.plan.tilt_deg, mount_angle_deg=0.0,
+                                        direction=job.plan.direction))
+    live = np.ones(job.head.nozzles, bool)
+    live[list(job.head.dead_nozzles)] = False
+    want = np.flatnonzero(ts.enabled & live)
+    assert sorted(ts.nozzle.tolist()) == want.tolist()  # every enabled live nozzle, once
+    np.testing.assert_array_equal(ts.r_mm, lay.r_mm[ts.nozzle])
+    np.testing.assert_allclose(ts.psi0_rad, lay.phi_rad[ts.nozzle] - np.radians(job.part.angle_deg), rtol=0, atol=1e-12)
+    assert np.all(np.diff(ts.r_mm) >= 0)
+    if swathe is not None:
+        assert swathe.pivot_radius_mm == ts.pivot_radius_mm and swathe.dphi_rad == ts.dphi_rad
+        assert swathe.first_firing == ts.first_firing and swathe.levels.shape[0] == ts.firings
+
+
 def lattice(job, ts, firings=None):
-    """Model XY ``(F, M)`` of every site of track set ``ts`` (rows: firing ``first_firing + b``)."""
+    """Model XY ``(F, M)`` of every site of track set ``ts`` (rows: firing ``first_firing + b``);
+    the track geometry is checked first (:func:`check_track_geometry`)."""
+    check_track_geometry(job, ts)
     b = np.arange(ts.firings) if firings is None else np.asarray(firings)
     i = (b + ts.first_firing)[:, None].astype(np.float64)
     sig = job.plan.direction
@@ -48,7 +70,9 @@ def shapely_mismatches(job, pr, geom, *, n_random=None, seed=0):
     rng = np.random.default_rng(seed)
     checked = bad_n = 0
     worst = 0.0
+    assert len(job.tracks) == len(pr.swathes)
     for ts, sw in zip(job.tracks, pr.swathes):
+        check_track_geometry(job, ts, sw)
         fired_all = sw.levels[:, ts.nozzle] > 0
         if n_random is None:
             X, Y = lattice(job, ts)

@@ -82,7 +82,24 @@ def test_direction_and_angle_every_site(direction, angle):
     g = section_geom(job, 1)
     inside = shapely.contains_xy(g, X, Y)
     far = shapely.distance(g.boundary, shapely.points(X, Y)) > 1e-6
-    assert inside[far].all() and len(d) > 1000
+    assert inside[far].all() and len(d) > 1000  # fired => inside
+    # inside => fired: every lattice site (geometry checked against nozzle_layout) inside the
+    # section, away from its boundary, has a simulated drop on it
+    from scipy.spatial import cKDTree
+
+    from _direct_checks import lattice
+
+    tree = cKDTree(np.c_[X, Y])
+    n_inside = 0
+    for ts in job.tracks:
+        LX, LY = lattice(job, ts)
+        LX, LY = LX.ravel(), LY.ravel()
+        keep = shapely.contains_xy(g, LX, LY)
+        keep[keep] = shapely.distance(g.boundary, shapely.points(LX[keep], LY[keep])) > 1e-6
+        dist, _ = tree.query(np.c_[LX[keep], LY[keep]])
+        assert dist.max(initial=0.0) < 1e-9
+        n_inside += int(keep.sum())
+    assert n_inside == int(far.sum())  # and no two sites share a drop
 
 
 def test_vertices_on_tracks_and_firing_angles():

@@ -55,7 +55,7 @@ def dlp_command(
     from ..devices import ProjectorDevice, load_device
     from ..io.archives import JobInfo, format_from_path, job_dir_name
     from ..io.dlpjob import write_dlp_job
-    from ..masks import MaskOptions
+    from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
 
     setup_logging(verbose)
@@ -74,6 +74,8 @@ def dlp_command(
         first_layer_offset_um=first_layer_offset,
     )
     m = load_mesh_from_options(mesh, units, scale, rotate, translate)
+    lo, hi = m.bounds
+    check_first_layer_offset(options, (float(hi[0] - lo[0]), float(hi[1] - lo[1])))
     job = slice_mesh(m, dev, layer_height_mm=layer_height, fibre_angle_deg=fibre_angle, offset_mm=parse_pair(offset, "--offset"))
     p = dev.projector
     info = JobInfo(

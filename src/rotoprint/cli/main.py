@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import logging
 import sys
+import warnings
 
 import typer
 
@@ -41,8 +43,23 @@ def _register() -> None:
 _register()
 
 
+def _log_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """Library warnings (matplotlib, numpy, ...) go to the log (seen with --verbose), not stderr."""
+    logging.getLogger("rotoprint.warnings").info("%s: %s (%s:%d)", category.__name__, message, filename, lineno)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point: runs the app; a RotoprintError becomes one line on stderr and exit 2."""
+    """Entry point: runs the app; a RotoprintError becomes one line on stderr and exit 2.
+
+    Python warnings raised while the command runs are logged at INFO level instead of being
+    printed as stray lines on stderr.
+    """
+    with warnings.catch_warnings():  # the filters in force stay (under pytest: warnings are errors)
+        warnings.showwarning = _log_warning
+        return _run(argv)
+
+
+def _run(argv: list[str] | None) -> int:
     try:
         result = app(args=argv, prog_name="rotoprint", standalone_mode=False)
         if isinstance(result, int) and not isinstance(result, bool):  # typer.Exit(code) lands here

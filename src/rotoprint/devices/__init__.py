@@ -9,7 +9,9 @@ from typing import Any
 
 from pydantic import TypeAdapter, ValidationError
 
-from ..errors import DeviceError, InputFileError
+import math
+
+from ..errors import ConfigError, DeviceError, InputFileError
 from .models import Device, InkjetDevice, InkjetHead, Projector, ProjectorDevice
 
 __all__ = ["load_device", "preset_names", "Device", "InkjetDevice", "InkjetHead", "Projector", "ProjectorDevice"]
@@ -23,12 +25,43 @@ def preset_names() -> list[str]:
     return sorted(p.name[: -len(".toml")] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
-def _validate(data: dict[str, Any], origin: str) -> InkjetDevice | ProjectorDevice:
+# Command-line options that override a device field: (option, the devices it applies to, unit).
+_OVERRIDE_OPTIONS: dict[str, tuple[str, str, str]] = {
+    "dpi_y": ("--dpi-y", "inkjet heads", "dpi"),
+    "exposure_s": ("--exposure", "projectors", "seconds"),
+    "first_exposure_s": ("--first-exposure", "projectors", "seconds"),
+}
+
+
+def _override_name(key: str) -> str:
+    return _OVERRIDE_OPTIONS[key][0] if key in _OVERRIDE_OPTIONS else f"override {key!r}"
+
+
+def _check_overrides(data: dict[str, Any], overrides: dict[str, Any], origin: str) -> str:
+    """The table the overrides go into; a ConfigError naming the option if one cannot apply."""
+    kind = data.get("kind")
+    table = "head" if kind == "inkjet" else "projector"
+    model = InkjetHead if kind == "inkjet" else Projector
+    for key, value in overrides.items():
+        name = _override_name(key)
+        if key not in model.model_fields:
+            applies = _OVERRIDE_OPTIONS[key][1] if key in _OVERRIDE_OPTIONS else f"devices with a {key!r} field"
+            raise ConfigError(f"{name} applies to {applies} only; {origin} is a {kind} device")
+        if isinstance(value, float) and not math.isfinite(value):
+            unit = _OVERRIDE_OPTIONS[key][2] if key in _OVERRIDE_OPTIONS else "units"
+            raise ConfigError(f"{name} must be a finite number of {unit}, got {value}")
+    return table
+
+
+def _validate(data: dict[str, Any], origin: str, overridden: tuple[str, ...] = ()) -> InkjetDevice | ProjectorDevice:
     try:
         return _ADAPTER.validate_python(data)
     except ValidationError as exc:
         err = exc.errors()[0]
-        where = ".".join(str(p) for p in err["loc"] if p not in ("inkjet", "projector")) or "(top level)"
+        raw = [str(p) for p in err["loc"]]
+        if len(raw) >= 2 and raw[-2] in ("head", "projector") and raw[-1] in overridden:
+            raise ConfigError(f"{_override_name(raw[-1])}: {err['msg']} (device {origin})") from None
+        where = ".".join(p for p in raw if p not in ("inkjet", "projector")) or "(top level)"
         raise DeviceError(f"invalid device field '{where}': {err['msg']}", path=origin) from None
 
 
@@ -59,8 +92,10 @@ def load_device(spec: str | Path, **overrides: Any) -> InkjetDevice | ProjectorD
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise DeviceError(f"not valid TOML: {exc}", path=origin) from None
-    if overrides:
-        table = "head" if data.get("kind") == "inkjet" else "projector"
-        data.setdefault(table, {})
-        data[table] = {**data[table], **{k: v for k, v in overrides.items() if v is not None}}
-    return _validate(data, origin)
+    overrides = {k: v for k, v in overrides.items() if v is not None}
+    if overrides and isinstance(data, dict):
+        table = _check_overrides(data, overrides, origin)
+        if not isinstance(data.get(table, {}), dict):
+            raise DeviceError(f"invalid device field '{table}': expected a table", path=origin)
+        data[table] = {**data.get(table, {}), **overrides}
+    return _validate(data, origin, tuple(overrides))

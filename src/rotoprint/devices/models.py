@@ -17,7 +17,7 @@ __all__ = ["InkjetHead", "InkjetDevice", "Projector", "ProjectorDevice", "Device
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class InkjetHead(_Strict):

@@ -36,7 +36,11 @@ def make_transform(
     """
     s = np.broadcast_to(np.asarray(scale, dtype=np.float64), (3,))
     if not np.all(np.isfinite(s)) or np.any(s == 0):
-        raise ConfigError(f"scale must be finite and non-zero, got {tuple(s.tolist())}")
+        raise ConfigError(f"scale (--scale) must be finite and non-zero, got {tuple(s.tolist())}")
+    for name, option, value in (("rotate_deg", "--rotate", rotate_deg), ("translate_mm", "--translate", translate_mm)):
+        v = np.asarray(value, dtype=np.float64)
+        if v.shape != (3,) or not np.isfinite(v).all():
+            raise ConfigError(f"{name} ({option}) must be three finite numbers, got {tuple(np.ravel(v).tolist())}")
     rx, ry, rz = np.deg2rad(np.asarray(rotate_deg, dtype=np.float64))
     cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
     Rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
@@ -133,8 +137,10 @@ def load_mesh(
         tri *= UNITS_TO_MM[units]  # tri is our own array: scaled in place
     if transform is not None:
         T = np.asarray(transform, dtype=np.float64)
-        if T.shape != (4, 4) or not np.isfinite(T).all():
-            raise ConfigError(f"transform must be a finite (4, 4) matrix, got shape {T.shape}")
+        if T.shape != (4, 4):
+            raise ConfigError(f"transform must be a (4, 4) matrix, got shape {T.shape}")
+        if not np.isfinite(T).all():
+            raise ConfigError("transform has NaN or infinite entries (check --rotate, --translate and --scale)")
         if not np.array_equal(T, np.eye(4)):
             tri = tri @ T[:3, :3].T + T[:3, 3]
             if np.linalg.det(T[:3, :3]) < 0:  # a mirroring transform reverses every face

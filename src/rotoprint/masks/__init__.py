@@ -15,7 +15,7 @@ from .ops import (
     smooth_mask,
 )
 from .exposure import FeatureExposure, exposure_table, feature_exposure, format_exposure_table, narrowest_kept_um
-from .pipeline import MODES, Mask, MaskOptions, iter_masks, render_layer
+from .pipeline import FIRST_LAYER_OFFSET_MAX_UM, MODES, Mask, MaskOptions, check_first_layer_offset, iter_masks, render_layer
 
 __all__ = [
     "coverage_fraction",
@@ -30,6 +30,8 @@ __all__ = [
     "first_layer_offsets_um",
     "SMOOTH_KERNEL",
     "MODES",
+    "FIRST_LAYER_OFFSET_MAX_UM",
+    "check_first_layer_offset",
     "MaskOptions",
     "Mask",
     "iter_masks",

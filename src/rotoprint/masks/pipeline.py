@@ -16,9 +16,13 @@ from ..errors import ConfigError
 from .coverage import coverage_mask
 from .ops import erm_shift, first_layer_offsets_um, inset_mask, invert_mask, mirror_mask, smooth_mask
 
-__all__ = ["MODES", "MaskOptions", "Mask", "iter_masks", "layer_masks", "plain_from_image", "render_layer"]
+__all__ = ["MODES", "FIRST_LAYER_OFFSET_MAX_UM", "MaskOptions", "check_first_layer_offset", "Mask", "iter_masks", "layer_masks", "plain_from_image", "render_layer"]
 
 MODES = ("binary", "coverage", "smooth")
+
+# The largest first-layer (elephant-foot) inset accepted, um: well above any real compensation
+# (tens to a few hundred um) and below what would blank a layer of any printable part.
+FIRST_LAYER_OFFSET_MAX_UM = 2000.0
 
 
 @dataclass(frozen=True)
@@ -37,6 +41,9 @@ class MaskOptions:
         if self.mode not in MODES:
             raise ConfigError(f"mode must be one of {', '.join(MODES)}, got {self.mode!r}")
         first_layer_offsets_um(0, first_layers=self.first_layers, first_layer_offset_um=self.first_layer_offset_um)
+        if self.first_layer_offset_um > FIRST_LAYER_OFFSET_MAX_UM:
+            raise ConfigError(f"--first-layer-offset must be at most {FIRST_LAYER_OFFSET_MAX_UM:g} um, got "
+                              f"{self.first_layer_offset_um:g} um")
         if self.first_layer_offset_um > 0 and self.first_layers == 0:
             raise ConfigError("a first-layer offset needs --first-layers N > 0 (the layers it fades over)")
 
@@ -46,6 +53,36 @@ class MaskOptions:
 
     def to_json(self) -> dict:
         return asdict(self)
+
+
+def check_first_layer_offset(options: MaskOptions, footprint_mm: tuple[float, float]) -> None:
+    """Refuse a first-layer inset that would blank the first layers.
+
+    Parameters
+    ----------
+    options : MaskOptions
+        Its ``first_layer_offset_um`` is checked.
+    footprint_mm : (2,) float
+        Width and depth of the part's XY bounding box, mm.
+
+    Raises
+    ------
+    ConfigError
+        The inset is more than half the smaller side of the footprint (the inset would meet
+        itself in the middle and leave nothing of the part).
+
+    Examples
+    --------
+    >>> check_first_layer_offset(MaskOptions(first_layers=2, first_layer_offset_um=900), (3.0, 2.0))
+    >>> check_first_layer_offset(MaskOptions(first_layers=2, first_layer_offset_um=1100), (3.0, 2.0))
+    Traceback (most recent call last):
+    ...
+    rotoprint.errors.ConfigError: --first-layer-offset of 1100 um is more than half the part's smallest footprint dimension (2 mm): it would blank the first layers
+    """
+    smallest_mm = float(min(footprint_mm))
+    if options.first_layer_offset_um > 0 and options.first_layer_offset_um > smallest_mm / 2 * 1000:
+        raise ConfigError(f"--first-layer-offset of {options.first_layer_offset_um:g} um is more than half the part's "
+                          f"smallest footprint dimension ({smallest_mm:g} mm): it would blank the first layers")
 
 
 @dataclass(frozen=True)

@@ -52,7 +52,15 @@ __all__ = ["JobSpec", "JobInfo", "PrinterSpec", "HeadSpec", "ClockSpec", "Placem
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # allow_inf_nan=False: a NaN or infinite number is refused by the field that holds it
+    # ("placement.inner_radius_mm: Input should be a finite number"), not later by whatever uses it.
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+# The range of the angular clock (drops per inch along the track at the reference radius): from a
+# drop every 1.016 mm (coarser than any drop can bridge) to one every 0.254 um.
+DPI_Y_RANGE = (25.0, 100_000.0)
+FREQUENCY_HZ_MAX = 1_000_000.0
 
 
 class JobInfo(_Strict):
@@ -67,9 +75,18 @@ class ClockSpec(_Strict):
     (default: each swathe's outermost track), fired at most at ``frequency_hz`` (default: the
     head's maximum)."""
 
-    dpi_y: float | None = Field(default=None, gt=0, le=100_000)
-    ref_radius_mm: float | None = Field(default=None, gt=0)
-    frequency_hz: float | None = Field(default=None, gt=0)
+    dpi_y: float | None = None
+    ref_radius_mm: float | None = Field(default=None, gt=0, le=10_000)
+    frequency_hz: float | None = Field(default=None, gt=0, le=FREQUENCY_HZ_MAX)
+
+    @field_validator("dpi_y")
+    @classmethod
+    def _dpi_range(cls, v: float | None) -> float | None:
+        lo, hi = DPI_Y_RANGE
+        if v is not None and not lo <= v <= hi:
+            raise ValueError(f"must be {lo:g} to {hi:g} drops per inch (a drop pitch along the track of "
+                             f"{25.4 / lo:g} mm to {25.4e3 / hi:g} um)")
+        return v
 
 
 class HeadSpec(_Strict):

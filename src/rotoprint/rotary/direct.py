@@ -547,6 +547,42 @@ def write_rotary_slices(
     Dask ``scheduler``, journalled in ``<out>.partial`` (``resume`` continues a killed run)
     and the folder is renamed into place only when complete; the bytes are the same whichever
     way they were made.
+
+    Parameters
+    ----------
+    job : DirectSliceJob
+        From :func:`slice_rotary`; each layer prints as ``(F_j, N) uint8`` swathe images.
+    out_dir : str or Path
+        The output folder; replaced only if it holds an earlier rotoprint output.
+    device_name : str
+        Recorded in the sidecars and the manifest.
+    options : dict
+        The command's options, recorded in the manifest (JSON-ready values).
+    mesh_info : dict, optional
+        :meth:`~rotoprint.mesh.Mesh.info` of the source mesh, recorded in the manifest.
+    reference_images : bool
+        Also write each layer's Cartesian design image (``(H, W) uint8``, 255 = inside).
+    on_layer : callable, optional
+        Called with each finished layer's index (progress).
+    workers : int
+        Processes to make layers in (``>= 1``).
+    scheduler : str, optional
+        Address of a Dask distributed scheduler to run the layers on instead.
+    resume : bool
+        Continue an interrupted run from its ``<out>.partial`` journal.
+
+    Returns
+    -------
+    dict
+        The manifest written as ``manifest.json``.
+
+    Raises
+    ------
+    InputFileError
+        The output folder holds something that is not an earlier rotoprint output, or cannot
+        be written.
+    ResourceError
+        Not enough disk space for the run (checked before anything is written).
     """
     import dataclasses
 

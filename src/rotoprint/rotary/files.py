@@ -10,6 +10,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 import re
 from pathlib import Path
 
@@ -17,9 +18,12 @@ import numpy as np
 from PIL import Image
 
 from ..devices.models import InkjetHead
+from pydantic import ValidationError
+
 from ..errors import ImageError, InputFileError, RotoprintError
 from ..io.atomic import atomic_file
 from ..io.images import png_bytes
+from .head import check_tilt
 from .placement import Placement
 from .printdata import SIDECAR_FORMAT, RotaryPrint, SwatheImage, levels_to_png, png_to_levels, runs_to_mask
 
@@ -72,8 +76,67 @@ def sidecar_path(path: str | Path) -> Path:
     return cand
 
 
+def _number(d: dict, key: str, where: str, sp: Path, *, positive: bool = False) -> float:
+    """``d[key]`` as a finite float (``> 0`` if ``positive``), or an InputFileError naming the field."""
+    v = d[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise InputFileError(f"sidecar field {where}{key} must be a finite number, got {v!r}", path=sp)
+    if positive and not v > 0:
+        raise InputFileError(f"sidecar field {where}{key} must be > 0, got {v!r}", path=sp)
+    return float(v)
+
+
+def _check_sidecar(side: dict, head: InkjetHead, sp: Path) -> None:
+    """Range checks on the numbers of a sidecar (tilt within the head's limit, dphi > 0, finite)."""
+    tilt = _number(side, "tilt_deg", "", sp)
+    try:
+        check_tilt(head, tilt)
+    except RotoprintError as exc:
+        raise InputFileError(f"sidecar field tilt_deg: {exc.problem}", path=sp) from None
+    _number(side, "mount_angle_deg", "", sp)
+    _number(side, "dpi_y", "", sp, positive=True)
+    if side["direction"] not in (1, -1):
+        raise InputFileError(f"sidecar field direction must be 1 or -1, got {side['direction']!r}", path=sp)
+    for j, d in enumerate(side["swathes"]):
+        where = f"swathes[{j}]."
+        dphi = _number(d, "dphi_rad", where, sp, positive=True)
+        if "angle_per_firing_deg" in d:
+            deg = _number(d, "angle_per_firing_deg", where, sp, positive=True)
+            if not math.isclose(deg, math.degrees(dphi), rel_tol=1e-9):
+                raise InputFileError(f"sidecar field {where}angle_per_firing_deg is {deg!r}, but dphi_rad "
+                                     f"{dphi!r} is {math.degrees(dphi)!r} deg", path=sp)
+        _number(d, "pivot_radius_mm", where, sp, positive=True)
+        _number(d, "ref_radius_mm", where, sp, positive=True)
+        lo, hi = (_number({"band_mm": v}, "band_mm", where, sp) for v in d["band_mm"])
+        if not hi >= lo:
+            raise InputFileError(f"sidecar field {where}band_mm must be [low, high] with high >= low, got {d['band_mm']!r}", path=sp)
+
+
 def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
-    """Read a print written by :func:`write_print` from its PNG or its sidecar."""
+    """Read a print written by :func:`write_print` from its PNG or its sidecar.
+
+    Parameters
+    ----------
+    path : str or Path
+        A swathe PNG (``X.png``, ``X-s2.png``) or the sidecar ``X.json``.
+
+    Returns
+    -------
+    print : RotaryPrint
+        The swathe images (``(firings, nozzles) uint8`` levels each) and their setting.
+    sidecar : dict
+        The parsed sidecar JSON.
+    sidecar_path : Path
+
+    Raises
+    ------
+    InputFileError
+        Missing files, a sidecar that is not ours, or a sidecar field that is missing, not a
+        finite number, or out of range (a tilt at or beyond the head's limit, ``dphi_rad <= 0``);
+        the message names the sidecar and the field.
+    ImageError
+        A swathe image that is not 8-bit greyscale or not the size the sidecar says.
+    """
     p = Path(path)
     if not p.exists():
         raise InputFileError("no such file", path=p)
@@ -87,7 +150,13 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
     if not isinstance(side, dict) or side.get("format") != SIDECAR_FORMAT:
         raise InputFileError(f"not a rotoprint rotary-print sidecar (format {SIDECAR_FORMAT!r} expected)", path=sp)
     try:
-        head = InkjetHead(**side["head"])
+        try:
+            head = InkjetHead(**side["head"])
+        except ValidationError as exc:
+            err = exc.errors()[0]
+            where = ".".join(str(p) for p in err["loc"])
+            raise InputFileError(f"sidecar field head.{where}: {err['msg']}", path=sp) from None
+        _check_sidecar(side, head, sp)
         placement = Placement.from_json(side["placement"])
         swathes = []
         for d in side["swathes"]:

@@ -157,7 +157,27 @@ def check_tilt(head: InkjetHead, tilt_deg: float) -> None:
 def nozzle_layout(head: InkjetHead, mount: Mount) -> NozzleLayout:
     """Nozzle positions in the platform frame (firing index 0).
 
-    Raises :class:`GeometryError` when a nozzle would sit at or behind the axis of rotation.
+    Nozzle ``k`` sits at ``pivot_radius_mm * e + s_k * a + t_k * n``: ``e`` the unit radial
+    line at the mount angle, ``a`` the head axis (``e`` turned by the tilt), ``n`` its normal,
+    ``s_k, t_k`` the along-head and across-head offsets of :func:`nozzle_offsets`.
+
+    Parameters
+    ----------
+    head : InkjetHead
+        ``nozzles`` nozzles in ``rows`` staggered rows over ``swathe_mm``.
+    mount : Mount
+        Pivot radius (mm), tilt and mount angle (deg), direction of the platform.
+
+    Returns
+    -------
+    NozzleLayout
+        ``xy_mm`` ``(N, 2) float64``, ``r_mm`` and ``phi_rad`` ``(N,) float64`` (radius and
+        angle of each nozzle), ``row`` ``(N,) int64``; ``N = head.nozzles``.
+
+    Raises
+    ------
+    GeometryError
+        A nozzle would sit at or behind the axis of rotation.
 
     Examples
     --------

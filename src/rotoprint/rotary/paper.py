@@ -79,6 +79,41 @@ def transform_paper(
     """The paper's polar + linear transform; same inputs and output as :func:`transform_exact`.
 
     Only tilts >= 0 (the paper's sign convention).
+
+    Parameters
+    ----------
+    design : (H, W) uint8
+        Non-zero = ink; ``H x W`` must be the placement's size.
+    head : InkjetHead
+    placement : Placement
+        Where the design lies on the platform (pitches in mm, inner radius, angle).
+    tilt_deg : float
+        Head tilt, degrees, ``0 <= tilt_deg`` below the head's maximum.
+    dpi_y : float, optional
+        Drops per inch along the track at the reference radius (default: the head's).
+    ref_radius_mm : float, optional
+        Reference radius of the clock, mm (default: each swathe's first column, as the paper).
+    mount_angle_deg : float
+        Angle of the head's radial line, degrees.
+    direction : {1, -1}
+        +1 counter-clockwise platform, -1 clockwise.
+    max_swathes : int, optional
+        Refuse a design needing more swathes.
+    kind : {"binary", "grey"}, optional
+        Default: ``"binary"`` when the design holds one non-zero value.
+
+    Returns
+    -------
+    RotaryPrint
+        One ``(F_j, N) uint8`` level image per swathe (``N = head.nozzles``) with its first
+        firing index, angle per firing (``dphi_rad``) and pivot radius.
+
+    Raises
+    ------
+    ConfigError
+        A negative tilt, a design of the wrong size or dtype.
+    GeometryError
+        A tilt at or beyond the head's maximum, nozzles over the axis, too many swathes.
     """
     if tilt_deg < 0:
         raise ConfigError(f"the paper method takes tilts >= 0 (its sign convention), got {tilt_deg}; use --method exact")

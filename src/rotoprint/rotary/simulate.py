@@ -56,7 +56,37 @@ class Drops:
 
 
 def place_drops(pr: RotaryPrint, *, jitter_um: float = 0.0, dead_nozzles: tuple[int, ...] = (), seed: int = 0) -> Drops:
-    """Land every drop of ``pr`` with the forward formula (no knowledge of the transform used)."""
+    """Land every drop of ``pr`` with the forward formula (no knowledge of the transform used).
+
+    Nozzle ``k`` of swathe ``s`` fired at firing ``i`` lands at radius ``r_k`` and angle
+    ``phi_k - direction * i * dphi_rad`` in the platform frame (``nozzle_layout`` of the
+    swathe's pivot, the print's tilt, mount angle and direction).
+
+    Parameters
+    ----------
+    pr : RotaryPrint
+        The print; each swathe's ``levels`` is ``(firings, nozzles) uint8``, 0 = no drop.
+    jitter_um : float
+        Standard deviation of a Gaussian landing error added to x and y, um (``>= 0``).
+    dead_nozzles : tuple of int
+        Nozzle indices (``0 <= k < nozzles``) that do not fire.
+    seed : int
+        Seed of the jitter's random generator.
+
+    Returns
+    -------
+    Drops
+        ``M`` drops: ``x_mm, y_mm`` ``(M,) float64`` platform frame; ``col, row`` ``(M,)
+        float64`` continuous design coordinates; ``level`` ``(M,) uint8``; ``swathe`` ``(M,)
+        int16``; ``nozzle, firing`` ``(M,) int64``. Swathe by swathe, row-major within one.
+
+    Raises
+    ------
+    ConfigError
+        Negative or non-finite jitter, a dead nozzle index out of range.
+    ImageError
+        A swathe image whose column count is not the head's nozzle count.
+    """
     if jitter_um < 0 or not math.isfinite(jitter_um):
         raise ConfigError(f"jitter must be >= 0 um, got {jitter_um}")
     n = pr.head.nozzles
@@ -241,6 +271,33 @@ def simulate(
     seed: int = 0,
 ) -> Simulation:
     """Place the drops of ``pr`` and compare them with ``design`` ``(H, W) uint8``.
+
+    Parameters
+    ----------
+    pr : RotaryPrint
+        The print to simulate; its ``placement`` is ``H x W`` px.
+    design : (H, W) uint8 array
+        The design the print was made from (binary 0/255 or grey levels).
+    drop_diameter_um : float, optional
+        Dot diameter for the disc model, um (default: the head's ``drop_diameter_um``).
+    jitter_um, dead_nozzles, seed
+        As in :func:`place_drops`.
+
+    Returns
+    -------
+    Simulation
+        ``report`` (:class:`SimulationReport`: IoU, area ratio, placement errors in px and um,
+        uncovered area, drops outside the design), ``drops`` (:class:`Drops`, ``M`` drops),
+        ``printed`` and ``inked`` ``(H, W) bool`` (cell model and design), ``drop_on_ink``
+        ``(M,) bool``, ``error_px`` ``(M,) float64`` (distance of each drop to the nearest
+        inked pixel centre, in design pixels).
+
+    Raises
+    ------
+    ImageError
+        ``design`` is not the size the print was made for.
+    ConfigError
+        Negative or non-finite drop diameter or jitter, a dead nozzle out of range.
 
     Examples
     --------

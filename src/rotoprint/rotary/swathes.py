@@ -112,6 +112,27 @@ def plan_swathes(
     The first swathe's innermost track lies half a track pitch outside ``inner_radius_mm``;
     swathes are added until a track lies within half a pitch of ``outer_radius_mm``.
 
+    Parameters
+    ----------
+    head : InkjetHead
+    tilt_deg : float
+        Head tilt, degrees; ``|tilt_deg|`` below :func:`~rotoprint.rotary.head.max_tilt_deg`.
+    inner_radius_mm, outer_radius_mm : float
+        The radial range to cover, mm, ``0 < inner < outer``.
+    mount_angle_deg : float
+        Angle of the radial line through the pivots, degrees.
+    direction : {1, -1}
+        +1 the platform turns counter-clockwise seen from above, -1 clockwise.
+    max_swathes : int, optional
+        Refuse a plan needing more swathes than this (``>= 1``).
+
+    Returns
+    -------
+    SwathePlan
+        The setting and ``swathes``, a tuple of :class:`Swathe`: ``pivot_radius_mm`` (float),
+        ``band_mm`` ``(low, high)`` radii the swathe prints, ``enabled`` ``(nozzles,) bool``
+        (the nozzles that print in the band), ``first_track_mm``/``last_track_mm``, ``pitch_mm``.
+
     Raises
     ------
     GeometryError

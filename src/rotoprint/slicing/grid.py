@@ -112,7 +112,39 @@ def make_grid(
     centre: bool = True,
     margin_px: int = 1,
 ) -> Grid:
-    """Place a part given by its ``(V, 2)`` vertex XY on a device grid (see module doc)."""
+    """Place a part given by its ``(V, 2)`` vertex XY on a device grid (see module doc).
+
+    Parameters
+    ----------
+    vertices_xy : (V, 2) float array
+        Model XY of the part's vertices, mm.
+    pitch_x_mm, pitch_y_mm : float
+        Column and row spacing of the device's pixels, mm.
+    fibre_axis : {'x', 'y'}
+        Device direction the fibres run along (``'x'``: image rows).
+    field_px : (2,) int, optional
+        ``(width, height)`` of a fixed device field (a projector); ``None`` sizes the grid to
+        the part (an inkjet head), symmetric about the origin, plus ``margin_px``.
+    fibre_angle_deg : float, optional
+        Model direction (degrees counter-clockwise from +X) to put along the fibre axis;
+        ``None`` keeps the model unrotated.
+    offset_mm : (2,) float
+        Platform position of the footprint's centre (``centre=True``) or of the model origin.
+    centre : bool
+        Centre the footprint's bounding box on ``offset_mm``.
+    margin_px : int
+        Empty pixels around the part when the grid is sized to it.
+
+    Returns
+    -------
+    Grid
+        ``width x height`` pixels with the rotation and translation applied to the model.
+
+    Raises
+    ------
+    GeometryError
+        An unknown ``fibre_axis``, a non-finite offset, or a part that does not fit the field.
+    """
     if fibre_axis not in ("x", "y"):
         raise GeometryError(f"fibre_axis must be 'x' or 'y', got {fibre_axis!r}")
     axis_deg = 0.0 if fibre_axis == "x" else 90.0

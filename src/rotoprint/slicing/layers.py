@@ -34,6 +34,29 @@ class LayerPlan:
 def plan_layers(z_min_mm: float, z_max_mm: float, layer_height_mm: float, *, max_layers: int = 10_000_000) -> LayerPlan:
     """Plan layers from ``z_min_mm`` to ``z_max_mm`` at mid-layer heights.
 
+    Layers are ``layer_height_mm`` thick from ``z_min_mm`` up; the last one ends at
+    ``z_max_mm`` and is merged into the one below when it would be thinner than
+    ``MIN_LAST_LAYER_FRACTION`` of a layer.
+
+    Parameters
+    ----------
+    z_min_mm, z_max_mm : float
+        Bottom and top of the part, mm (``z_max_mm > z_min_mm``).
+    layer_height_mm : float
+        Nominal layer thickness, mm (finite, ``> 0``).
+    max_layers : int
+        Refuse a plan with more layers than this.
+
+    Returns
+    -------
+    LayerPlan
+        ``z_bottom``, ``z_top``, ``z_slice_mm`` ``(n,) float64`` (mm) and the nominal height.
+
+    Raises
+    ------
+    ConfigError
+        A non-positive or non-finite layer height, a part with no height, too many layers.
+
     Examples
     --------
     >>> plan_layers(0.0, 1.0, 0.25).z_slice_mm.tolist()

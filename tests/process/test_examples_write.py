@@ -1,0 +1,82 @@
+"""write_example (used by `rotoprint demo`): atomic, and never replaces what it did not write."""
+
+from __future__ import annotations
+
+import pytest
+
+from rotoprint.errors import InputFileError
+from rotoprint.process.examples import EXAMPLES, example_files, write_example
+
+
+def _snapshot(folder):
+    return {p.name: p.read_bytes() for p in folder.iterdir()}
+
+
+def test_writes_the_example_and_rewrites_its_own_copy(tmp_path):
+    folder = tmp_path / "job"
+    job = write_example("coil-sensor", folder)
+    assert job == folder / EXAMPLES["coil-sensor"][0]
+    assert _snapshot(folder) == example_files("coil-sensor")  # no temporary left beside them
+    assert write_example("coil-sensor", folder) == job  # an unchanged earlier copy is ours: rewritten
+    assert _snapshot(folder) == example_files("coil-sensor")
+
+
+def test_refuses_an_edited_job_file(tmp_path):
+    folder = tmp_path / "job"
+    job = write_example("coil-sensor", folder)
+    job.write_text(job.read_text() + "\n# my change\n")
+    before = _snapshot(folder)
+    with pytest.raises(InputFileError) as ei:
+        write_example("coil-sensor", folder)
+    assert str(ei.value) == f"{job}: differs from the coil-sensor example (edited?); refusing to overwrite it"
+    assert _snapshot(folder) == before
+
+
+def test_refuses_a_folder_with_other_files(tmp_path):
+    folder = tmp_path / "job"
+    folder.mkdir()
+    (folder / "mine.toml").write_text("keep me")
+    with pytest.raises(InputFileError, match=r"holds files that are not the gas-sensor example \(mine.toml\)"):
+        write_example("gas-sensor", folder)
+    assert _snapshot(folder) == {"mine.toml": b"keep me"}
+
+
+def test_refuses_a_file_in_place_of_the_folder(tmp_path):
+    f = tmp_path / "job"
+    f.write_text("x")
+    with pytest.raises(InputFileError, match="exists and is not a folder"):
+        write_example("coil-sensor", f)
+    assert f.read_text() == "x"
+
+
+def test_a_failed_write_leaves_no_job_file_and_no_temporaries(tmp_path, monkeypatch):
+    import rotoprint.io.atomic as atomic
+
+    calls = []
+    real = atomic.os.replace
+
+    def failing_replace(src, dst):
+        calls.append(dst)
+        if len(calls) == 2:
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(atomic.os, "replace", failing_replace)
+    folder = tmp_path / "job"
+    with pytest.raises(OSError):
+        write_example("coil-sensor", folder)
+    assert len(calls) == 2 and calls[-1] == folder / "coil-sensor.toml"  # the job file is renamed last
+    # no job file without its meshes, no temporary left; what is there is the example's own
+    assert _snapshot(folder) == {"coil-body.stl": example_files("coil-sensor")["coil-body.stl"]}
+    monkeypatch.undo()
+    assert write_example("coil-sensor", folder).exists()  # and a rerun completes it
+
+
+def test_demo_refuses_an_edited_job_without_a_traceback(run_cli, tmp_path):
+    job_dir = tmp_path / "d" / "job"
+    job = write_example("coil-sensor", job_dir)
+    job.write_text("# mine\n")
+    code, _, err = run_cli("demo", "--out", tmp_path / "d")
+    assert code == 2
+    assert err.strip() == f"rotoprint: error: {job}: differs from the coil-sensor example (edited?); refusing to overwrite it"
+    assert job.read_text() == "# mine\n" and not (tmp_path / "d" / "build").exists()
