@@ -119,9 +119,11 @@ def _sections(piece_mesh, shared_meshes=SHARED):
             yield slice_mesh(load_mesh(shared_meshes / name), dev, layer_height_mm=lh).segments(k)[0], dev
 
 
-def test_sample_widths_measure_what_the_check_uses(piece_mesh):
+@pytest.mark.parametrize("chained", [False, True])
+def test_sample_widths_measure_what_the_check_uses(piece_mesh, chained):
     """Against measuring every width of every sample: the same samples below the thresholds
-    with the same widths, the same smallest width, no sample dropped that could matter."""
+    with the same widths, the same smallest width, no sample dropped that could matter.
+    ``chained``: with the chain order, runs of segments are cleared as a whole."""
     n = dropped = 0
     for seg, dev in _sections(piece_mesh):
         p = max(dev.pitch_x_mm, dev.pitch_y_mm)
@@ -133,7 +135,11 @@ def test_sample_widths_measure_what_the_check_uses(piece_mesh):
         keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)
         rx, ry, rux, ruy, rsid, rln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing)
         rw, rg = K.cast_rays(rx, ry, rux, ruy, rsid, sx, sy, ex, ey, keep, cap, 1e-9, cell)
-        bx, by, ux, uy, ln, w, g = K.sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, cap, 1e-9, cell, need_w, need_g)
+        if chained:
+            succ = K.chain_successors(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
+            bx, by, ux, uy, ln, w, g = K.sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, cap, 1e-9, cell, need_w, need_g, succ)
+        else:
+            bx, by, ux, uy, ln, w, g = K.sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, cap, 1e-9, cell, need_w, need_g)
         # the kept samples are reference samples (the same points, bit for bit), in order
         pos = np.flatnonzero(np.isin(rx + 1j * ry, bx + 1j * by))
         assert pos.size == bx.size and np.array_equal(rx[pos], bx) and np.array_equal(ry[pos], by)
@@ -211,3 +217,45 @@ def test_check_layer_equals_widths_on_the_image_and_islands(piece_mesh):
             prev = (rs, r0, r1)
             n += 1
     assert n > 10 and tested > 0
+
+
+def _successors_plain(sx, sy, ex, ey, js, je):
+    """The next piece of each by a dictionary of start points: the one joinable piece starting
+    where this one ends (joinable end), and only if no other piece claims it; else -1."""
+    starts = {}
+    for o in range(sx.size):
+        starts.setdefault((sx[o], sy[o]), []).append(o)
+    succ = np.full(sx.size, -1)
+    for i in range(sx.size):
+        if je[i]:
+            cand = [o for o in starts.get((ex[i], ey[i]), []) if js[o]]
+            if len(cand) == 1 and cand[0] != i:
+                succ[i] = cand[0]
+    targets, counts = np.unique(succ[succ >= 0], return_counts=True)
+    shared = set(targets[counts > 1].tolist())
+    return np.array([-1 if s in shared else s for s in succ])
+
+
+def test_chain_successors_and_runs_against_plain(piece_mesh):
+    """Successors against a dictionary of start points; every run is a path along them of
+    kept segments, none shorter than the minimum (but a lone one), directions within 35
+    degrees of its first (any two within 70)."""
+    for seg, dev in _sections(piece_mesh):
+        cell = 0.5 * min(dev.pitch_x_mm, dev.pitch_y_mm)
+        sx, sy, ex, ey = (np.ascontiguousarray(a) for a in (seg.start[:, 0], seg.start[:, 1], seg.end[:, 0], seg.end[:, 1]))
+        sx, sy, ex, ey, _, js, je = K.split_at_crossings(sx, sy, ex, ey, cell, 1e-5)
+        succ = K.chain_successors(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
+        assert np.array_equal(succ, _successors_plain(sx, sy, ex, ey, js, je))
+        comp, nc = K.chain_components(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
+        keep, _, _ = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)
+        run, ptr, mem = K._chain_runs(sx, sy, ex, ey, keep, succ)
+        assert np.array_equal(np.sort(mem), np.flatnonzero(keep)) and np.all(run[~keep] == -1)
+        L = np.hypot(ex - sx, ey - sy)
+        for r in range(ptr.size - 1):
+            m = mem[ptr[r] : ptr[r + 1]]
+            assert np.all(run[m] == r) and 1 <= m.size <= K._RUN_MAX
+            assert np.all(succ[m[:-1]] == m[1:])
+            if m.size > 1:
+                assert np.all(L[m] >= K._RUN_MIN_LEN_MM)
+                t = np.stack([(ex - sx)[m], (ey - sy)[m]], 1) / L[m, None]
+                assert np.all(t @ t[0] >= K._RUN_COS - 1e-12)

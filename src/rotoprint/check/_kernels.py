@@ -39,6 +39,13 @@ _MIN_LEN_MM = 1e-9
 _FEW = 256
 #: Margin (mm) by which the strip a segment's rays sweep is grown before testing it clear.
 _STRIP_MARGIN_MM = 1e-6
+#: Runs of chained segments tested as a whole (:func:`_chain_runs`): at most this many
+#: segments, each at least this long, every direction within acos(_RUN_COS) = 35 degrees of
+#: the first one; runs of fewer than _RUN_MIN_SEGS segments are not tested as a whole.
+_RUN_MAX = 48
+_RUN_MIN_LEN_MM = 1e-5
+_RUN_COS = 0.8191520442889918
+_RUN_MIN_SEGS = 3
 
 
 # ---------------------------------------------------------------- bucketing helpers
@@ -704,7 +711,195 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
 
 
 @njit(cache=True, nogil=True)
+def chain_successors(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: no cover - jit
+    """The next piece along each chain: ``(Q,) int64``, the one piece whose start is this
+    piece's end (bit-identical point, an ordinary joint at both sides), or -1 (a chain end, a
+    cut, or a point where several pieces start or end). Keys as :func:`chain_components`."""
+    n = sx.shape[0]
+    succ = np.full(n, -1, np.int64)
+    if n == 0:
+        return succ
+    bits = 1
+    while (1 << bits) < 2 * n:
+        bits += 1
+    size = 1 << bits
+    slot_key = np.empty(size, np.int64)
+    slot_head = np.full(size, -1, np.int64)
+    nxt = np.full(n, -1, np.int64)
+    shift = np.uint64(64 - bits)
+    mul = np.uint64(0x9E3779B97F4A7C15)
+    mask = size - 1
+    for i in range(n):
+        k = key_s[i]
+        h = np.int64((np.uint64(k) * mul) >> shift)
+        while slot_head[h] >= 0 and slot_key[h] != k:
+            h = (h + 1) & mask
+        if slot_head[h] < 0:
+            slot_key[h] = k
+        nxt[i] = slot_head[h]
+        slot_head[h] = i
+    npred = np.zeros(n, np.int64)
+    for i in range(n):
+        if not join_e[i]:
+            continue
+        k = key_e[i]
+        h = np.int64((np.uint64(k) * mul) >> shift)
+        while slot_head[h] >= 0 and slot_key[h] != k:
+            h = (h + 1) & mask
+        o = slot_head[h]
+        found = -1
+        cnt = 0
+        while o >= 0:
+            if join_s[o] and sx[o] == ex[i] and sy[o] == ey[i]:
+                found = o
+                cnt += 1
+            o = nxt[o]
+        if cnt == 1 and found != i:
+            succ[i] = found
+            npred[found] += 1
+    for i in range(n):
+        if succ[i] >= 0 and npred[succ[i]] != 1:
+            succ[i] = -1
+    return succ
+
+
+@njit(cache=True, nogil=True)
+def _chain_runs(sx, sy, ex, ey, keep, succ):  # pragma: no cover - jit
+    """Cut the chains (``succ`` from :func:`chain_successors`) of kept segments into runs of
+    at most ``_RUN_MAX`` consecutive segments, each at least ``_RUN_MIN_LEN_MM`` long, whose
+    directions all lie within ``_RUN_COS`` (35 degrees) of the run's first: any two differ by
+    less than 90 degrees, so no normal ray from a point of the run meets the run again.
+
+    Returns the run of every segment (-1: none), and the runs' members in chain order (CSR:
+    ``ptr``, ``mem``)."""
+    n = sx.shape[0]
+    run = np.full(n, -1, np.int64)
+    has_pred = np.zeros(n, np.bool_)
+    for k in range(n):
+        if succ[k] >= 0 and keep[k]:
+            has_pred[succ[k]] = True
+    ptr = np.zeros(n + 1, np.int64)
+    mem = np.empty(n, np.int64)
+    nr = 0
+    pos = 0
+    for sweep in range(2):  # chain heads first, then what is left (closed chains)
+        for k0 in range(n):
+            if not keep[k0] or run[k0] >= 0 or (sweep == 0 and has_pred[k0]):
+                continue
+            k = k0
+            while k >= 0 and keep[k] and run[k] < 0:
+                L0 = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+                t0x = (ex[k] - sx[k]) / L0
+                t0y = (ey[k] - sy[k]) / L0
+                cnt = 0
+                while k >= 0 and keep[k] and run[k] < 0 and cnt < _RUN_MAX:
+                    L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+                    if L < _RUN_MIN_LEN_MM and cnt > 0:
+                        break
+                    if cnt > 0 and ((ex[k] - sx[k]) * t0x + (ey[k] - sy[k]) * t0y) < _RUN_COS * L:
+                        break
+                    run[k] = nr
+                    mem[pos] = k
+                    pos += 1
+                    cnt += 1
+                    k = succ[k]
+                    if L < _RUN_MIN_LEN_MM:
+                        break  # a tiny segment is a run of its own
+                nr += 1
+                ptr[nr] = pos
+    return run, ptr[: nr + 1], mem[:pos]
+
+
+@njit(cache=True, nogil=True)
+def _run_clear(r, sgn, Lr, run, ptr, mem, sx, sy, ex, ey, nx, ny, spacing, px0, py0, px1, py1, par, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
+    """Whether no piece outside run ``r`` meets the rectangle (in the frame of the run's first
+    direction) holding every ray its samples cast on side ``sgn`` up to ``Lr``, grown by
+    ``_STRIP_MARGIN_MM``: then none of those rays hits anything (the run cannot see itself).
+    Returns 1 clear, 2 not clear or not worth testing."""
+    a = ptr[r]
+    b = ptr[r + 1]
+    k0 = mem[a]
+    L0 = math.hypot(ex[k0] - sx[k0], ey[k0] - sy[k0])
+    tx = (ex[k0] - sx[k0]) / L0
+    ty = (ey[k0] - sy[k0]) / L0
+    qx = -ty
+    qy = tx
+    ox = sx[k0]
+    oy = sy[k0]
+    a_lo = np.inf
+    a_hi = -np.inf
+    c_lo = np.inf
+    c_hi = -np.inf
+    nrays = 0
+    for j in range(a, b):
+        k = mem[j]
+        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        m = max(1, int(math.ceil(L / spacing)))
+        nrays += m
+        for e in range(2):
+            f = (0.5 / m) if e == 0 else ((m - 0.5) / m)
+            px = sx[k] + f * (ex[k] - sx[k])
+            py = sy[k] + f * (ey[k] - sy[k])
+            for o in range(2):
+                X = px + o * Lr * sgn * nx[k]
+                Y = py + o * Lr * sgn * ny[k]
+                u = (X - ox) * tx + (Y - oy) * ty
+                v = (X - ox) * qx + (Y - oy) * qy
+                a_lo = min(a_lo, u)
+                a_hi = max(a_hi, u)
+                c_lo = min(c_lo, v)
+                c_hi = max(c_hi, v)
+    a_lo -= _STRIP_MARGIN_MM
+    a_hi += _STRIP_MARGIN_MM
+    c_lo -= _STRIP_MARGIN_MM
+    c_hi += _STRIP_MARGIN_MM
+    q0x = ox + a_lo * tx + c_lo * qx
+    q0y = oy + a_lo * ty + c_lo * qy
+    q1x = ox + a_lo * tx + c_hi * qx
+    q1y = oy + a_lo * ty + c_hi * qy
+    q2x = ox + a_hi * tx + c_hi * qx
+    q2y = oy + a_hi * ty + c_hi * qy
+    q3x = ox + a_hi * tx + c_lo * qx
+    q3y = oy + a_hi * ty + c_lo * qy
+    gc0 = max(0, int(math.floor((min(q0x, q1x, q2x, q3x) - xmin) / h)))
+    gc1 = min(ncx - 1, int(math.floor((max(q0x, q1x, q2x, q3x) - xmin) / h)))
+    gr0 = max(0, int(math.floor((min(q0y, q1y, q2y, q3y) - ymin) / h)))
+    gr1 = min(ncy - 1, int(math.floor((max(q0y, q1y, q2y, q3y) - ymin) / h)))
+    if (gc1 - gc0 + 1) * (gr1 - gr0 + 1) > nrays * (int(Lr / h) + 2):
+        return 2  # the rays are cheaper
+    for gr in range(gr0, gr1 + 1):
+        for gc in range(gc0, gc1 + 1):
+            cell = gr * ncx + gc
+            for pc in range(start[cell], start[cell + 1]):
+                if run[par[pc]] == r:
+                    continue
+                ua_ = (px0[pc] - ox) * tx + (py0[pc] - oy) * ty
+                ub_ = (px1[pc] - ox) * tx + (py1[pc] - oy) * ty
+                if max(ua_, ub_) < a_lo or min(ua_, ub_) > a_hi:
+                    continue
+                va_ = (px0[pc] - ox) * qx + (py0[pc] - oy) * qy
+                vb_ = (px1[pc] - ox) * qx + (py1[pc] - oy) * qy
+                if max(va_, vb_) < c_lo or min(va_, vb_) > c_hi:
+                    continue
+                e0 = px1[pc] - px0[pc]
+                e1 = py1[pc] - py0[pc]
+                w0 = e0 * (q0y - py0[pc]) - e1 * (q0x - px0[pc])
+                w1 = e0 * (q1y - py0[pc]) - e1 * (q1x - px0[pc])
+                w2 = e0 * (q2y - py0[pc]) - e1 * (q2x - px0[pc])
+                w3 = e0 * (q3y - py0[pc]) - e1 * (q3x - px0[pc])
+                if min(w0, w1, w2, w3) <= 0.0 <= max(w0, w1, w2, w3):
+                    return 2
+    return 1
+
+
+@njit(cache=True, nogil=True)
 def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap):  # pragma: no cover - jit
+    """:func:`sample_widths_chained` without chain order (no run is tested as a whole)."""
+    return sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap, np.full(sx.shape[0], -1, np.int64))
+
+
+@njit(cache=True, nogil=True)
+def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap, succ):  # pragma: no cover - jit
     """The samples of :func:`boundary_samples` with the widths of :func:`cast_rays`, measuring
     only what the check uses: every width below ``need_wall`` (``need_gap``) exactly, and the
     smallest width up to ``max_mm``; any other width may come back as ``inf``.
@@ -742,6 +937,11 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
     low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
     need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
     skip = np.zeros(2, np.bool_)
+    # runs of chained segments turning little: tested as a whole, once per side, when the
+    # first of their segments comes (the ray length only shrinks after that)
+    run, rptr, rmem = _chain_runs(sx, sy, ex, ey, keep, succ)
+    nrun = rptr.shape[0] - 1
+    rstate = np.zeros((nrun, 2), np.int8)  # 0 untested, 1 clear, 2 not clear
     p = 0
     for k in range(n):
         if not keep[k]:
@@ -750,6 +950,15 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
         m = max(1, int(math.ceil(L / spacing)))
         skip[0] = False
         skip[1] = False
+        r = run[k]
+        if r >= 0 and rptr[r + 1] - rptr[r] >= _RUN_MIN_SEGS:
+            for side in range(2):
+                if rstate[r, side] == 0:
+                    sgn = 1.0 if side == 0 else -1.0
+                    rstate[r, side] = _run_clear(r, sgn, max(need[side], low[side]), run, rptr, rmem, sx, sy, ex, ey, nx, ny, spacing, px0, py0, px1, py1, par, start, xmin, ymin, h, ncx, ncy)
+                skip[side] = rstate[r, side] == 1
+            if skip[0] and skip[1]:
+                continue
         if m >= 4:
             # a long segment: does the strip its rays sweep on a side (from the first to the
             # last sample, up to the ray length) meet any other piece? Conservative: a piece
@@ -772,6 +981,8 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
             a_lo -= _STRIP_MARGIN_MM
             a_hi += _STRIP_MARGIN_MM
             for side in range(2):
+                if skip[side]:
+                    continue  # its run is clear
                 sgn = 1.0 if side == 0 else -1.0
                 dx = sgn * nx[k]
                 dy = sgn * ny[k]
@@ -1293,9 +1504,12 @@ def measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max
     ex = np.ascontiguousarray(end[:, 0])
     ey = np.ascontiguousarray(end[:, 1])
     sx, sy, ex, ey, _, join_s, join_e = split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm)
-    comp, ncomp = chain_components(sx, sy, ex, ey, join_s, join_e, _keys(sx, sy), _keys(ex, ey))
+    ks = _keys(sx, sy)
+    ke = _keys(ex, ey)
+    comp, ncomp = chain_components(sx, sy, ex, ey, join_s, join_e, ks, ke)
     keep, nx, ny = classify_segments(sx, sy, ex, ey, comp, ncomp, evenodd, side_eps)
-    return sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap)
+    succ = chain_successors(sx, sy, ex, ey, join_s, join_e, ks, ke)
+    return sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap, succ)
 
 
 @njit(cache=True, nogil=True)
