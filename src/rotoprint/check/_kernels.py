@@ -208,10 +208,11 @@ def boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing):  # pragma: no cover
 
 
 @njit(cache=True, nogil=True)
-def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy):  # pragma: no cover - jit
+def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy, grow=0.0):  # pragma: no cover - jit
     """CSR of (piece start x, y, end x, y, parent segment) per square cell of side ``h``:
     every kept segment is cut into pieces no longer than ``h`` and each piece is listed in the
-    cells its bounding box touches (at most four, nine on cell corners)."""
+    cells its bounding box, grown by ``grow`` mm, touches (at most four, nine on cell corners,
+    when ``grow`` is below a cell)."""
     n = sx.shape[0]
     npieces = 0
     for k in range(n):
@@ -247,7 +248,7 @@ def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy):  # pragma: no cover - jit
             idx = np.empty(count[ncell], np.int64)
             fill = count[:-1].copy()
         for p in range(npieces):
-            pad = 1e-9 * h
+            pad = 1e-9 * h + grow
             cx0 = max(0, min(ncx - 1, int(math.floor((min(px0[p], px1[p]) - pad - x0) / h))))
             cx1 = max(0, min(ncx - 1, int(math.floor((max(px0[p], px1[p]) + pad - x0) / h))))
             cy0 = max(0, min(ncy - 1, int(math.floor((min(py0[p], py1[p]) - pad - y0) / h))))
@@ -328,6 +329,88 @@ def _near(sx, sy, ex, ey, A, B, d):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
+def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m):  # pragma: no cover - jit
+    """Test segments ``A < B`` of :func:`split_at_crossings` (boxes grown by the near
+    distance): record the cuts each makes in the other (``_push``) and flag the ends that are
+    no ordinary joints. Returns the cut records and their count."""
+    if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
+        return rec_s, rec_t, m
+    d0x = ex[A] - sx[A]
+    d0y = ey[A] - sy[A]
+    d1x = ex[B] - sx[B]
+    d1y = ey[B] - sy[B]
+    wx = sx[B] - sx[A]
+    wy = sy[B] - sy[A]
+    den = d0x * d1y - d0y * d1x
+    l0 = d0x * d0x + d0y * d0y
+    l1 = d1x * d1x + d1y * d1y
+    if l0 == 0.0 or l1 == 0.0:
+        return rec_s, rec_t, m
+    if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
+        # parallel: only collinear overlaps matter
+        if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
+            if _near(sx, sy, ex, ey, A, B, near_mm):
+                _isolate(touch_s, touch_e, A, B)
+            return rec_s, rec_t, m
+        # B's ends along A: an overlap of positive length, or just a joint
+        u0 = (wx * d0x + wy * d0y) / l0
+        u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
+        if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
+            return rec_s, rec_t, m  # end to end (a straight run of a chain) or apart
+        for q in range(2):
+            X = A if q == 0 else B
+            Y = B if q == 0 else A
+            dx = ex[X] - sx[X]
+            dy = ey[X] - sy[X]
+            ll = dx * dx + dy * dy
+            for r in range(2):  # Y's ends on X
+                yx = sx[Y] if r == 0 else ex[Y]
+                yy = sy[Y] if r == 0 else ey[Y]
+                t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
+                if tol < t < 1.0 - tol:
+                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
+                    if r == 0:
+                        touch_s[Y] = True
+                    else:
+                        touch_e[Y] = True
+                elif -tol <= t <= 1.0 + tol:
+                    # ends meet on an overlap: neither end is an ordinary joint
+                    ty = 0.0 if r == 0 else 1.0
+                    if t <= tol:
+                        touch_s[X] = True
+                    else:
+                        touch_e[X] = True
+                    if ty == 0.0:
+                        touch_s[Y] = True
+                    else:
+                        touch_e[Y] = True
+        return rec_s, rec_t, m
+    ta = (wx * d1y - wy * d1x) / den
+    tb = (wx * d0y - wy * d0x) / den
+    if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
+        if _near(sx, sy, ex, ey, A, B, near_mm):
+            _isolate(touch_s, touch_e, A, B)
+        return rec_s, rec_t, m
+    ia = tol < ta < 1.0 - tol
+    ib = tol < tb < 1.0 - tol
+    if not ia and not ib:
+        return rec_s, rec_t, m  # a shared vertex: an ordinary joint
+    if ia:
+        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
+    elif ta <= tol:
+        touch_s[A] = True
+    else:
+        touch_e[A] = True
+    if ib:
+        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
+    elif tb <= tol:
+        touch_s[B] = True
+    else:
+        touch_e[B] = True
+    return rec_s, rec_t, m
+
+
+@njit(cache=True, nogil=True)
 def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - jit
     """Cut every segment where another one crosses, touches or overlaps its interior, so that
     each piece is wholly on the boundary of the filled region or wholly inside it (overlapping
@@ -339,6 +422,164 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
     chains that come within ``near_mm`` without meeting (coincident faces of touching shells,
     to rounding) are not ordinary at either end, so the classification looks at each of them.
     """
+    return _split(sx, sy, ex, ey, cell_mm, near_mm, True)
+
+
+@njit(cache=True, nogil=True)
+def split_at_crossings_grid(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - jit
+    """:func:`split_at_crossings` by the grid alone (every pair of segments sharing a cell),
+    the reference for the search by runs."""
+    return _split(sx, sy, ex, ey, cell_mm, near_mm, False)
+
+
+@njit(cache=True, nogil=True)
+def _rects_apart(P, Q):  # pragma: no cover - jit
+    """Whether two rectangles (``(4, 2)`` corners in order) are separated along one of their
+    sides' directions (separating axes; rectangles that only touch are not apart)."""
+    for which in range(2):
+        R = P if which == 0 else Q
+        for side in range(2):
+            axx = R[side + 1, 0] - R[side, 0]
+            axy = R[side + 1, 1] - R[side, 1]
+            p_lo = np.inf
+            p_hi = -np.inf
+            q_lo = np.inf
+            q_hi = -np.inf
+            for c in range(4):
+                v = P[c, 0] * axx + P[c, 1] * axy
+                p_lo = min(p_lo, v)
+                p_hi = max(p_hi, v)
+                w = Q[c, 0] * axx + Q[c, 1] * axy
+                q_lo = min(q_lo, w)
+                q_hi = max(q_hi, w)
+            if p_hi < q_lo or q_hi < p_lo:
+                return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m):  # pragma: no cover - jit
+    """The pair tests of :func:`split_at_crossings` by runs: the segments are cut into runs of
+    consecutive chained segments (:func:`chain_successors`, :func:`_chain_runs`) whose
+    directions stay within 35 degrees of the first and whose segments are long enough that
+    two segments of a run with one between are more than the near distance apart along the
+    first direction. Such a run neither crosses, touches nor comes near itself (neighbours
+    share their end exactly and meet at it: the pair test finds nothing, see the tests), so
+    only pairs of segments of different runs whose boxes (grown by the near distance) overlap
+    are tested, runs paired by a sweep over their boxes.
+
+    Returns ``False`` (nothing done) when the runs are not at least 8 segments long on average
+    (the grid is the better search), else ``True`` and the cut records."""
+    n = sx.shape[0]
+    ones = np.ones(n, np.bool_)
+    succ = chain_successors(sx, sy, ex, ey, ones, ones, _keys(sx, sy), _keys(ex, ey))
+    min_len = max(_RUN_MIN_LEN_MM, 2.0 * max(near_mm, 0.0) / _RUN_COS)
+    run, ptr, mem = _chain_runs(sx, sy, ex, ey, ones, succ, min_len)
+    nu = ptr.shape[0] - 1
+    if 8 * nu > n:
+        return False, rec_s, rec_t, m
+    ux0 = np.full(nu, np.inf)
+    ux1 = np.full(nu, -np.inf)
+    uy0 = np.full(nu, np.inf)
+    uy1 = np.full(nu, -np.inf)
+    for u in range(nu):
+        for a in range(ptr[u], ptr[u + 1]):
+            k = mem[a]
+            ux0[u] = min(ux0[u], bx0[k])
+            ux1[u] = max(ux1[u], bx1[k])
+            uy0[u] = min(uy0[u], by0[k])
+            uy1[u] = max(uy1[u], by1[k])
+    # each run's rectangle in the frame of its first direction (a run is thin across it: an
+    # arc's sagitta), grown by the near distance and a rounding margin
+    grow = max(near_mm, 0.0) + 1e-9
+    rc = np.empty((nu, 4, 2))  # corners
+    for u in range(nu):
+        k0 = mem[ptr[u]]
+        L0 = max(math.hypot(ex[k0] - sx[k0], ey[k0] - sy[k0]), 1e-300)
+        tx = (ex[k0] - sx[k0]) / L0
+        ty = (ey[k0] - sy[k0]) / L0
+        if L0 <= 1e-300:
+            tx = 1.0
+            ty = 0.0
+        a_lo = np.inf
+        a_hi = -np.inf
+        c_lo = np.inf
+        c_hi = -np.inf
+        for a in range(ptr[u], ptr[u + 1]):
+            k = mem[a]
+            for e in range(2):
+                X = (sx[k] if e == 0 else ex[k]) - sx[k0]
+                Y = (sy[k] if e == 0 else ey[k]) - sy[k0]
+                al = X * tx + Y * ty
+                ac = -X * ty + Y * tx
+                a_lo = min(a_lo, al)
+                a_hi = max(a_hi, al)
+                c_lo = min(c_lo, ac)
+                c_hi = max(c_hi, ac)
+        a_lo -= grow
+        a_hi += grow
+        c_lo -= grow
+        c_hi += grow
+        for q in range(4):
+            al = a_lo if q == 0 or q == 1 else a_hi
+            ac = c_lo if q == 0 or q == 3 else c_hi
+            rc[u, q, 0] = sx[k0] + al * tx - ac * ty
+            rc[u, q, 1] = sy[k0] + al * ty + ac * tx
+    # each run's segments by the low edge of their boxes in x and in y
+    ordx = mem.copy()
+    ordy = mem.copy()
+    for u in range(nu):
+        a0 = ptr[u]
+        a1 = ptr[u + 1]
+        if a1 - a0 > 1:
+            seg = mem[a0:a1]
+            ordx[a0:a1] = seg[np.argsort(bx0[seg], kind="mergesort")]
+            ordy[a0:a1] = seg[np.argsort(by0[seg], kind="mergesort")]
+    order = np.argsort(ux0, kind="mergesort")
+    for ii in range(nu):
+        U = order[ii]
+        for jj in range(ii + 1, nu):
+            V = order[jj]
+            if ux0[V] > ux1[U]:
+                break
+            if uy0[V] > uy1[U] or uy0[U] > uy1[V]:
+                continue
+            if _rects_apart(rc[U], rc[V]):
+                continue
+            # the pairs of the two runs whose boxes overlap along the axis both runs spread
+            # over most (a sweep over the two sorted lists; each such pair once)
+            along_x = (ux1[U] - ux0[U]) + (ux1[V] - ux0[V]) >= (uy1[U] - uy0[U]) + (uy1[V] - uy0[V])
+            LA = ordx[ptr[U] : ptr[U + 1]] if along_x else ordy[ptr[U] : ptr[U + 1]]
+            LB = ordx[ptr[V] : ptr[V + 1]] if along_x else ordy[ptr[V] : ptr[V + 1]]
+            lo = bx0 if along_x else by0
+            hi = bx1 if along_x else by1
+            nA = LA.shape[0]
+            nB = LB.shape[0]
+            i = 0
+            j = 0
+            while i < nA and j < nB:
+                a = LA[i]
+                b = LB[j]
+                if lo[a] <= lo[b]:
+                    q = j
+                    while q < nB and lo[LB[q]] <= hi[a]:
+                        B0 = LB[q]
+                        rec_s, rec_t, m = _pair(min(a, B0), max(a, B0), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+                        q += 1
+                    i += 1
+                else:
+                    q = i
+                    while q < nA and lo[LA[q]] <= hi[b]:
+                        A0 = LA[q]
+                        rec_s, rec_t, m = _pair(min(A0, b), max(A0, b), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+                        q += 1
+                    j += 1
+    return True, rec_s, rec_t, m
+
+
+@njit(cache=True, nogil=True)
+def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - jit
+    """:func:`split_at_crossings`, by runs (``use_runs``, when it pays) or by the grid."""
     n = sx.shape[0]
     keep = np.ones(n, np.bool_)
     tol = 1e-12
@@ -347,7 +588,15 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
     rec_s = np.empty(64, np.int64)
     rec_t = np.empty(64)
     m = 0
-    if n > 0:
+    done = False
+    g = max(near_mm, 0.0)
+    bx0 = np.minimum(sx, ex) - g
+    bx1 = np.maximum(sx, ex) + g
+    by0 = np.minimum(sy, ey) - g
+    by1 = np.maximum(sy, ey) + g
+    if use_runs and n > _FEW:
+        done, rec_s, rec_t, m = _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+    if n > 0 and not done:
         wx = max(sx.max(), ex.max()) - min(sx.min(), ex.min())
         wy = max(sy.max(), ey.max()) - min(sy.min(), ey.min())
         h = _cell_size(wx, wy, n, cell_mm)
@@ -359,12 +608,9 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
         ymax = max(sy.max(), ey.max()) + h
         ncx = int((xmax - xmin) / h) + 1
         ncy = int((ymax - ymin) / h) + 1
-        px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
-        g = max(near_mm, 0.0)
-        bx0 = np.minimum(sx, ex) - g
-        bx1 = np.maximum(sx, ex) + g
-        by0 = np.minimum(sy, ey) - g
-        by1 = np.maximum(sy, ey) + g
+        # pieces are listed in every cell their box grown by the near distance touches: two
+        # segments that cross, touch or come within it share a cell
+        px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy, g)
         # each cell's pieces by the left edge of their segment's box: a pair is looked at only
         # while the boxes can overlap in x (a sweep; the same pairs meet, fewer are tried)
         key = np.empty(idx.shape[0])
@@ -399,82 +645,7 @@ def split_at_crossings(sx, sy, ex, ey, cell_mm, near_mm):  # pragma: no cover - 
                         break  # this and every later box start right of A's box
                     if A0 == B0:
                         continue
-                    A = min(A0, B0)  # the lower segment first, as without the sweep
-                    B = max(A0, B0)
-                    if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
-                        continue
-                    d0x = ex[A] - sx[A]
-                    d0y = ey[A] - sy[A]
-                    d1x = ex[B] - sx[B]
-                    d1y = ey[B] - sy[B]
-                    wx = sx[B] - sx[A]
-                    wy = sy[B] - sy[A]
-                    den = d0x * d1y - d0y * d1x
-                    l0 = d0x * d0x + d0y * d0y
-                    l1 = d1x * d1x + d1y * d1y
-                    if l0 == 0.0 or l1 == 0.0:
-                        continue
-                    if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
-                        # parallel: only collinear overlaps matter
-                        if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
-                            if _near(sx, sy, ex, ey, A, B, near_mm):
-                                _isolate(touch_s, touch_e, A, B)
-                            continue
-                        # B's ends along A: an overlap of positive length, or just a joint
-                        u0 = (wx * d0x + wy * d0y) / l0
-                        u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
-                        if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
-                            continue  # end to end (a straight run of a chain) or apart
-                        for q in range(2):
-                            X = A if q == 0 else B
-                            Y = B if q == 0 else A
-                            dx = ex[X] - sx[X]
-                            dy = ey[X] - sy[X]
-                            ll = dx * dx + dy * dy
-                            for r in range(2):  # Y's ends on X
-                                yx = sx[Y] if r == 0 else ex[Y]
-                                yy = sy[Y] if r == 0 else ey[Y]
-                                t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
-                                if tol < t < 1.0 - tol:
-                                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
-                                    if r == 0:
-                                        touch_s[Y] = True
-                                    else:
-                                        touch_e[Y] = True
-                                elif -tol <= t <= 1.0 + tol:
-                                    # ends meet on an overlap: neither end is an ordinary joint
-                                    ty = 0.0 if r == 0 else 1.0
-                                    if t <= tol:
-                                        touch_s[X] = True
-                                    else:
-                                        touch_e[X] = True
-                                    if ty == 0.0:
-                                        touch_s[Y] = True
-                                    else:
-                                        touch_e[Y] = True
-                        continue
-                    ta = (wx * d1y - wy * d1x) / den
-                    tb = (wx * d0y - wy * d0x) / den
-                    if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
-                        if _near(sx, sy, ex, ey, A, B, near_mm):
-                            _isolate(touch_s, touch_e, A, B)
-                        continue
-                    ia = tol < ta < 1.0 - tol
-                    ib = tol < tb < 1.0 - tol
-                    if not ia and not ib:
-                        continue  # a shared vertex: an ordinary joint
-                    if ia:
-                        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
-                    elif ta <= tol:
-                        touch_s[A] = True
-                    else:
-                        touch_e[A] = True
-                    if ib:
-                        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
-                    elif tb <= tol:
-                        touch_s[B] = True
-                    else:
-                        touch_e[B] = True
+                    rec_s, rec_t, m = _pair(min(A0, B0), max(A0, B0), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
     # pieces: every segment from 0 to 1 through its sorted cut parameters
     cuts_n = np.zeros(n + 1, np.int64)
     for i in range(m):
@@ -764,9 +935,9 @@ def chain_successors(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
 
 
 @njit(cache=True, nogil=True)
-def _chain_runs(sx, sy, ex, ey, keep, succ):  # pragma: no cover - jit
+def _chain_runs(sx, sy, ex, ey, keep, succ, min_len):  # pragma: no cover - jit
     """Cut the chains (``succ`` from :func:`chain_successors`) of kept segments into runs of
-    at most ``_RUN_MAX`` consecutive segments, each at least ``_RUN_MIN_LEN_MM`` long, whose
+    at most ``_RUN_MAX`` consecutive segments, each at least ``min_len`` mm long, whose
     directions all lie within ``_RUN_COS`` (35 degrees) of the run's first: any two differ by
     less than 90 degrees, so no normal ray from a point of the run meets the run again.
 
@@ -788,13 +959,13 @@ def _chain_runs(sx, sy, ex, ey, keep, succ):  # pragma: no cover - jit
                 continue
             k = k0
             while k >= 0 and keep[k] and run[k] < 0:
-                L0 = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+                L0 = max(math.hypot(ex[k] - sx[k], ey[k] - sy[k]), 1e-300)
                 t0x = (ex[k] - sx[k]) / L0
                 t0y = (ey[k] - sy[k]) / L0
                 cnt = 0
                 while k >= 0 and keep[k] and run[k] < 0 and cnt < _RUN_MAX:
                     L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
-                    if L < _RUN_MIN_LEN_MM and cnt > 0:
+                    if L < min_len and cnt > 0:
                         break
                     if cnt > 0 and ((ex[k] - sx[k]) * t0x + (ey[k] - sy[k]) * t0y) < _RUN_COS * L:
                         break
@@ -803,7 +974,7 @@ def _chain_runs(sx, sy, ex, ey, keep, succ):  # pragma: no cover - jit
                     pos += 1
                     cnt += 1
                     k = succ[k]
-                    if L < _RUN_MIN_LEN_MM:
+                    if L < min_len:
                         break  # a tiny segment is a run of its own
                 nr += 1
                 ptr[nr] = pos
@@ -939,7 +1110,7 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     skip = np.zeros(2, np.bool_)
     # runs of chained segments turning little: tested as a whole, once per side, when the
     # first of their segments comes (the ray length only shrinks after that)
-    run, rptr, rmem = _chain_runs(sx, sy, ex, ey, keep, succ)
+    run, rptr, rmem = _chain_runs(sx, sy, ex, ey, keep, succ, _RUN_MIN_LEN_MM)
     nrun = rptr.shape[0] - 1
     rstate = np.zeros((nrun, 2), np.int8)  # 0 untested, 1 clear, 2 not clear
     p = 0
