@@ -46,6 +46,9 @@ _RUN_MAX = 48
 _RUN_MIN_LEN_MM = 1e-5
 _RUN_COS = 0.8191520442889918
 _RUN_MIN_SEGS = 3
+#: Sections with fewer segments than this are searched and measured without runs (finding
+#: the chains costs more than it saves).
+_RUNS_FROM = 4096
 
 
 # ---------------------------------------------------------------- bucketing helpers
@@ -328,11 +331,16 @@ def _near(sx, sy, ex, ey, A, B, d):  # pragma: no cover - jit
     )
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m):  # pragma: no cover - jit
     """Test segments ``A < B`` of :func:`split_at_crossings` (boxes grown by the near
     distance): record the cuts each makes in the other (``_push``) and flag the ends that are
-    no ordinary joints. Returns the cut records and their count."""
+    no ordinary joints. Returns the cut records and their count.
+
+    The search by runs calls this; the grid search in :func:`_split` keeps the same test
+    written out in its loop (called there, it made the check of the real meshes, a few
+    hundred segments per layer, 10-30 % slower). ``test_split_by_runs_equals_the_grid``
+    holds the two to the same results."""
     if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
         return rec_s, rec_t, m
     d0x = ex[A] - sx[A]
@@ -594,7 +602,7 @@ def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - ji
     bx1 = np.maximum(sx, ex) + g
     by0 = np.minimum(sy, ey) - g
     by1 = np.maximum(sy, ey) + g
-    if use_runs and n > _FEW:
+    if use_runs and n >= _RUNS_FROM:
         done, rec_s, rec_t, m = _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
     if n > 0 and not done:
         wx = max(sx.max(), ex.max()) - min(sx.min(), ex.min())
@@ -645,7 +653,82 @@ def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - ji
                         break  # this and every later box start right of A's box
                     if A0 == B0:
                         continue
-                    rec_s, rec_t, m = _pair(min(A0, B0), max(A0, B0), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+                    A = min(A0, B0)  # the lower segment first, as without the sweep
+                    B = max(A0, B0)
+                    if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
+                        continue
+                    d0x = ex[A] - sx[A]
+                    d0y = ey[A] - sy[A]
+                    d1x = ex[B] - sx[B]
+                    d1y = ey[B] - sy[B]
+                    wx = sx[B] - sx[A]
+                    wy = sy[B] - sy[A]
+                    den = d0x * d1y - d0y * d1x
+                    l0 = d0x * d0x + d0y * d0y
+                    l1 = d1x * d1x + d1y * d1y
+                    if l0 == 0.0 or l1 == 0.0:
+                        continue
+                    if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
+                        # parallel: only collinear overlaps matter
+                        if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
+                            if _near(sx, sy, ex, ey, A, B, near_mm):
+                                _isolate(touch_s, touch_e, A, B)
+                            continue
+                        # B's ends along A: an overlap of positive length, or just a joint
+                        u0 = (wx * d0x + wy * d0y) / l0
+                        u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
+                        if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
+                            continue  # end to end (a straight run of a chain) or apart
+                        for q in range(2):
+                            X = A if q == 0 else B
+                            Y = B if q == 0 else A
+                            dx = ex[X] - sx[X]
+                            dy = ey[X] - sy[X]
+                            ll = dx * dx + dy * dy
+                            for r in range(2):  # Y's ends on X
+                                yx = sx[Y] if r == 0 else ex[Y]
+                                yy = sy[Y] if r == 0 else ey[Y]
+                                t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
+                                if tol < t < 1.0 - tol:
+                                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
+                                    if r == 0:
+                                        touch_s[Y] = True
+                                    else:
+                                        touch_e[Y] = True
+                                elif -tol <= t <= 1.0 + tol:
+                                    # ends meet on an overlap: neither end is an ordinary joint
+                                    ty = 0.0 if r == 0 else 1.0
+                                    if t <= tol:
+                                        touch_s[X] = True
+                                    else:
+                                        touch_e[X] = True
+                                    if ty == 0.0:
+                                        touch_s[Y] = True
+                                    else:
+                                        touch_e[Y] = True
+                        continue
+                    ta = (wx * d1y - wy * d1x) / den
+                    tb = (wx * d0y - wy * d0x) / den
+                    if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
+                        if _near(sx, sy, ex, ey, A, B, near_mm):
+                            _isolate(touch_s, touch_e, A, B)
+                        continue
+                    ia = tol < ta < 1.0 - tol
+                    ib = tol < tb < 1.0 - tol
+                    if not ia and not ib:
+                        continue  # a shared vertex: an ordinary joint
+                    if ia:
+                        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
+                    elif ta <= tol:
+                        touch_s[A] = True
+                    else:
+                        touch_e[A] = True
+                    if ib:
+                        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
+                    elif tb <= tol:
+                        touch_s[B] = True
+                    else:
+                        touch_e[B] = True
     # pieces: every segment from 0 to 1 through its sorted cut parameters
     cuts_n = np.zeros(n + 1, np.int64)
     for i in range(m):
@@ -1080,6 +1163,13 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     (tested exactly, with a nanometre's margin); a segment clear on both sides gives no samples at all (none of
     them could be a finding or the thinnest). Samples keep their order.
 
+    With the chain order ``succ`` (:func:`chain_successors`; all -1: none), the segments are
+    cut into runs (:func:`_chain_runs`) that cannot see themselves: a run of at least
+    ``_RUN_MIN_SEGS`` segments is tested once per side, when its first segment in index
+    order comes, by :func:`_run_clear` (the rectangle holding all its rays up to the ray
+    length then, which only shrinks later); a clear side casts no rays. Rays skip the pieces
+    of their own run.
+
     Returns ``(P,)`` x, y, inward normal x, y, length each stands for, wall and gap widths.
     """
     n = sx.shape[0]
@@ -1113,6 +1203,9 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     run, rptr, rmem = _chain_runs(sx, sy, ex, ey, keep, succ, _RUN_MIN_LEN_MM)
     nrun = rptr.shape[0] - 1
     rstate = np.zeros((nrun, 2), np.int8)  # 0 untested, 1 clear, 2 not clear
+    prun = np.empty(par.shape[0], np.int64)  # the run of each piece, in cell order
+    for q in range(par.shape[0]):
+        prun[q] = run[par[q]]
     p = 0
     for k in range(n):
         if not keep[k]:
@@ -1122,6 +1215,7 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
         skip[0] = False
         skip[1] = False
         r = run[k]
+        own = r
         if r >= 0 and rptr[r + 1] - rptr[r] >= _RUN_MIN_SEGS:
             for side in range(2):
                 if rstate[r, side] == 0:
@@ -1262,7 +1356,7 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
                         c = cy * ncx + cx
                         for q in range(start[c], start[c + 1]):
                             pc = q
-                            if par[pc] == k:
+                            if prun[pc] == own:  # its own segment, or its run (which it cannot see)
                                 continue
                             e0 = px1[pc] - px0[pc]
                             e1 = py1[pc] - py0[pc]
@@ -1679,6 +1773,8 @@ def measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max
     ke = _keys(ex, ey)
     comp, ncomp = chain_components(sx, sy, ex, ey, join_s, join_e, ks, ke)
     keep, nx, ny = classify_segments(sx, sy, ex, ey, comp, ncomp, evenodd, side_eps)
+    if sx.shape[0] < _RUNS_FROM:
+        return sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap)
     succ = chain_successors(sx, sy, ex, ey, join_s, join_e, ks, ke)
     return sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap, succ)
 
