@@ -119,9 +119,11 @@ def _sections(piece_mesh, shared_meshes=SHARED):
             yield slice_mesh(load_mesh(shared_meshes / name), dev, layer_height_mm=lh).segments(k)[0], dev
 
 
-def test_sample_widths_measure_what_the_check_uses(piece_mesh):
+@pytest.mark.parametrize("chained", [False, True])
+def test_sample_widths_measure_what_the_check_uses(piece_mesh, chained):
     """Against measuring every width of every sample: the same samples below the thresholds
-    with the same widths, the same smallest width, no sample dropped that could matter."""
+    with the same widths, the same smallest width, no sample dropped that could matter.
+    ``chained``: with the chain order, runs of segments are cleared as a whole."""
     n = dropped = 0
     for seg, dev in _sections(piece_mesh):
         p = max(dev.pitch_x_mm, dev.pitch_y_mm)
@@ -133,7 +135,11 @@ def test_sample_widths_measure_what_the_check_uses(piece_mesh):
         keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)
         rx, ry, rux, ruy, rsid, rln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing)
         rw, rg = K.cast_rays(rx, ry, rux, ruy, rsid, sx, sy, ex, ey, keep, cap, 1e-9, cell)
-        bx, by, ux, uy, ln, w, g = K.sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, cap, 1e-9, cell, need_w, need_g)
+        if chained:
+            succ = K.chain_successors(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
+            bx, by, ux, uy, ln, w, g = K.sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, cap, 1e-9, cell, need_w, need_g, succ)
+        else:
+            bx, by, ux, uy, ln, w, g = K.sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, cap, 1e-9, cell, need_w, need_g)
         # the kept samples are reference samples (the same points, bit for bit), in order
         pos = np.flatnonzero(np.isin(rx + 1j * ry, bx + 1j * by))
         assert pos.size == bx.size and np.array_equal(rx[pos], bx) and np.array_equal(ry[pos], by)
@@ -211,3 +217,98 @@ def test_check_layer_equals_widths_on_the_image_and_islands(piece_mesh):
             prev = (rs, r0, r1)
             n += 1
     assert n > 10 and tested > 0
+
+
+def _successors_plain(sx, sy, ex, ey, js, je):
+    """The next piece of each by a dictionary of start points: the one joinable piece starting
+    where this one ends (joinable end), and only if no other piece claims it; else -1."""
+    starts = {}
+    for o in range(sx.size):
+        starts.setdefault((sx[o], sy[o]), []).append(o)
+    succ = np.full(sx.size, -1)
+    for i in range(sx.size):
+        if je[i]:
+            cand = [o for o in starts.get((ex[i], ey[i]), []) if js[o]]
+            if len(cand) == 1 and cand[0] != i:
+                succ[i] = cand[0]
+    targets, counts = np.unique(succ[succ >= 0], return_counts=True)
+    shared = set(targets[counts > 1].tolist())
+    return np.array([-1 if s in shared else s for s in succ])
+
+
+def test_chain_successors_and_runs_against_plain(piece_mesh):
+    """Successors against a dictionary of start points; every run is a path along them of
+    kept segments, none shorter than the minimum (but a lone one), directions within 35
+    degrees of its first (any two within 70)."""
+    for seg, dev in _sections(piece_mesh):
+        cell = 0.5 * min(dev.pitch_x_mm, dev.pitch_y_mm)
+        sx, sy, ex, ey = (np.ascontiguousarray(a) for a in (seg.start[:, 0], seg.start[:, 1], seg.end[:, 0], seg.end[:, 1]))
+        sx, sy, ex, ey, _, js, je = K.split_at_crossings(sx, sy, ex, ey, cell, 1e-5)
+        succ = K.chain_successors(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
+        assert np.array_equal(succ, _successors_plain(sx, sy, ex, ey, js, je))
+        comp, nc = K.chain_components(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
+        keep, _, _ = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)
+        run, ptr, mem = K._chain_runs(sx, sy, ex, ey, keep, succ, K._RUN_MIN_LEN_MM)
+        assert np.array_equal(np.sort(mem), np.flatnonzero(keep)) and np.all(run[~keep] == -1)
+        L = np.hypot(ex - sx, ey - sy)
+        for r in range(ptr.size - 1):
+            m = mem[ptr[r] : ptr[r + 1]]
+            assert np.all(run[m] == r) and 1 <= m.size <= K._RUN_MAX
+            assert np.all(succ[m[:-1]] == m[1:])
+            if m.size > 1:
+                assert np.all(L[m] >= K._RUN_MIN_LEN_MM)
+                t = np.stack([(ex - sx)[m], (ey - sy)[m]], 1) / L[m, None]
+                assert np.all(t @ t[0] >= K._RUN_COS - 1e-12)
+
+
+def _circle(cx, cy, r, n=720, phase=0.0):
+    a = phase + 2 * np.pi * np.arange(n) / n
+    p = np.stack([cx + r * np.cos(a), cy + r * np.sin(a)], 1)
+    return p, np.roll(p, -1, axis=0)
+
+
+def _split_inputs(parts):
+    s = np.concatenate([p[0] for p in parts])
+    e = np.concatenate([p[1] for p in parts])
+    return tuple(np.ascontiguousarray(a) for a in (s[:, 0], s[:, 1], e[:, 0], e[:, 1]))
+
+
+def test_split_by_runs_equals_the_grid(piece_mesh):
+    """The crossing search by runs of chained segments gives exactly what the grid search
+    gives (every pair sharing a cell): on the sections and on circles that cross, touch,
+    coincide in part and come within a few nanometres."""
+    cases = []
+    for seg, dev in _sections(piece_mesh):
+        cases.append((tuple(np.ascontiguousarray(a) for a in (seg.start[:, 0], seg.start[:, 1], seg.end[:, 0], seg.end[:, 1])), 0.5 * min(dev.pitch_x_mm, dev.pitch_y_mm)))
+    crossing = _split_inputs([_circle(0, 0, 0.1), _circle(0.05, 0.0, 0.1, phase=0.3), _circle(0.0, 0.0, 0.1 + 5e-9, phase=0.0), _circle(0.3, 0.0, 0.05, 90)])
+    half = _circle(0.2, 0.2, 0.1)
+    coincide = _split_inputs([half, (half[0][:360], half[1][:360]), _circle(0.2, 0.2, 0.05)])
+    cases += [(crossing, 0.01), (crossing, 0.035), (coincide, 0.01)]
+    for (sx, sy, ex, ey), cell in cases:
+        a = K.split_at_crossings(sx, sy, ex, ey, cell, 1e-5)
+        b = K.split_at_crossings_grid(sx, sy, ex, ey, cell, 1e-5)
+        assert all(np.array_equal(x, y) for x, y in zip(a, b))
+    # the crossing circles were cut, the near one flagged
+    ox0, _, _, _, par, js, je = K.split_at_crossings(*crossing, 0.01, 1e-5)
+    assert ox0.size > crossing[0].size
+    near = (par >= 1440) & (par < 2160)
+    assert not js[near].any() and not je[near].any()
+
+
+def test_near_segments_in_different_cells_are_compared():
+    """Two 1 um segments 5 nm apart (closer than the near distance) on either side of a cell
+    boundary of the search grid are compared (the pieces are listed in the cells their boxes
+    grown by the near distance touch): neither end of either is an ordinary joint, by either
+    search. (Listed with a 1e-9-cell pad only, they were never compared.)"""
+    for cell in (0.003, 0.01):
+        xs = np.linspace(0.0, 1.0, 301)  # a straight chain of 300 segments, y = 0
+        h = K._cell_size(1.0, 0.5, 302, cell)
+        xb = -h + h * np.ceil((0.5 + h) / h)  # a cell boundary of the grid (x0 = min x - h)
+        s = np.concatenate([np.stack([xs[:-1], np.zeros(300)], 1), [[xb - 2.5e-6, 0.5], [xb + 2.5e-6, 0.499]]])
+        e = np.concatenate([np.stack([xs[1:], np.zeros(300)], 1), [[xb - 2.5e-6, 0.499], [xb + 2.5e-6, 0.5]]])
+        args = tuple(np.ascontiguousarray(a) for a in (s[:, 0], s[:, 1], e[:, 0], e[:, 1]))
+        for fn in (K.split_at_crossings, K.split_at_crossings_grid):
+            _, _, _, _, par, js, je = fn(*args, cell, 1e-5)
+            pair = par >= 300
+            assert pair.sum() == 2 and not js[pair].any() and not je[pair].any()
+            assert js[~pair][1:].all() and je[~pair][:-1].all()  # the chain's inner joints stay ordinary
