@@ -47,8 +47,9 @@ def _case(case: str, n_layers: int) -> dict:
     import numpy as np
 
     from rotoprint import load_device, slice_mesh
-    from rotoprint.io.archives import JobInfo, write_job
-    from rotoprint.masks import MaskOptions, coverage_mask, iter_masks
+    from rotoprint.io.archives import JobInfo
+    from rotoprint.io.dlpjob import write_dlp_job
+    from rotoprint.masks import MaskOptions, coverage_mask
 
     mesh = _model()
     dev = load_device("perfactory-sxga")
@@ -73,7 +74,8 @@ def _case(case: str, n_layers: int) -> dict:
                 first_exposure_s=p.first_exposure_s, first_exposure_layers=p.first_exposure_layers,
                 printer_model=p.printer_model,
             )
-            write_job(os.path.join(tmp, "bench.sl1"), iter_masks(job, opts), info)
+            # what `rotoprint dlp` runs: masks journalled in .partial, then the SL1 assembled
+            write_dlp_job(job, os.path.join(tmp, "bench.sl1"), info, opts)
             done = len(job)
             size = os.path.getsize(os.path.join(tmp, "bench.sl1"))
         else:  # trimesh + PIL on a subset of the same layers
