@@ -130,16 +130,6 @@ def job_dir_name(path: str | Path) -> str:
     return name
 
 
-def _umask_mode(path: Path, base: int) -> None:
-    """Give a finished output the permissions a plain ``open`` would (temporary files are
-    created private, 0600 / 0700)."""
-    import os
-
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(path, base & ~mask)
-
-
 def _ini(d: dict) -> bytes:
     return "".join(f"{k} = {v}\n" for k, v in d.items()).encode("utf-8")
 
@@ -374,7 +364,6 @@ def _write_sl1(path, items, info: JobInfo, fmt, on_mask) -> dict:
         }
         zf.writestr(_zinfo("config.ini"), _ini(config), compress_type=zipfile.ZIP_DEFLATED)
         zf.writestr(_zinfo("prusaslicer.ini"), _ini(prusa), compress_type=zipfile.ZIP_DEFLATED)
-    _umask_mode(path, 0o666)
     return {"format": fmt, "path": str(path), "masks": n_out, "config": config, "prusaslicer": prusa, "volume_mm3": stats.volume_mm3}
 
 
@@ -463,7 +452,6 @@ def _write_folder(path, items, info: JobInfo, fmt, on_mask) -> dict:
                 encoding="utf-8",
             )
         (tmp / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-    _umask_mode(path, 0o777)
     return manifest
 
 

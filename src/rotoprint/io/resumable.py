@@ -13,13 +13,12 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import os
 import shutil
 from pathlib import Path
 
 from .._resources import available_memory_bytes, format_bytes
 from ..errors import InputFileError, ResourceError
-from .atomic import MANIFEST_NAME
+from .atomic import check_output_target, replace_with
 
 __all__ = ["PartialOutput", "check_target", "check_resources", "partial_path"]
 
@@ -33,19 +32,8 @@ def partial_path(out: str | Path) -> Path:
 
 
 def check_target(out: Path, *, is_dir: bool) -> None:
-    """Refuse targets we must not replace: a file where a folder goes (or the reverse), or a
-    folder of someone else's (non-empty, without our manifest)."""
-    if not out.parent.exists():
-        raise InputFileError("parent folder of the output does not exist", path=out.parent)
-    if not out.exists():
-        return
-    if is_dir:
-        if not out.is_dir():
-            raise InputFileError("output exists and is not a folder", path=out)
-        if any(out.iterdir()) and not (out / MANIFEST_NAME).exists():
-            raise InputFileError(f"output folder is not empty and holds no {MANIFEST_NAME}; refusing to replace it", path=out)
-    elif out.is_dir():
-        raise InputFileError("output is a folder, expected a file name", path=out)
+    """Refuse targets we must not replace (see :func:`rotoprint.io.atomic.check_output_target`)."""
+    check_output_target(out, is_dir=is_dir)
 
 
 def check_resources(*, n_layers: int, bytes_per_layer: float, copies_on_disk: int, per_process_bytes: int,
@@ -143,7 +131,7 @@ class PartialOutput:
         earlier output of ours)."""
         self.close()
         (self.dir / JOURNAL).unlink()
-        replace_path(self.dir, self.out)
+        replace_with(self.dir, self.out)
 
     def discard_if_empty(self) -> None:
         """After a failure: remove the folder if no layer was finished (nothing to resume)."""
@@ -153,16 +141,3 @@ class PartialOutput:
     def discard(self) -> None:
         self.close()
         shutil.rmtree(self.dir, ignore_errors=True)
-
-
-def replace_path(src: Path, dst: Path) -> None:
-    """Rename ``src`` onto ``dst``; an existing ``dst`` is moved aside first, then removed."""
-    if dst.exists():
-        old = dst.parent / f".{dst.name}.old"
-        if old.exists():
-            shutil.rmtree(old) if old.is_dir() else old.unlink()
-        os.replace(dst, old)
-        os.replace(src, dst)
-        shutil.rmtree(old, ignore_errors=True) if old.is_dir() else old.unlink(missing_ok=True)
-    else:
-        os.replace(src, dst)
