@@ -194,7 +194,7 @@ def test_check_layer_equals_widths_on_the_image_and_islands(piece_mesh):
             below = i > 0
             # widths well above a pixel so that the raster tests have candidates
             rest = (spacing, 8 * p, 1e-9, 3 * p, 3 * p, 1.5 * p, 1.5 * p, 3 * p, p2m, m2p, p)
-            got = K.check_layer(seg.start, seg.end, job._to_uv, g.height, g.width, evenodd, *prev, below, cell, 1e-5, 1e-7, *rest)
+            got = K.check_layer(seg.start, seg.end, seg.start, seg.end, job._to_uv, g.height, g.width, evenodd, *prev, below, cell, 1e-5, 1e-7, *rest)
             rs, r0, r1, st, isl = K.layer_islands(seg.start, seg.end, job._to_uv, g.height, g.width, evenodd, *prev, below)
             for a, b in zip(got[7:], (rs, r0, r1, st, isl)):
                 assert np.array_equal(a, b)

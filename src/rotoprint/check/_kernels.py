@@ -48,7 +48,9 @@ _RUN_COS = 0.8191520442889918
 _RUN_MIN_SEGS = 3
 #: Sections with fewer segments than this are searched and measured without runs (finding
 #: the chains costs more than it saves).
-_RUNS_FROM = 4096
+_RUNS_FROM = 16384
+#: :func:`simplify_section` replaces at most this many chained segments by one chord.
+_SIMPLIFY_SPAN = 64
 
 
 # ---------------------------------------------------------------- bucketing helpers
@@ -2014,17 +2016,18 @@ def layer_islands(start, end, m, n_fib, n_samp, evenodd, ps, p0, p1, below):  # 
 
 
 @njit(cache=True, nogil=True)
-def check_layer(start, end, uv, H, W, evenodd, ps, p0, p1, below, cell_mm, near_mm, side_eps, spacing, max_mm, tmin, need_wall, need_gap, min_wall, min_gap, raster_lim, p2m, m2p, pmax):  # pragma: no cover - jit
+def check_layer(start, end, wstart, wend, uv, H, W, evenodd, ps, p0, p1, below, cell_mm, near_mm, side_eps, spacing, max_mm, tmin, need_wall, need_gap, min_wall, min_gap, raster_lim, p2m, m2p, pmax):  # pragma: no cover - jit
     """The whole check of one layer in one call, without the image: the layer's material as
-    runs (:func:`section_runs`, equal to the slicer's image), the widths and selections of
-    :func:`layer_widths` with the raster tests on the runs (:func:`chord_presence_runs`), and
-    the islands of :func:`layer_islands` (when ``below``).
+    runs (:func:`section_runs` of the section ``start, end``, equal to the slicer's image), the
+    widths and selections of :func:`layer_widths` measured on ``wstart, wend`` (the section,
+    or the section simplified by :func:`simplify_section`) with the raster tests on the runs
+    (:func:`chord_presence_runs`), and the islands of :func:`layer_islands` (when ``below``).
 
     Returns ``S, iw, ig, thin, narrow, vanished, closed`` as :func:`layer_widths`, then the
     runs ``rs, r0, r1``, and ``st, isl`` as :func:`layer_islands`."""
     rs, r0, r1 = section_runs(start, end, uv, H, W, evenodd)
-    if start.shape[0] > 0:
-        bx, by, ux, uy, ln, wall, gap = measure_widths(start, end, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap)
+    if wstart.shape[0] > 0:
+        bx, by, ux, uy, ln, wall, gap = measure_widths(wstart, wend, cell_mm, near_mm, evenodd, side_eps, spacing, max_mm, tmin, need_wall, need_gap)
     else:
         bx = by = ux = uy = ln = wall = gap = np.zeros(0)
     iw = _argmin_finite(wall)
@@ -2043,3 +2046,184 @@ def check_layer(start, end, uv, H, W, evenodd, ps, p0, p1, below, cell_mm, near_
     S[6] = gap
     st, isl = _island_stats(rs, r0, r1, ps, p0, p1, below)
     return S, iw, ig, thin, narrow, vanished, closed, rs, r0, r1, st, isl
+
+
+# ---------------------------------------------------------------- section simplification
+
+
+@njit(cache=True, nogil=True)
+def _greedy_keep(px, py, a, b, tol, keep):  # pragma: no cover - jit
+    """Mark in ``keep`` the points of the polyline ``px[a..b], py[a..b]`` (``b`` included)
+    that a greedy pass keeps: from each kept point, the farthest point (at most
+    ``_SIMPLIFY_SPAN`` on) such that every point in between lies within ``tol`` of the chord
+    to it and no farther from the kept point than the chord's end (so it projects onto the
+    chord). The directions a chord may take form a wedge narrowed by each point passed (the
+    tangents from the kept point to the point's ``tol`` disc): one pass, no trigonometry."""
+    keep[a] = True
+    keep[b] = True
+    i = a
+    while i < b:
+        ax = px[i]
+        ay = py[i]
+        # wedge of allowed directions (lo: clockwise bound, hi: counter-clockwise), open at first
+        lox = loy = hix = hiy = 0.0
+        wedge = False
+        dmax2 = 0.0
+        tol2 = tol * tol
+        j = i + 1
+        c = i + 1
+        while True:
+            # the chord i..c is valid; can it reach c + 1?
+            if c >= b or c + 1 - i > _SIMPLIFY_SPAN:
+                break
+            # point c joins the points in between: narrow the wedge by the tangents to its
+            # disc (the direction to it turned by -/+ asin(tol / d), scaled by d)
+            vx = px[c] - ax
+            vy = py[c] - ay
+            d2 = vx * vx + vy * vy
+            if d2 > dmax2:
+                dmax2 = d2
+            if d2 > tol2:
+                cs = math.sqrt(d2 - tol2)
+                lx = cs * vx + tol * vy
+                ly = -tol * vx + cs * vy
+                hx = cs * vx - tol * vy
+                hy = tol * vx + cs * vy
+                if not wedge:
+                    lox, loy, hix, hiy = lx, ly, hx, hy
+                    wedge = True
+                else:
+                    if lox * ly - loy * lx > 0.0:  # the new bound is counter-clockwise of lo
+                        lox, loy = lx, ly
+                    if hix * hy - hiy * hx < 0.0:  # the new bound is clockwise of hi
+                        hix, hiy = hx, hy
+                    if lox * hiy - loy * hix < 0.0:
+                        break  # empty wedge: no chord past c
+            qx = px[c + 1] - ax
+            qy = py[c + 1] - ay
+            if qx * qx + qy * qy < dmax2:
+                break
+            if wedge and (lox * qy - loy * qx < 0.0 or qx * hiy - qy * hix < 0.0):
+                break
+            c += 1
+            j = c
+        keep[j] = True
+        i = j
+
+
+@njit(cache=True, nogil=True)
+def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no cover - jit
+    """The section ``(S, 2)`` starts and ends (model mm) with its chains simplified: chained
+    segments (one ends on the mesh edge the next starts on, bit-identical joint, neither edge
+    shared by another segment) are replaced by chords along which every dropped joint lies
+    within ``tol`` mm (and between the chord's ends). Joints are never moved, chains are never
+    joined to others, and segments that do not chain (gap closing, non-manifold edges) are
+    kept as they are, so every point of the result lies within ``tol`` of the section and
+    every point of the section within ``tol`` of the result.
+
+    ``pos`` is an ``int64`` buffer of at least ``max(edge) + 1`` entries, all -1, and is left
+    so (one buffer serves every layer of a job).
+
+    Returns ``(S', 2)`` starts and ends, ``S' <= S``, chain by chain in order.
+    """
+    n = start.shape[0]
+    succ = np.full(n, -1, np.int64)
+    npred = np.zeros(n, np.int64)
+    dup = False
+    for i in range(n):
+        e = start_edge[i]
+        if e >= 0:
+            if pos[e] != -1:
+                pos[e] = -2  # two segments start on this edge: neither is chained to
+            else:
+                pos[e] = i
+    for i in range(n):
+        e = end_edge[i]
+        if e >= 0:
+            j = pos[e]
+            if j >= 0 and j != i and start[j, 0] == end[i, 0] and start[j, 1] == end[i, 1]:
+                succ[i] = j
+                npred[j] += 1
+    for i in range(n):
+        e = start_edge[i]
+        if e >= 0:
+            pos[e] = -1
+    for i in range(n):
+        j = succ[i]
+        if j >= 0 and npred[j] > 1:
+            dup = True
+    if dup:  # two segments end where one starts: break both
+        for i in range(n):
+            j = succ[i]
+            if j >= 0 and npred[j] > 1:
+                succ[i] = -1
+        for j in range(n):
+            if npred[j] > 1:
+                npred[j] = 0
+    # walk the chains: open ones from their heads, then the cycles
+    px = np.empty(n + 1)
+    py = np.empty(n + 1)
+    keep = np.zeros(n + 1, np.bool_)
+    seen = np.zeros(n, np.bool_)
+    ox0 = np.empty(n)
+    oy0 = np.empty(n)
+    ox1 = np.empty(n)
+    oy1 = np.empty(n)
+    m = 0
+    for phase in range(2):
+        for h in range(n):
+            if seen[h] or (phase == 0 and npred[h] > 0):
+                continue
+            # points of the chain from h
+            k = 0
+            i = h
+            closed = False
+            while True:
+                seen[i] = True
+                px[k] = start[i, 0]
+                py[k] = start[i, 1]
+                k += 1
+                j = succ[i]
+                if j < 0:
+                    px[k] = end[i, 0]
+                    py[k] = end[i, 1]
+                    break
+                if j == h:
+                    px[k] = end[i, 0]
+                    py[k] = end[i, 1]
+                    closed = True
+                    break
+                i = j
+            # k segments, points 0..k
+            for q in range(k + 1):
+                keep[q] = False
+            if closed and k >= 3:
+                # split the cycle at the point farthest from its first
+                far = 0
+                dmax = -1.0
+                for q in range(1, k):
+                    d = (px[q] - px[0]) ** 2 + (py[q] - py[0]) ** 2
+                    if d > dmax:
+                        dmax = d
+                        far = q
+                _greedy_keep(px, py, 0, far, tol, keep)
+                _greedy_keep(px, py, far, k, tol, keep)
+            else:
+                _greedy_keep(px, py, 0, k, tol, keep)
+            last = 0
+            for q in range(1, k + 1):
+                if keep[q]:
+                    ox0[m] = px[last]
+                    oy0[m] = py[last]
+                    ox1[m] = px[q]
+                    oy1[m] = py[q]
+                    m += 1
+                    last = q
+    s = np.empty((m, 2))
+    e = np.empty((m, 2))
+    for q in range(m):
+        s[q, 0] = ox0[q]
+        s[q, 1] = oy0[q]
+        e[q, 0] = ox1[q]
+        e[q, 1] = oy1[q]
+    return s, e

@@ -155,6 +155,7 @@ def check_command(
     mask: Annotated[str, typer.Option("--mask", help="Exposure model for DLP masks: none, binary or smooth (the paper's SMOOTH filter).")] = "none",
     cure_threshold: Annotated[float | None, typer.Option("--cure-threshold", help="Fraction of full exposure that cures (with --mask). Default: the projector's.")] = None,
     islands: Annotated[bool, typer.Option("--islands/--no-islands", help="Look for regions with nothing below them.")] = True,
+    resolution: Annotated[float | None, typer.Option("--resolution", help="Measure widths on the section simplified to this deviation, mm (widths within twice it). Default: 1/100 pixel; 0: the section as sliced.")] = None,
     max_overlays: Annotated[int, typer.Option("--max-overlays", help="Write at most this many overlay images (layers with problems, first first).")] = 200,
     fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero or evenodd.")] = "nonzero",
     offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
@@ -170,6 +171,7 @@ def check_command(
     islands and (--mask) features that do not cure. Exit 0: nothing falls short; 3: something
     does (after writing the report); 2: bad input."""
     from ..check import check_printability, compare_orientations, device_limits, mask_model, overlay_image
+    from ..check.core import resolution_for
     from ..devices import load_device
     from ..io.atomic import atomic_dir, atomic_file
 
@@ -192,6 +194,7 @@ def check_command(
     if max_overlays < 0:
         raise ConfigError(f"--max-overlays must be >= 0, got {max_overlays}")
     angles = parse_orientations(orientations) if orientations is not None else None
+    resolution_for(dev, resolution)  # refused now, before anything is read
     rot_kw = {"tilt_deg": tilt, "radius_mm": radius} if rotary else {}
 
     if mesh is None:
@@ -218,6 +221,7 @@ def check_command(
         mask_name=mask,
         cure_threshold=cure_threshold,
         islands=islands,
+        resolution_mm=resolution,
         slice_options=slice_options,
     )
 
