@@ -84,6 +84,9 @@ def test_check_cli_limits_only(run_cli):
         ("--layer-height", "0.2", "--tilt", "10"),
         ("--layer-height", "0.2", "--mask", "blur"),
         ("--layer-height", "0.2", "--cure-threshold", "0.4"),
+        ("--layer-height", "0.2", "--resolution", "-0.001"),
+        ("--layer-height", "0.2", "--resolution", "nan"),
+        ("--layer-height", "0.2", "--resolution", "0.01"),  # over a quarter pixel
         (),  # no layer height
     ],
 )
@@ -94,6 +97,19 @@ def test_check_cli_bad_input_exit_2_nothing_written(run_cli, thin_part, tmp_path
     assert "error" in err and len(err.strip().splitlines()) == 1
     assert not out.exists()
     assert not list(tmp_path.glob(".out*"))
+
+
+def test_check_cli_resolution(run_cli, thin_part):
+    """--resolution is recorded; 0 measures on the section as sliced."""
+    widths = {}
+    for res in ("0", "0.0002"):
+        code, stdout, err = run_cli("check", thin_part, "--device", "perfactory-sxga", "--layer-height", "0.2", "--resolution", res, "--json")
+        assert code in (0, 3), err
+        rep = json.loads(stdout)
+        assert rep["settings"]["resolution_mm"] == float(res)
+        widths[res] = rep["thinnest_wall"]["width_mm"] if rep["thinnest_wall"] else None
+    assert widths["0"] == pytest.approx(0.04, abs=1e-6)  # the fin (float32 STL coordinates)
+    assert abs(widths["0"] - widths["0.0002"]) <= 2 * 0.0002 + 1e-12
 
 
 def test_check_cli_bad_mesh_and_device(run_cli, tmp_path):
