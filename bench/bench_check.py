@@ -36,6 +36,8 @@ def _cases(quick: bool):
     piece = Mesh.from_triangles(feature_test_piece()[0])
     yield "feature piece (10 mm, 55k segments/layer)", piece, "perfactory-sxga", 0.1 if not quick else 0.4, {}
     yield "feature piece (10 mm, 55k segments/layer)", piece, "omnidot760", 0.1 if not quick else 0.4, {}
+    # the same on the section as sliced (no simplification): the exact path
+    yield "feature piece, resolution 0", piece, "perfactory-sxga", 0.1 if not quick else 0.4, {"resolution_mm": 0.0}
     if (SHARED / "sphere_openscad.stl").exists():
         yield "sphere_openscad (100 mm)", load_mesh(SHARED / "sphere_openscad.stl"), "omnidot760", 1.0 if not quick else 5.0, {}
         yield "teapot_open (63 mm)", load_mesh(SHARED / "teapot_open.stl"), "omnidot760", 0.5 if not quick else 3.0, {}
@@ -55,7 +57,7 @@ def run(quick: bool) -> list[dict]:
         job = slice_mesh(mesh, dev, layer_height_mm=lh)
         # warm the jit caches on one layer
         job.layer(0)
-        check_printability(slice_mesh(mesh, dev, layer_height_mm=lh * max(1, len(job))), dev)
+        check_printability(slice_mesh(mesh, dev, layer_height_mm=lh * max(1, len(job))), dev, **opts)
 
         def slice_all():
             j = slice_mesh(mesh, dev, layer_height_mm=lh)
@@ -63,12 +65,12 @@ def run(quick: bool) -> list[dict]:
                 j.layer(i)
 
         def check_all():
-            check_printability(slice_mesh(mesh, dev, layer_height_mm=lh), dev)
+            check_printability(slice_mesh(mesh, dev, layer_height_mm=lh), dev, **opts)
 
         # slicing: every layer's image (what a print needs); check: the whole check of the same
         # layers on the same device (it slices each layer itself, once)
         t_slice, t_check = _best_alternating([slice_all, check_all], rounds)
-        rep = check_printability(slice_mesh(mesh, dev, layer_height_mm=lh), dev)
+        rep = check_printability(slice_mesh(mesh, dev, layer_height_mm=lh), dev, **opts)
         rows.append(
             {
                 "part": name,
@@ -76,6 +78,7 @@ def run(quick: bool) -> list[dict]:
                 "layers": len(job),
                 "grid_px": f"{job.grid.width}x{job.grid.height}",
                 "min_um": round(default_minimum_mm(dev)[0] * 1000, 1),
+                "res_um": round(rep.settings["resolution_mm"] * 1000, 3),
                 "slice_s": t_slice,
                 "check_s": t_check,
                 "check/slice": t_check / t_slice,

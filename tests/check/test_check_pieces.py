@@ -166,3 +166,34 @@ def test_check_corners_are_not_thin():
     f = [f for f in rep.findings if f.kind == "thin_wall"]
     assert len(f) == 1 and f[0].width_mm == pytest.approx(0.05, abs=1e-9)
     assert 1.0 <= f[0].x_mm <= 1.3
+
+
+def test_regions_join_findings_through_layers():
+    """A fin through every layer is one region; two fins apart are two; a fin broken by a
+    layer without it is two."""
+    from rotoprint.check import join_regions
+    from rotoprint.check.core import Finding
+
+    dev = load_device("perfactory-sxga")
+    p = max(dev.pitch_x_mm, dev.pitch_y_mm)
+    tris = np.concatenate(
+        [
+            box_triangles((2.0, 2.0, 0.2)),
+            box_triangles((0.01, 1.0, 0.6), (0.5, 0.5, 0.2)),  # 10 um fin, z 0.2..0.8
+            box_triangles((0.015, 1.0, 0.3), (1.5, 0.5, 0.2)),  # 15 um fin, z 0.2..0.5
+        ]
+    )
+    rep = check_printability(Mesh.from_triangles(tris), dev, layer_height_mm=0.1, islands=False)
+    thin = [r for r in rep.regions() if r["kind"] == "thin_wall"]
+    assert len(thin) == 2
+    a, b = sorted(thin, key=lambda r: r["x_mm"])
+    assert a["width_mm"] == pytest.approx(0.010, abs=1e-6 + 2 * rep.settings["resolution_mm"])
+    assert b["width_mm"] == pytest.approx(0.015, abs=1e-6 + 2 * rep.settings["resolution_mm"])
+    assert a["last_layer"] - a["first_layer"] == 5 and b["last_layer"] - b["first_layer"] == 2
+    assert a["findings"] == sum(1 for f in rep.findings if f.kind == "thin_wall" and f.x_mm < 1.0)
+    assert rep.to_json()["regions"] == rep.regions()
+    # a gap in the layers splits a region; boxes one pixel apart join
+    f = lambda layer, x: Finding("thin_wall", layer, 0.1 * layer, x, 0.0, 0, 0, width_mm=0.01, bbox_mm=(x, 0.0, x + 0.01, 1.0))  # noqa: E731
+    assert len(join_regions([f(0, 0.0), f(1, 0.0), f(3, 0.0)])) == 2
+    assert len(join_regions([f(0, 0.0), f(1, 0.01 + p)], p)) == 1
+    assert len(join_regions([f(0, 0.0), f(1, 0.01 + 2.5 * p)], p)) == 2

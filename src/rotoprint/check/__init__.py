@@ -2,7 +2,7 @@
 exposure, and the smallest wall and gap a device prints for sure. See ``docs/check.md``."""
 
 from ._exposure import MASK_MODELS, mask_model, smooth_mask
-from .core import KINDS, CheckReport, Finding, LayerCheck, check_layers, check_printability, compare_orientations
+from .core import KINDS, CheckReport, Finding, LayerCheck, check_layers, check_printability, compare_orientations, join_regions
 from .limits import default_minimum_mm, device_limits, rotary_tracks
 from .overlay import overlay_image
 
@@ -10,6 +10,7 @@ __all__ = [
     "check_printability",
     "check_layers",
     "compare_orientations",
+    "join_regions",
     "CheckReport",
     "Finding",
     "LayerCheck",

@@ -33,7 +33,7 @@ from ..mesh import Mesh
 from . import _kernels as K
 from .limits import default_minimum_mm, device_limits
 
-__all__ = ["KINDS", "Finding", "LayerCheck", "CheckReport", "check_layers", "check_printability", "compare_orientations"]
+__all__ = ["KINDS", "Finding", "LayerCheck", "CheckReport", "check_layers", "check_printability", "compare_orientations", "join_regions"]
 
 log = logging.getLogger(__name__)
 
@@ -139,6 +139,80 @@ class LayerCheck:
         )
 
 
+def join_regions(findings: Sequence[Finding], grow_mm: float = 0.0) -> list[dict]:
+    """Findings of one kind in consecutive layers whose bounding boxes (grown by ``grow_mm``)
+    overlap, joined into regions through the part: one thin fin is one region, not one
+    finding per layer.
+
+    Returns one dict per region, in order of kind (:data:`KINDS`), first layer and position:
+    ``kind``, ``first_layer``, ``last_layer``, ``z_mm`` ``[lo, hi]``, ``findings`` (how many),
+    ``width_mm`` (narrowest; ``None`` for islands), ``area_mm2`` (islands: summed over the
+    layers), ``layer``, ``x_mm``, ``y_mm`` (the worst finding: narrowest, or largest island)
+    and ``bbox_mm`` (x0, y0, x1, y1 over the layers).
+    """
+    out: list[dict] = []
+    for kind in KINDS:
+        fs = [f for f in findings if f.kind == kind]
+        if not fs:
+            continue
+        n = len(fs)
+        parent = list(range(n))
+
+        def find(i: int) -> int:
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        box = np.array([f.bbox_mm for f in fs], dtype=np.float64).reshape(n, 4)
+        box[:, :2] -= grow_mm
+        box[:, 2:] += grow_mm
+        layer = np.array([f.layer for f in fs])
+        by_layer: dict[int, np.ndarray] = {}
+        for L in np.unique(layer):
+            by_layer[int(L)] = np.flatnonzero(layer == L)
+        for L, a in by_layer.items():
+            b = by_layer.get(L + 1)
+            if b is None:
+                continue
+            for k in range(0, a.size, 1024):  # bounded memory for many findings per layer
+                ak = a[k : k + 1024]
+                A, B = box[ak][:, None, :], box[b][None, :, :]
+                hit = (A[..., 0] <= B[..., 2]) & (B[..., 0] <= A[..., 2]) & (A[..., 1] <= B[..., 3]) & (B[..., 1] <= A[..., 3])
+                for i, j in zip(*np.nonzero(hit)):
+                    ri, rj = find(int(ak[i])), find(int(b[j]))
+                    if ri != rj:
+                        parent[ri] = rj
+        groups: dict[int, list[int]] = {}
+        for i in range(n):
+            groups.setdefault(find(i), []).append(i)
+        regs = []
+        for members in groups.values():
+            g = [fs[i] for i in members]
+            if kind == "island":
+                worst = max(g, key=lambda f: f.area_mm2 or 0.0)
+            else:
+                worst = min(g, key=lambda f: f.width_mm)
+            regs.append(
+                {
+                    "kind": kind,
+                    "first_layer": min(f.layer for f in g),
+                    "last_layer": max(f.layer for f in g),
+                    "z_mm": [min(f.z_mm for f in g), max(f.z_mm for f in g)],
+                    "findings": len(g),
+                    "width_mm": None if kind == "island" else worst.width_mm,
+                    "area_mm2": sum(f.area_mm2 or 0.0 for f in g) if kind == "island" else None,
+                    "layer": worst.layer,
+                    "x_mm": worst.x_mm,
+                    "y_mm": worst.y_mm,
+                    "bbox_mm": [min(f.bbox_mm[0] for f in g), min(f.bbox_mm[1] for f in g), max(f.bbox_mm[2] for f in g), max(f.bbox_mm[3] for f in g)],
+                }
+            )
+        regs.sort(key=lambda r: (r["first_layer"], r["bbox_mm"][1], r["bbox_mm"][0]))
+        out.extend(regs)
+    return out
+
+
 @dataclass
 class CheckReport:
     """The result of :func:`check_printability`; ``to_json()`` gives the JSON report."""
@@ -159,6 +233,12 @@ class CheckReport:
 
     def counts(self) -> dict[str, int]:
         return {k: sum(1 for f in self.findings if f.kind == k) for k in KINDS}
+
+    def regions(self) -> list[dict]:
+        """The findings joined through the layers (:func:`join_regions`, boxes grown by one
+        pixel): what a user fixes, one entry per feature."""
+        pitch = max(self.grid.get("pitch_x_mm", 0.0), self.grid.get("pitch_y_mm", 0.0)) if isinstance(self.grid, dict) else 0.0
+        return join_regions(self.findings, pitch)
 
     def lengths_mm(self) -> dict[str, float]:
         out = {k: 0.0 for k in KINDS}
@@ -185,6 +265,7 @@ class CheckReport:
             "lengths_mm": self.lengths_mm(),
             "island_area_mm2": sum(f.area_mm2 or 0.0 for f in self.findings if f.kind == "island"),
             "layers_with_findings": self.layers_with_findings,
+            "regions": self.regions(),
             "grid": self.grid,
             "findings": [f.to_json() for f in self.findings],
         }

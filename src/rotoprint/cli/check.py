@@ -96,11 +96,14 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
         title=f"Check: {rep.n_layers} layers, walls under {st['min_wall_mm'] * 1000:.1f} um, gaps under {st['min_gap_mm'] * 1000:.1f} um",
         title_justify="left",
     )
-    for col, just in (("problem", "left"), ("found", "right"), ("layers", "right"), ("worst", "right"), ("at layer, x, y (mm)", "left")):
+    for col, just in (("problem", "left"), ("found", "right"), ("regions", "right"), ("layers", "right"), ("worst", "right"), ("at layer, x, y (mm)", "left")):
         t.add_column(col, justify=just)
     by_kind: dict[str, list] = {k: [] for k in KINDS}
     for f in rep.findings:
         by_kind[f.kind].append(f)
+    n_regions = {k: 0 for k in KINDS}
+    for r in j["regions"]:
+        n_regions[r["kind"]] += 1
     for k in KINDS:
         fs = by_kind[k]
         if k in ("underexposed", "cured_gap") and st["exposure_model"] is None:
@@ -108,7 +111,7 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
         if k == "island" and not st["islands"]:
             continue
         if not fs:
-            t.add_row(k.replace("_", " "), Text("0", style="green"), "0", "", "")
+            t.add_row(k.replace("_", " "), Text("0", style="green"), "0", "0", "", "")
             continue
         if k == "island":
             w = max(fs, key=lambda f: f.area_mm2)
@@ -116,7 +119,7 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
         else:
             w = min(fs, key=lambda f: f.width_mm)
             worst = f"{w.width_mm * 1000:.1f} um"
-        t.add_row(k.replace("_", " "), Text(str(len(fs)), style="red"), str(len({f.layer for f in fs})), worst,
+        t.add_row(k.replace("_", " "), Text(str(len(fs)), style="red"), str(n_regions[k]), str(len({f.layer for f in fs})), worst,
                   f"{w.layer}, {w.x_mm:.3f}, {w.y_mm:.3f}")
     out_console.print(t)
     for name, key in (("thinnest wall", "thinnest_wall"), ("narrowest gap", "narrowest_gap")):
