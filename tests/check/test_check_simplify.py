@@ -21,7 +21,7 @@ from rotoprint.testing import box_triangles
 
 def _simplify(seg, tol):
     top = int(max(seg.start_edge.max(), seg.end_edge.max())) + 1
-    pos = np.full(top, -1, np.int64)
+    pos = np.full(top, -1, np.int32)
     s, e = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, tol, pos)
     assert (pos == -1).all()  # the buffer is left as it was given
     return s, e
@@ -67,7 +67,7 @@ def test_simplify_keeps_unchained_segments():
     end = np.array([[1.0, 0.0], [2.0, 0.0], [3.0, 0.0], [6.0, 5.0], [7.0, 5.0 + 1e-9]])
     se = np.array([0, 1, 2, 10, 11])
     ee = np.array([1, 2, 3, 11, -1])
-    pos = np.full(20, -1, np.int64)
+    pos = np.full(20, -1, np.int32)
     s, e = K.simplify_section(start, end, se, ee, 1e-3, pos)
     got = sorted(map(tuple, np.concatenate([s, e], axis=1)))
     assert got == [(0.0, 0.0, 3.0, 0.0), (5.0, 5.0, 7.0, 5.0 + 1e-9)]

@@ -2052,15 +2052,13 @@ def check_layer(start, end, wstart, wend, uv, H, W, evenodd, ps, p0, p1, below, 
 
 
 @njit(cache=True, nogil=True)
-def _greedy_keep(px, py, a, b, tol, keep):  # pragma: no cover - jit
-    """Mark in ``keep`` the points of the polyline ``px[a..b], py[a..b]`` (``b`` included)
-    that a greedy pass keeps: from each kept point, the farthest point (at most
+def _greedy_emit(px, py, a, b, tol, out_s, out_e, m):  # pragma: no cover - jit
+    """Write to ``out_s[m:], out_e[m:]`` the chords of the polyline ``px[a..b], py[a..b]``
+    (``b`` included) that a greedy pass keeps, and return the new count: from each kept point, the farthest point (at most
     ``_SIMPLIFY_SPAN`` on) such that every point in between lies within ``tol`` of the chord
     to it and no farther from the kept point than the chord's end (so it projects onto the
     chord). The directions a chord may take form a wedge narrowed by each point passed (the
     tangents from the kept point to the point's ``tol`` disc): one pass, no trigonometry."""
-    keep[a] = True
-    keep[b] = True
     i = a
     while i < b:
         ax = px[i]
@@ -2107,8 +2105,13 @@ def _greedy_keep(px, py, a, b, tol, keep):  # pragma: no cover - jit
                 break
             c += 1
             j = c
-        keep[j] = True
+        out_s[m, 0] = px[i]
+        out_s[m, 1] = py[i]
+        out_e[m, 0] = px[j]
+        out_e[m, 1] = py[j]
+        m += 1
         i = j
+    return m
 
 
 @njit(cache=True, nogil=True)
@@ -2121,14 +2124,14 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
     kept as they are, so every point of the result lies within ``tol`` of the section and
     every point of the section within ``tol`` of the result.
 
-    ``pos`` is an ``int64`` buffer of at least ``max(edge) + 1`` entries, all -1, and is left
+    ``pos`` is an ``int32`` buffer of at least ``max(edge) + 1`` entries, all -1, and is left
     so (one buffer serves every layer of a job).
 
     Returns ``(S', 2)`` starts and ends, ``S' <= S``, chain by chain in order.
     """
     n = start.shape[0]
-    succ = np.full(n, -1, np.int64)
-    npred = np.zeros(n, np.int64)
+    succ = np.full(n, -1, np.int32)
+    npred = np.zeros(n, np.int32)
     dup = False
     for i in range(n):
         e = start_edge[i]
@@ -2163,12 +2166,9 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
     # walk the chains: open ones from their heads, then the cycles
     px = np.empty(n + 1)
     py = np.empty(n + 1)
-    keep = np.zeros(n + 1, np.bool_)
     seen = np.zeros(n, np.bool_)
-    ox0 = np.empty(n)
-    oy0 = np.empty(n)
-    ox1 = np.empty(n)
-    oy1 = np.empty(n)
+    out_s = np.empty((n, 2))
+    out_e = np.empty((n, 2))
     m = 0
     for phase in range(2):
         for h in range(n):
@@ -2195,8 +2195,6 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
                     break
                 i = j
             # k segments, points 0..k
-            for q in range(k + 1):
-                keep[q] = False
             if closed and k >= 3:
                 # split the cycle at the point farthest from its first
                 far = 0
@@ -2206,24 +2204,8 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
                     if d > dmax:
                         dmax = d
                         far = q
-                _greedy_keep(px, py, 0, far, tol, keep)
-                _greedy_keep(px, py, far, k, tol, keep)
+                m = _greedy_emit(px, py, 0, far, tol, out_s, out_e, m)
+                m = _greedy_emit(px, py, far, k, tol, out_s, out_e, m)
             else:
-                _greedy_keep(px, py, 0, k, tol, keep)
-            last = 0
-            for q in range(1, k + 1):
-                if keep[q]:
-                    ox0[m] = px[last]
-                    oy0[m] = py[last]
-                    ox1[m] = px[q]
-                    oy1[m] = py[q]
-                    m += 1
-                    last = q
-    s = np.empty((m, 2))
-    e = np.empty((m, 2))
-    for q in range(m):
-        s[q, 0] = ox0[q]
-        s[q, 1] = oy0[q]
-        e[q, 0] = ox1[q]
-        e[q, 1] = oy1[q]
-    return s, e
+                m = _greedy_emit(px, py, 0, k, tol, out_s, out_e, m)
+    return out_s[:m], out_e[:m]

@@ -323,7 +323,7 @@ class _LayerChecker:
         self._no_runs = (np.zeros(g.height + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
         self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self.resolution = float(resolution_mm)
-        self._pos = np.full(0, -1, np.int64)  # edge -> segment buffer of simplify_section
+        self._pos = np.full(0, -1, np.int32)  # edge -> segment buffer of simplify_section
 
     def _simplified(self, seg) -> tuple[np.ndarray, np.ndarray]:
         """The section on which widths are measured: as sliced, or simplified to the resolution."""
@@ -331,7 +331,7 @@ class _LayerChecker:
             return seg.start, seg.end
         top = int(max(seg.start_edge.max(), seg.end_edge.max())) + 1
         if top > self._pos.shape[0]:
-            self._pos = np.full(max(top, 2 * self._pos.shape[0]), -1, np.int64)
+            self._pos = np.full(max(top, 2 * self._pos.shape[0]), -1, np.int32)
         return K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, self.resolution, self._pos)
 
     def run(self, index: int) -> LayerCheck:
