@@ -31,6 +31,7 @@ import numpy as np
 from ..errors import ConfigError
 from ..mesh import Mesh
 from . import _kernels as K
+from ._cavities import CavityTracker
 from .limits import default_minimum_mm, device_limits
 
 __all__ = ["KINDS", "Finding", "LayerCheck", "CheckReport", "check_layers", "check_printability", "compare_orientations", "join_regions"]
@@ -38,7 +39,7 @@ __all__ = ["KINDS", "Finding", "LayerCheck", "CheckReport", "check_layers", "che
 log = logging.getLogger(__name__)
 
 #: Problem kinds, in the order they are reported.
-KINDS: tuple[str, ...] = ("thin_wall", "narrow_gap", "vanished_wall", "closed_gap", "island", "underexposed", "cured_gap")
+KINDS: tuple[str, ...] = ("thin_wall", "narrow_gap", "vanished_wall", "closed_gap", "island", "underexposed", "cured_gap", "cavity")
 
 #: Side offset (mm) at which the fill rule is evaluated to tell boundary from inner segments.
 _SIDE_EPS_MM = 1e-7
@@ -69,6 +70,11 @@ class Finding:
     width (``None`` for islands); ``length_mm`` the boundary length it spans (half of it is
     each side of a wall); ``area_mm2`` an island's area; ``value`` the peak (underexposed) or
     lowest (cured gap) exposure as a fraction of full.
+
+    A ``cavity`` (empty space the part shuts in on every side: resin that cannot drain) is
+    reported at the layer that closes it over (its roof), with ``first_layer`` the first
+    layer it is in, ``volume_mm3`` its volume (pixels times pixel area times layer height),
+    its centroid and its box over all its layers.
     """
 
     kind: str
@@ -83,6 +89,8 @@ class Finding:
     area_mm2: float | None = None
     value: float | None = None
     bbox_mm: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    volume_mm3: float | None = None
+    first_layer: int | None = None
 
     def to_json(self) -> dict:
         d = asdict(self)
@@ -191,17 +199,20 @@ def join_regions(findings: Sequence[Finding], grow_mm: float = 0.0) -> list[dict
             g = [fs[i] for i in members]
             if kind == "island":
                 worst = max(g, key=lambda f: f.area_mm2 or 0.0)
+            elif kind == "cavity":
+                worst = max(g, key=lambda f: f.volume_mm3 or 0.0)
             else:
                 worst = min(g, key=lambda f: f.width_mm)
             regs.append(
                 {
                     "kind": kind,
-                    "first_layer": min(f.layer for f in g),
+                    "first_layer": min(f.layer if f.first_layer is None else f.first_layer for f in g),
                     "last_layer": max(f.layer for f in g),
                     "z_mm": [min(f.z_mm for f in g), max(f.z_mm for f in g)],
                     "findings": len(g),
-                    "width_mm": None if kind == "island" else worst.width_mm,
+                    "width_mm": worst.width_mm,
                     "area_mm2": sum(f.area_mm2 or 0.0 for f in g) if kind == "island" else None,
+                    "volume_mm3": sum(f.volume_mm3 or 0.0 for f in g) if kind == "cavity" else None,
                     "layer": worst.layer,
                     "x_mm": worst.x_mm,
                     "y_mm": worst.y_mm,
@@ -264,6 +275,7 @@ class CheckReport:
             "counts": self.counts(),
             "lengths_mm": self.lengths_mm(),
             "island_area_mm2": sum(f.area_mm2 or 0.0 for f in self.findings if f.kind == "island"),
+            "cavity_volume_mm3": sum(f.volume_mm3 or 0.0 for f in self.findings if f.kind == "cavity"),
             "layers_with_findings": self.layers_with_findings,
             "regions": self.regions(),
             "grid": self.grid,
@@ -296,7 +308,7 @@ def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarr
 class _LayerChecker:
     """Everything fixed for a job: thresholds, affines, sampling."""
 
-    def __init__(self, job, *, min_wall_mm, min_gap_mm, grey_fn, cure_threshold, islands, measure_up_to_mm, resolution_mm=0.0) -> None:
+    def __init__(self, job, *, min_wall_mm, min_gap_mm, grey_fn, cure_threshold, islands, measure_up_to_mm, resolution_mm=0.0, cavities=False) -> None:
         g = job.grid
         self.job = job
         self.grid = g
@@ -310,6 +322,7 @@ class _LayerChecker:
         self.grey_fn = grey_fn
         self.thr = cure_threshold
         self.islands = islands
+        self.cavities = CavityTracker(g.width, g.height) if cavities else None
         self.evenodd = job.fill == "evenodd"
         # widths the findings need exactly (the smallest one is measured up to the cap)
         lim = _RASTER_TEST_PX * self.pmax
@@ -383,6 +396,9 @@ class _LayerChecker:
                     vals = np.full(width.shape, np.nan)
                     vals[cand] = ext / 255.0
                     self._emit(kind, cand[bad], width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
+        if self.cavities is not None:
+            for rec in self.cavities.step(rs, r0, r1, index):
+                findings.append(self._cavity(rec, index, z))
         island_mask = None
         if self.islands and ist.shape[1]:
             island_mask = self._islands(ist, isl, rs, r0, r1, index, z, findings)
@@ -394,6 +410,25 @@ class _LayerChecker:
         ac, ar = _affine_apply(self.m2p, bx, by)
         bc, br = _affine_apply(self.m2p, bx + w * ux, by + w * uy)
         return (np.ascontiguousarray(a) for a in (ac, ar, bc, br))
+
+    def _cavity(self, rec: dict, index: int, z: float) -> Finding:
+        g = self.grid
+        x, y = _affine_apply(self.p2m, np.array([rec["col"]]), np.array([rec["row"]]))
+        cc = np.array([rec["col0"] - 0.5, rec["col1"] + 0.5])
+        rr = np.array([rec["row0"] - 0.5, rec["row1"] + 0.5])
+        X, Y = _affine_apply(self.p2m, np.repeat(cc, 2), np.tile(rr, 2))
+        return Finding(
+            kind="cavity",
+            layer=index,
+            z_mm=z,
+            x_mm=float(x[0]),
+            y_mm=float(y[0]),
+            col=float(rec["col"]),
+            row=float(rec["row"]),
+            bbox_mm=(float(X.min()), float(Y.min()), float(X.max()), float(Y.max())),
+            volume_mm3=float(rec["pixels"] * g.pitch_x_mm * g.pitch_y_mm * float(self.job.plan.layer_height_mm)),
+            first_layer=int(rec["first_layer"]),
+        )
 
     def _extreme(self, i, width, bx, by, ux, uy, sgn, index, z) -> dict | None:
         if i < 0:
@@ -507,7 +542,7 @@ def resolution_for(device, resolution_mm: float | None) -> float:
     return res
 
 
-def _settings(device, *, min_wall_mm, min_gap_mm, mask_fn, mask_name, cure_threshold, islands, measure_up_to_mm, resolution_mm=None):
+def _settings(device, *, min_wall_mm, min_gap_mm, mask_fn, mask_name, cure_threshold, islands, measure_up_to_mm, resolution_mm=None, cavities=True):
     default, source = default_minimum_mm(device)
     wall = _positive("min_wall_mm", min_wall_mm)
     gap = _positive("min_gap_mm", min_gap_mm)
@@ -522,6 +557,8 @@ def _settings(device, *, min_wall_mm, min_gap_mm, mask_fn, mask_name, cure_thres
         raise ConfigError("a cure threshold needs an exposure model (mask_fn)")
     if not isinstance(islands, bool):
         raise ConfigError(f"islands must be True or False, got {islands!r}")
+    if not isinstance(cavities, bool):
+        raise ConfigError(f"cavities must be True or False, got {cavities!r}")
     w = default if wall is None else wall
     g = default if gap is None else gap
     pmax = max(device.pitch_x_mm, device.pitch_y_mm)
@@ -536,6 +573,7 @@ def _settings(device, *, min_wall_mm, min_gap_mm, mask_fn, mask_name, cure_thres
         "exposure_model": mask_name if mask_fn is not None else None,
         "cure_threshold": thr,
         "islands": islands,
+        "cavities": cavities,
         "measured_up_to_mm": cap,
         "resolution_mm": res,
     }
@@ -554,6 +592,7 @@ def check_layers(
     islands: bool = True,
     measure_up_to_mm: float | None = None,
     resolution_mm: float | None = None,
+    cavities: bool = True,
     slice_options: dict | None = None,
 ) -> Iterator[LayerCheck]:
     """Check layer after layer; yields one :class:`LayerCheck` each (see
@@ -561,7 +600,7 @@ def check_layers(
     job = _as_job(job_or_mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=fibre_angle_deg, slice_options=slice_options or {})
     st = _settings(
         device, min_wall_mm=min_wall_mm, min_gap_mm=min_gap_mm, mask_fn=mask_fn, mask_name="", cure_threshold=cure_threshold,
-        islands=islands, measure_up_to_mm=measure_up_to_mm, resolution_mm=resolution_mm,
+        islands=islands, measure_up_to_mm=measure_up_to_mm, resolution_mm=resolution_mm, cavities=cavities,
     )
     yield from _iter(job, st, mask_fn)
 
@@ -577,6 +616,7 @@ def _iter(job, st, mask_fn) -> Iterator[LayerCheck]:
         islands=st["islands"],
         measure_up_to_mm=st["measured_up_to_mm"],
         resolution_mm=st["resolution_mm"],
+        cavities=st["cavities"],
     )
     for i in range(len(job)):
         yield checker.run(i)
@@ -596,6 +636,7 @@ def check_printability(
     islands: bool = True,
     measure_up_to_mm: float | None = None,
     resolution_mm: float | None = None,
+    cavities: bool = True,
     slice_options: dict | None = None,
     tilt_deg: float | None = None,
     radius_mm: float | None = None,
@@ -632,6 +673,9 @@ def check_printability(
         dropped joint is at most this far from the chord replacing it); measured widths are
         then within twice this of the section's. Default 1/100 of the smaller pixel pitch;
         0 measures on the section as sliced (slower on finely tessellated parts).
+    cavities : bool
+        Look for empty space the part shuts in on every side (resin traps): reported as
+        ``cavity`` findings at the layer that closes them over.
     tilt_deg, radius_mm : float, optional
         Inkjet on the rotary platform: adds the track figures to ``limits``.
     on_layer : callable, optional
@@ -656,6 +700,7 @@ def check_printability(
     st = _settings(
         device, min_wall_mm=min_wall_mm, min_gap_mm=min_gap_mm, mask_fn=mask_fn, mask_name=mask_name,
         cure_threshold=cure_threshold, islands=islands, measure_up_to_mm=measure_up_to_mm, resolution_mm=resolution_mm,
+        cavities=cavities,
     )
     st["layer_height_mm"] = float(job.plan.layer_height_mm)
     st["fibre_angle_deg"] = fibre_angle_deg

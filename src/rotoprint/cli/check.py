@@ -110,12 +110,17 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
             continue
         if k == "island" and not st["islands"]:
             continue
+        if k == "cavity" and not st.get("cavities", True):
+            continue
         if not fs:
             t.add_row(k.replace("_", " "), Text("0", style="green"), "0", "0", "", "")
             continue
         if k == "island":
             w = max(fs, key=lambda f: f.area_mm2)
             worst = f"{w.area_mm2:.4g} mm2"
+        elif k == "cavity":
+            w = max(fs, key=lambda f: f.volume_mm3)
+            worst = f"{w.volume_mm3:.4g} mm3"
         else:
             w = min(fs, key=lambda f: f.width_mm)
             worst = f"{w.width_mm * 1000:.1f} um"
@@ -158,6 +163,7 @@ def check_command(
     mask: Annotated[str, typer.Option("--mask", help="Exposure model for DLP masks: none, binary or smooth (the paper's SMOOTH filter).")] = "none",
     cure_threshold: Annotated[float | None, typer.Option("--cure-threshold", help="Fraction of full exposure that cures (with --mask). Default: the projector's.")] = None,
     islands: Annotated[bool, typer.Option("--islands/--no-islands", help="Look for regions with nothing below them.")] = True,
+    cavities: Annotated[bool, typer.Option("--cavities/--no-cavities", help="Look for empty space the part shuts in (resin traps).")] = True,
     resolution: Annotated[float | None, typer.Option("--resolution", help="Measure widths on the section simplified to this deviation, mm (widths within twice it). Default: 1/100 pixel; 0: the section as sliced.")] = None,
     max_overlays: Annotated[int, typer.Option("--max-overlays", help="Write at most this many overlay images (layers with problems, first first).")] = 200,
     fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero or evenodd.")] = "nonzero",
@@ -225,6 +231,7 @@ def check_command(
         cure_threshold=cure_threshold,
         islands=islands,
         resolution_mm=resolution,
+        cavities=cavities,
         slice_options=slice_options,
     )
 
