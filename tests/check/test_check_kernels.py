@@ -119,17 +119,24 @@ def _sections(piece_mesh, shared_meshes=SHARED):
             yield slice_mesh(load_mesh(shared_meshes / name), dev, layer_height_mm=lh).segments(k)[0], dev
 
 
+@pytest.mark.parametrize("simplified", [False, True])
 @pytest.mark.parametrize("chained", [False, True])
-def test_sample_widths_measure_what_the_check_uses(piece_mesh, chained):
+def test_sample_widths_measure_what_the_check_uses(piece_mesh, chained, simplified):
     """Against measuring every width of every sample: the same samples below the thresholds
     with the same widths, the same smallest width, no sample dropped that could matter.
-    ``chained``: with the chain order, runs of segments are cleared as a whole."""
+    ``chained``: with the chain order, runs of segments are cleared as a whole.
+    ``simplified``: on the section simplified as the check does by default (long segments,
+    whose rays are tested against the pieces their strip meets)."""
     n = dropped = 0
     for seg, dev in _sections(piece_mesh):
         p = max(dev.pitch_x_mm, dev.pitch_y_mm)
         cell = spacing = 0.5 * min(dev.pitch_x_mm, dev.pitch_y_mm)
         cap, need_w, need_g = 8 * p, 2 * p, 2.5 * p
-        sx, sy, ex, ey = (np.ascontiguousarray(a) for a in (seg.start[:, 0], seg.start[:, 1], seg.end[:, 0], seg.end[:, 1]))
+        start, end = seg.start, seg.end
+        if simplified:
+            pos = np.full(int(max(seg.start_edge.max(), seg.end_edge.max())) + 1, -1, np.int64)
+            start, end = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, 0.01 * min(dev.pitch_x_mm, dev.pitch_y_mm), pos)
+        sx, sy, ex, ey = (np.ascontiguousarray(a) for a in (start[:, 0], start[:, 1], end[:, 0], end[:, 1]))
         sx, sy, ex, ey, _, js, je = K.split_at_crossings(sx, sy, ex, ey, cell, 1e-5)
         comp, nc = K.chain_components(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
         keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)

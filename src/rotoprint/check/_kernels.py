@@ -51,6 +51,12 @@ _RUN_MIN_SEGS = 3
 _RUNS_FROM = 16384
 #: :func:`simplify_section` replaces at most this many chained segments by one chord.
 _SIMPLIFY_SPAN = 64
+#: :func:`sample_widths_chained` lists the pieces in cells this many times the ray grid's.
+_GATHER_CELL = 1.0
+#: ... and walks a strip's cells row by row when its bounding box holds more than this many.
+_GATHER_BOX = 6
+#: ... and only for segments with at least this many samples (shorter ones cast their rays).
+_GATHER_MIN = 3
 
 
 # ---------------------------------------------------------------- bucketing helpers
@@ -1154,15 +1160,189 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
     return sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap, np.full(sx.shape[0], -1, np.int64))
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _clip_x(ax, ay, bx, by, y0, y1, lo, hi):  # pragma: no cover - jit
+    """``lo, hi`` widened by the x extent of the edge from ``(ax, ay)`` to ``(bx, by)`` within
+    the band ``y0 <= y <= y1`` (unchanged when the edge misses the band)."""
+    if max(ay, by) < y0 or min(ay, by) > y1:
+        return lo, hi
+    if ay == by:
+        return min(lo, ax, bx), max(hi, ax, bx)
+    f0 = min(1.0, max(0.0, (y0 - ay) / (by - ay)))
+    f1 = min(1.0, max(0.0, (y1 - ay) / (by - ay)))
+    x0 = ax + f0 * (bx - ax)
+    x1 = ax + f1 * (bx - ax)
+    return min(lo, x0, x1), max(hi, x0, x1)
+
+
+@njit(cache=True, nogil=True)
+def _piece_cells(sx, sy, ex, ey, keep, seglen, run, h, x0, y0, hc, ncx, ncy):  # pragma: no cover - jit
+    """The pieces of :func:`_cells` (every kept segment cut into pieces no longer than ``h``,
+    by the same arithmetic; ``seglen`` the segments' lengths), each listed in the cells of
+    side ``hc`` its bounding box touches, in cell order: start x, y, end x, y, parent segment
+    and the parent's ``run``, and the CSR ``start`` of every cell."""
+    n = sx.shape[0]
+    npc = 0
+    for k in range(n):
+        if keep[k]:
+            npc += 1 if seglen[k] <= h else max(1, int(math.ceil(seglen[k] / h)))
+    qa0 = np.empty(npc)
+    qb0 = np.empty(npc)
+    qa1 = np.empty(npc)
+    qb1 = np.empty(npc)
+    qk = np.empty(npc, np.int64)
+    box = np.empty((npc, 4), np.int64)  # first and last cell column, row
+    ncell = ncx * ncy
+    count = np.zeros(ncell + 1, np.int64)
+    pad = 1e-9 * hc
+    inv = 1.0 / hc
+    q = 0
+    for k in range(n):
+        if not keep[k]:
+            continue
+        m = 1 if seglen[k] <= h else max(1, int(math.ceil(seglen[k] / h)))
+        for j in range(m):
+            if m == 1:
+                a0 = sx[k]
+                b0 = sy[k]
+            else:
+                f0 = j / m
+                a0 = sx[k] + f0 * (ex[k] - sx[k])
+                b0 = sy[k] + f0 * (ey[k] - sy[k])
+            if j == m - 1:
+                a1 = ex[k]
+                b1 = ey[k]
+            else:
+                f1 = (j + 1) / m
+                a1 = sx[k] + f1 * (ex[k] - sx[k])
+                b1 = sy[k] + f1 * (ey[k] - sy[k])
+            cx0 = max(0, min(ncx - 1, int(math.floor((min(a0, a1) - pad - x0) * inv))))
+            cx1 = max(0, min(ncx - 1, int(math.floor((max(a0, a1) + pad - x0) * inv))))
+            cy0 = max(0, min(ncy - 1, int(math.floor((min(b0, b1) - pad - y0) * inv))))
+            cy1 = max(0, min(ncy - 1, int(math.floor((max(b0, b1) + pad - y0) * inv))))
+            for cy in range(cy0, cy1 + 1):
+                for cx in range(cx0, cx1 + 1):
+                    count[cy * ncx + cx + 1] += 1
+            qa0[q] = a0
+            qb0[q] = b0
+            qa1[q] = a1
+            qb1[q] = b1
+            qk[q] = k
+            box[q, 0] = cx0
+            box[q, 1] = cx1
+            box[q, 2] = cy0
+            box[q, 3] = cy1
+            q += 1
+    for i in range(ncell):
+        count[i + 1] += count[i]
+    tot = count[ncell]
+    px0 = np.empty(tot)
+    py0 = np.empty(tot)
+    px1 = np.empty(tot)
+    py1 = np.empty(tot)
+    par = np.empty(tot, np.int64)
+    prun = np.empty(tot, np.int64)
+    fill = count[:-1].copy()
+    for q in range(npc):
+        k = qk[q]
+        for cy in range(box[q, 2], box[q, 3] + 1):
+            for cx in range(box[q, 0], box[q, 1] + 1):
+                c = cy * ncx + cx
+                w = fill[c]
+                px0[w] = qa0[q]
+                py0[w] = qb0[q]
+                px1[w] = qa1[q]
+                py1[w] = qb1[q]
+                par[w] = k
+                prun[w] = run[k]
+                fill[c] = w + 1
+    return px0, py0, px1, py1, par, prun, count
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _walk(ox, oy, dx, dy, own, best, tmin, px0, py0, px1, py1, prun, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
+    """:func:`_ray` on pieces in cell order (``start``: each cell's first), skipping the pieces
+    whose run ``prun`` is ``own``."""
+    cx = int(math.floor((ox - xmin) / h))
+    cy = int(math.floor((oy - ymin) / h))
+    if dx > 0.0:
+        stx = 1
+        tmx = (xmin + (cx + 1) * h - ox) / dx
+        tdx = h / dx
+    elif dx < 0.0:
+        stx = -1
+        tmx = (xmin + cx * h - ox) / dx
+        tdx = -h / dx
+    else:
+        stx = 0
+        tmx = np.inf
+        tdx = np.inf
+    if dy > 0.0:
+        sty = 1
+        tmy = (ymin + (cy + 1) * h - oy) / dy
+        tdy = h / dy
+    elif dy < 0.0:
+        sty = -1
+        tmy = (ymin + cy * h - oy) / dy
+        tdy = -h / dy
+    else:
+        sty = 0
+        tmy = np.inf
+        tdy = np.inf
+    hit = False
+    while True:
+        if 0 <= cx < ncx and 0 <= cy < ncy:
+            c = cy * ncx + cx
+            for pc in range(start[c], start[c + 1]):
+                if prun[pc] == own:  # its own segment, or its run (which it cannot see)
+                    continue
+                e0 = px1[pc] - px0[pc]
+                e1 = py1[pc] - py0[pc]
+                den = dx * e1 - dy * e0
+                if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
+                    continue
+                w0 = px0[pc] - ox
+                w1 = py0[pc] - oy
+                t = (w0 * e1 - w1 * e0) / den
+                if t <= tmin or t > best:
+                    continue
+                sp = (w0 * dy - w1 * dx) / den
+                if sp < 0.0 or sp > 1.0:
+                    continue
+                best = t
+                hit = True
+        else:
+            break
+        texit = min(tmx, tmy)
+        if texit >= best:
+            break
+        if tmx < tmy:
+            cx += stx
+            tmx += tdx
+        else:
+            cy += sty
+            tmy += tdy
+    return best if hit else np.inf
+
+
 @njit(cache=True, nogil=True)
 def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap, succ):  # pragma: no cover - jit
     """The samples of :func:`boundary_samples` with the widths of :func:`cast_rays`, measuring
     only what the check uses: every width below ``need_wall`` (``need_gap``) exactly, and the
     smallest width up to ``max_mm``; any other width may come back as ``inf``.
 
-    A ray looks no further than ``max(need, smallest width found so far)``, and a segment
-    whose strip of rays (on a side) meets no other piece casts none there
-    (tested exactly, with a nanometre's margin); a segment clear on both sides gives no samples at all (none of
+    A ray looks no further than ``max(need, smallest width found so far)``. A segment with
+    fewer than ``_GATHER_MIN`` samples casts each ray through the cells it crosses (a 2-D DDA,
+    :func:`_walk`, as :func:`cast_rays`) and keeps its samples. The rays of a longer segment
+    are parallel: per side, the pieces (as :func:`cast_rays` cuts the segments) that meet
+    the strip its rays sweep (from the first to the last sample, up to
+    the ray length when the segment comes, grown by ``_STRIP_MARGIN_MM``; tested exactly:
+    its axes, then the piece's normal) are gathered once from the cells the strip covers.
+    Each such piece is tested against the rays whose sample lies within its extent along
+    the segment, by the arithmetic of :func:`cast_rays` (every piece a ray hits within its
+    length lies in the strip, so each ray gets the nearest hit the reference finds); then
+    the rays, in order, keep the hits within their own length. A side whose strip meets
+    nothing casts no rays; a segment clear on both sides gives no samples at all (none of
     them could be a finding or the thinnest). Samples keep their order.
 
     With the chain order ``succ`` (:func:`chain_successors`; all -1: none), the segments are
@@ -1175,11 +1355,23 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     Returns ``(P,)`` x, y, inward normal x, y, length each stands for, wall and gap widths.
     """
     n = sx.shape[0]
+    seglen = np.empty(n)
     total = 0
+    nk = 0
+    xlo = np.inf
+    xhi = -np.inf
+    ylo = np.inf
+    yhi = -np.inf
     for k in range(n):
+        xlo = min(xlo, sx[k], ex[k])
+        xhi = max(xhi, sx[k], ex[k])
+        ylo = min(ylo, sy[k], ey[k])
+        yhi = max(yhi, sy[k], ey[k])
         if keep[k]:
             L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+            seglen[k] = L
             total += max(1, int(math.ceil(L / spacing)))
+            nk += 1
     bx = np.empty(total)
     by = np.empty(total)
     ux = np.empty(total)
@@ -1189,30 +1381,35 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     gap = np.empty(total)
     if total == 0:
         return bx, by, ux, uy, ln, wall, gap
-    h, xmin, ymin, ncx, ncy = _grid(sx, sy, ex, ey, keep, cell_mm)
-    px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
-    # the pieces in cell order: a cell's pieces are read one after another (same pieces, same order)
-    px0 = px0[idx]
-    py0 = py0[idx]
-    px1 = px1[idx]
-    py1 = py1[idx]
-    par = par[idx]
-    low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
-    need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
-    skip = np.zeros(2, np.bool_)
+    # the pieces are cut as cast_rays cuts them (cells of side h: the hit arithmetic is the
+    # reference's) and listed in cells of side hc
+    h = _cell_size(xhi - xlo, yhi - ylo, nk, cell_mm)
+    hc = h * _GATHER_CELL
+    xmin = xlo - hc
+    ymin = ylo - hc
+    ncx = int((xhi + hc - xmin) / hc) + 1
+    ncy = int((yhi + hc - ymin) / hc) + 1
+    inv = 1.0 / hc
     # runs of chained segments turning little: tested as a whole, once per side, when the
     # first of their segments comes (the ray length only shrinks after that)
     run, rptr, rmem = _chain_runs(sx, sy, ex, ey, keep, succ, _RUN_MIN_LEN_MM)
     nrun = rptr.shape[0] - 1
     rstate = np.zeros((nrun, 2), np.int8)  # 0 untested, 1 clear, 2 not clear
-    prun = np.empty(par.shape[0], np.int64)  # the run of each piece, in cell order
-    for q in range(par.shape[0]):
-        prun[q] = run[par[q]]
+    px0, py0, px1, py1, par, prun, start = _piece_cells(sx, sy, ex, ey, keep, seglen, run, h, xmin, ymin, hc, ncx, ncy)
+    low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
+    need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
+    skip = np.zeros(2, np.bool_)
+    cand0 = np.empty(px0.shape[0], np.int64)  # the pieces the wall strip meets
+    cand1 = np.empty(px0.shape[0], np.int64)  # ... and the gap strip
+    ncand = np.zeros(2, np.int64)
+    mg = _STRIP_MARGIN_MM
+    pad = 1e-9 * hc
+    tbest = np.empty(64)  # per sample of a segment, its nearest hit
     p = 0
     for k in range(n):
         if not keep[k]:
             continue
-        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        L = seglen[k]
         m = max(1, int(math.ceil(L / spacing)))
         skip[0] = False
         skip[1] = False
@@ -1222,88 +1419,162 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
             for side in range(2):
                 if rstate[r, side] == 0:
                     sgn = 1.0 if side == 0 else -1.0
-                    rstate[r, side] = _run_clear(r, sgn, max(need[side], low[side]), run, rptr, rmem, sx, sy, ex, ey, nx, ny, spacing, px0, py0, px1, py1, par, start, xmin, ymin, h, ncx, ncy)
+                    rstate[r, side] = _run_clear(r, sgn, max(need[side], low[side]), run, rptr, rmem, sx, sy, ex, ey, nx, ny, spacing, px0, py0, px1, py1, par, start, xmin, ymin, hc, ncx, ncy)
                 skip[side] = rstate[r, side] == 1
             if skip[0] and skip[1]:
                 continue
-        if m >= 4:
-            # a long segment: does the strip its rays sweep on a side (from the first to the
-            # last sample, up to the ray length) meet any other piece? Conservative: a piece
-            # within a nanometre of the strip counts, and a strip over more cells than its
-            # rays would visit is not tested.
-            tx = (ex[k] - sx[k]) / L
-            ty = (ey[k] - sy[k]) / L
-            ox = sx[k]
-            oy = sy[k]
-            f = 0.5 / m
-            ax = sx[k] + f * (ex[k] - sx[k])
-            ay = sy[k] + f * (ey[k] - sy[k])
-            f = (m - 0.5) / m
-            zx = sx[k] + f * (ex[k] - sx[k])
-            zy = sy[k] + f * (ey[k] - sy[k])
-            a_lo = (ax - ox) * tx + (ay - oy) * ty
-            a_hi = (zx - ox) * tx + (zy - oy) * ty
-            if a_lo > a_hi:
-                a_lo, a_hi = a_hi, a_lo
-            a_lo -= _STRIP_MARGIN_MM
-            a_hi += _STRIP_MARGIN_MM
-            for side in range(2):
-                if skip[side]:
-                    continue  # its run is clear
-                sgn = 1.0 if side == 0 else -1.0
-                dx = sgn * nx[k]
-                dy = sgn * ny[k]
-                Lr = max(need[side], low[side])
-                c_lo = -_STRIP_MARGIN_MM
-                c_hi = Lr + _STRIP_MARGIN_MM
-                # corners (along, across) = (lo, lo), (lo, hi), (hi, hi), (hi, lo)
-                q0x = ox + a_lo * tx + c_lo * dx
-                q0y = oy + a_lo * ty + c_lo * dy
-                q1x = ox + a_lo * tx + c_hi * dx
-                q1y = oy + a_lo * ty + c_hi * dy
-                q2x = ox + a_hi * tx + c_hi * dx
-                q2y = oy + a_hi * ty + c_hi * dy
-                q3x = ox + a_hi * tx + c_lo * dx
-                q3y = oy + a_hi * ty + c_lo * dy
-                gc0 = max(0, int(math.floor((min(q0x, q1x, q2x, q3x) - xmin) / h)))
-                gc1 = min(ncx - 1, int(math.floor((max(q0x, q1x, q2x, q3x) - xmin) / h)))
-                gr0 = max(0, int(math.floor((min(q0y, q1y, q2y, q3y) - ymin) / h)))
-                gr1 = min(ncy - 1, int(math.floor((max(q0y, q1y, q2y, q3y) - ymin) / h)))
-                if (gc1 - gc0 + 1) * (gr1 - gr0 + 1) > m * (int(Lr / h) + 2):
-                    continue  # the rays are cheaper
-                clear = True
-                for gr in range(gr0, gr1 + 1):
-                    if not clear:
-                        break
-                    for gc in range(gc0, gc1 + 1):
-                        if not clear:
-                            break
-                        cell = gr * ncx + gc
-                        for q in range(start[cell], start[cell + 1]):
-                            pc = q
-                            if par[pc] == k:
-                                continue
-                            # separating axes: the strip's own (along, across), then the piece's normal
-                            ua_ = (px0[pc] - ox) * tx + (py0[pc] - oy) * ty
-                            ub_ = (px1[pc] - ox) * tx + (py1[pc] - oy) * ty
-                            if max(ua_, ub_) < a_lo or min(ua_, ub_) > a_hi:
-                                continue
-                            va_ = (px0[pc] - ox) * dx + (py0[pc] - oy) * dy
-                            vb_ = (px1[pc] - ox) * dx + (py1[pc] - oy) * dy
-                            if max(va_, vb_) < c_lo or min(va_, vb_) > c_hi:
-                                continue
-                            e0 = px1[pc] - px0[pc]
-                            e1 = py1[pc] - py0[pc]
-                            w0 = e0 * (q0y - py0[pc]) - e1 * (q0x - px0[pc])
-                            w1 = e0 * (q1y - py0[pc]) - e1 * (q1x - px0[pc])
-                            w2 = e0 * (q2y - py0[pc]) - e1 * (q2x - px0[pc])
-                            w3 = e0 * (q3y - py0[pc]) - e1 * (q3x - px0[pc])
-                            if min(w0, w1, w2, w3) <= 0.0 <= max(w0, w1, w2, w3):
-                                clear = False
-                                break
-                skip[side] = clear
-            if skip[0] and skip[1]:
-                continue
+        if m < _GATHER_MIN:
+            # a short segment: each of its few rays walks the cells it crosses (a 2-D DDA),
+            # stopping as soon as its nearest hit lies before the next cell
+            for j in range(m):
+                f = (j + 0.5) / m
+                bx[p] = sx[k] + f * (ex[k] - sx[k])
+                by[p] = sy[k] + f * (ey[k] - sy[k])
+                ux[p] = nx[k]
+                uy[p] = ny[k]
+                ln[p] = L / m
+                p += 1
+            for i in range(p - m, p):
+                for side in range(2):
+                    if skip[side]:
+                        if side == 0:
+                            wall[i] = np.inf
+                        else:
+                            gap[i] = np.inf
+                        continue
+                    sgn = 1.0 if side == 0 else -1.0
+                    best = max(need[side], low[side])
+                    t = _walk(bx[i], by[i], sgn * ux[i], sgn * uy[i], own, best, tmin, px0, py0, px1, py1, prun, start, xmin, ymin, hc, ncx, ncy)
+                    if t < low[side]:
+                        low[side] = t
+                    if side == 0:
+                        wall[i] = t
+                    else:
+                        gap[i] = t
+            continue
+        # the strips: along the segment from its first to its last sample, across it (in
+        # the frame of the inward normal) from 0 to the ray length on each side, each grown
+        # by the margin
+        tx = (ex[k] - sx[k]) / L
+        ty = (ey[k] - sy[k]) / L
+        ox = sx[k]
+        oy = sy[k]
+        f = 0.5 / m
+        ax = sx[k] + f * (ex[k] - sx[k])
+        ay = sy[k] + f * (ey[k] - sy[k])
+        f = (m - 0.5) / m
+        zx = sx[k] + f * (ex[k] - sx[k])
+        zy = sy[k] + f * (ey[k] - sy[k])
+        a_lo = (ax - ox) * tx + (ay - oy) * ty
+        a_hi = (zx - ox) * tx + (zy - oy) * ty
+        if a_lo > a_hi:
+            a_lo, a_hi = a_hi, a_lo
+        a_lo -= mg
+        a_hi += mg
+        vx = nx[k]
+        vy = ny[k]
+        # per side, the strip across [c_lo, c_hi] (inward normal frame) and its corners
+        # (along, across) = (lo, lo), (lo, hi), (hi, hi), (hi, lo)
+        skip0 = skip[0]
+        skip1 = skip[1]
+        cw_lo = -mg
+        cw_hi = need[0] if skip0 else max(need[0], low[0]) + mg
+        cg_lo = -need[1] if skip1 else -max(need[1], low[1]) - mg
+        cg_hi = mg
+        w0x = ox + a_lo * tx + cw_lo * vx
+        w0y = oy + a_lo * ty + cw_lo * vy
+        w1x = ox + a_lo * tx + cw_hi * vx
+        w1y = oy + a_lo * ty + cw_hi * vy
+        w2x = ox + a_hi * tx + cw_hi * vx
+        w2y = oy + a_hi * ty + cw_hi * vy
+        w3x = ox + a_hi * tx + cw_lo * vx
+        w3y = oy + a_hi * ty + cw_lo * vy
+        g0x = ox + a_lo * tx + cg_lo * vx
+        g0y = oy + a_lo * ty + cg_lo * vy
+        g1x = ox + a_lo * tx + cg_hi * vx
+        g1y = oy + a_lo * ty + cg_hi * vy
+        g2x = ox + a_hi * tx + cg_hi * vx
+        g2y = oy + a_hi * ty + cg_hi * vy
+        g3x = ox + a_hi * tx + cg_lo * vx
+        g3y = oy + a_hi * ty + cg_lo * vy
+        # both strips together: the rectangle along [a_lo, a_hi], across [v_lo, v_hi]; its
+        # cells (those of its bounding box, or row by row when the box holds many)
+        v_lo = -mg if skip1 else cg_lo
+        v_hi = mg if skip0 else cw_hi
+        r0x = ox + a_lo * tx + v_lo * vx
+        r0y = oy + a_lo * ty + v_lo * vy
+        r1x = ox + a_lo * tx + v_hi * vx
+        r1y = oy + a_lo * ty + v_hi * vy
+        r2x = ox + a_hi * tx + v_hi * vx
+        r2y = oy + a_hi * ty + v_hi * vy
+        r3x = ox + a_hi * tx + v_lo * vx
+        r3y = oy + a_hi * ty + v_lo * vy
+        gr0 = max(0, int(math.floor((min(r0y, r1y, r2y, r3y) - pad - ymin) * inv)))
+        gr1 = min(ncy - 1, int(math.floor((max(r0y, r1y, r2y, r3y) + pad - ymin) * inv)))
+        bc0 = max(0, int(math.floor((min(r0x, r1x, r2x, r3x) - pad - xmin) * inv)))
+        bc1 = min(ncx - 1, int(math.floor((max(r0x, r1x, r2x, r3x) + pad - xmin) * inv)))
+        by_rows = (gr1 - gr0 + 1) * (bc1 - bc0 + 1) > _GATHER_BOX
+        n0 = 0
+        n1 = 0
+        for gr in range(gr0, gr1 + 1):
+            gc0 = bc0
+            gc1 = bc1
+            if by_rows:
+                # the rectangle's x extent within the row of cells
+                y0 = ymin + gr * hc - pad
+                y1 = y0 + hc + 2.0 * pad
+                lo = np.inf
+                hi = -np.inf
+                lo, hi = _clip_x(r0x, r0y, r1x, r1y, y0, y1, lo, hi)
+                lo, hi = _clip_x(r1x, r1y, r2x, r2y, y0, y1, lo, hi)
+                lo, hi = _clip_x(r2x, r2y, r3x, r3y, y0, y1, lo, hi)
+                lo, hi = _clip_x(r3x, r3y, r0x, r0y, y0, y1, lo, hi)
+                if lo > hi:
+                    continue
+                gc0 = max(bc0, int(math.floor((lo - pad - xmin) * inv)))
+                gc1 = min(bc1, int(math.floor((hi + pad - xmin) * inv)))
+            for pc in range(start[gr * ncx + gc0], start[gr * ncx + gc1 + 1]):
+                if prun[pc] == own:  # its own segment, or its run (which it cannot see)
+                    continue
+                # separating axes: the strips' own (along, across), then the piece's normal
+                ax_ = px0[pc]
+                ay_ = py0[pc]
+                bx_ = px1[pc]
+                by_ = py1[pc]
+                ua_ = (ax_ - ox) * tx + (ay_ - oy) * ty
+                ub_ = (bx_ - ox) * tx + (by_ - oy) * ty
+                if max(ua_, ub_) < a_lo or min(ua_, ub_) > a_hi:
+                    continue
+                va_ = (ax_ - ox) * vx + (ay_ - oy) * vy
+                vb_ = (bx_ - ox) * vx + (by_ - oy) * vy
+                vmin = min(va_, vb_)
+                vmax = max(va_, vb_)
+                e0 = bx_ - ax_
+                e1 = by_ - ay_
+                if not skip0 and vmax >= cw_lo and vmin <= cw_hi:
+                    s0 = e0 * (w0y - ay_) - e1 * (w0x - ax_)
+                    s1 = e0 * (w1y - ay_) - e1 * (w1x - ax_)
+                    s2 = e0 * (w2y - ay_) - e1 * (w2x - ax_)
+                    s3 = e0 * (w3y - ay_) - e1 * (w3x - ax_)
+                    if min(s0, s1, s2, s3) <= 0.0 <= max(s0, s1, s2, s3):
+                        cand0[n0] = pc
+                        n0 += 1
+                if not skip1 and vmax >= cg_lo and vmin <= cg_hi:
+                    s0 = e0 * (g0y - ay_) - e1 * (g0x - ax_)
+                    s1 = e0 * (g1y - ay_) - e1 * (g1x - ax_)
+                    s2 = e0 * (g2y - ay_) - e1 * (g2x - ax_)
+                    s3 = e0 * (g3y - ay_) - e1 * (g3x - ax_)
+                    if min(s0, s1, s2, s3) <= 0.0 <= max(s0, s1, s2, s3):
+                        cand1[n1] = pc
+                        n1 += 1
+        if n0 == 0:
+            skip[0] = True
+        if n1 == 0:
+            skip[1] = True
+        ncand[0] = n0
+        ncand[1] = n1
+        if skip[0] and skip[1]:
+            continue
         for j in range(m):
             f = (j + 0.5) / m
             bx[p] = sx[k] + f * (ex[k] - sx[k])
@@ -1312,89 +1583,58 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
             uy[p] = ny[k]
             ln[p] = L / m
             p += 1
-        for i in range(p - m, p):
-            for side in range(2):
-                if skip[side]:
-                    if side == 0:
-                        wall[i] = np.inf
-                    else:
-                        gap[i] = np.inf
-                    continue
-                sgn = 1.0 if side == 0 else -1.0
-                dx = sgn * ux[i]
-                dy = sgn * uy[i]
-                ox = bx[i]
-                oy = by[i]
-                cx = int(math.floor((ox - xmin) / h))
-                cy = int(math.floor((oy - ymin) / h))
-                if dx > 0.0:
-                    stx = 1
-                    tmx = (xmin + (cx + 1) * h - ox) / dx
-                    tdx = h / dx
-                elif dx < 0.0:
-                    stx = -1
-                    tmx = (xmin + cx * h - ox) / dx
-                    tdx = -h / dx
+        # per side: each candidate piece is tested against the rays whose sample lies within
+        # its extent along the segment (the rays are normal to it), giving each ray the
+        # nearest hit up to the strip's length; the rays then take, in order, the hits within
+        # their own length (which shrinks with the smallest width found)
+        if m > tbest.shape[0]:
+            tbest = np.empty(2 * m)
+        scale = m / L
+        for side in range(2):
+            out = wall if side == 0 else gap
+            if skip[side]:
+                for i in range(p - m, p):
+                    out[i] = np.inf
+                continue
+            for j in range(m):
+                tbest[j] = np.inf
+            sgn = 1.0 if side == 0 else -1.0
+            Lr = max(need[side], low[side])
+            for c in range(ncand[side]):
+                pc = cand0[c] if side == 0 else cand1[c]
+                e0 = px1[pc] - px0[pc]
+                e1 = py1[pc] - py0[pc]
+                j0 = 0
+                j1 = m - 1
+                if m > 1:
+                    ua_ = (px0[pc] - ox) * tx + (py0[pc] - oy) * ty
+                    ub_ = (px1[pc] - ox) * tx + (py1[pc] - oy) * ty
+                    j0 = max(0, int(math.ceil((min(ua_, ub_) - mg) * scale - 0.5)))
+                    j1 = min(m - 1, int(math.floor((max(ua_, ub_) + mg) * scale - 0.5)))
+                for j in range(j0, j1 + 1):
+                    i = p - m + j
+                    dx = sgn * ux[i]
+                    dy = sgn * uy[i]
+                    den = dx * e1 - dy * e0
+                    if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
+                        continue
+                    w0 = px0[pc] - bx[i]
+                    w1 = py0[pc] - by[i]
+                    t = (w0 * e1 - w1 * e0) / den
+                    if t <= tmin or t > Lr or t >= tbest[j]:
+                        continue
+                    sp = (w0 * dy - w1 * dx) / den
+                    if sp < 0.0 or sp > 1.0:
+                        continue
+                    tbest[j] = t
+            for j in range(m):
+                t = tbest[j]
+                if t <= max(need[side], low[side]):
+                    if t < low[side]:
+                        low[side] = t
                 else:
-                    stx = 0
-                    tmx = np.inf
-                    tdx = np.inf
-                if dy > 0.0:
-                    sty = 1
-                    tmy = (ymin + (cy + 1) * h - oy) / dy
-                    tdy = h / dy
-                elif dy < 0.0:
-                    sty = -1
-                    tmy = (ymin + cy * h - oy) / dy
-                    tdy = -h / dy
-                else:
-                    sty = 0
-                    tmy = np.inf
-                    tdy = np.inf
-                best = max(need[side], low[side])
-                hit = False
-                while True:
-                    if 0 <= cx < ncx and 0 <= cy < ncy:
-                        c = cy * ncx + cx
-                        for q in range(start[c], start[c + 1]):
-                            pc = q
-                            if prun[pc] == own:  # its own segment, or its run (which it cannot see)
-                                continue
-                            e0 = px1[pc] - px0[pc]
-                            e1 = py1[pc] - py0[pc]
-                            den = dx * e1 - dy * e0
-                            if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
-                                continue
-                            w0 = px0[pc] - ox
-                            w1 = py0[pc] - oy
-                            t = (w0 * e1 - w1 * e0) / den
-                            if t <= tmin or t > best:
-                                continue
-                            sp = (w0 * dy - w1 * dx) / den
-                            if sp < 0.0 or sp > 1.0:
-                                continue
-                            best = t
-                            hit = True
-                    else:
-                        break
-                    texit = min(tmx, tmy)
-                    if texit >= best:
-                        break
-                    if tmx < tmy:
-                        cx += stx
-                        tmx += tdx
-                    else:
-                        cy += sty
-                        tmy += tdy
-                t = np.inf
-                if hit:
-                    t = best
-                    if best < low[side]:
-                        low[side] = best
-                if side == 0:
-                    wall[i] = t
-                else:
-                    gap[i] = t
+                    t = np.inf
+                out[p - m + j] = t
     return bx[:p], by[:p], ux[:p], uy[:p], ln[:p], wall[:p], gap[:p]
 
 
