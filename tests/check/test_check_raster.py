@@ -134,3 +134,31 @@ def test_check_bad_arguments():
         rotary_tracks(dev, tilt_deg=10, radius_mm=50)  # a projector has no tracks
     with pytest.raises(ConfigError):
         rotary_tracks(load_device("omnidot760"), tilt_deg=95, radius_mm=50)
+
+
+@pytest.mark.parametrize("device_name", ["perfactory-sxga", "omnidot760"])
+def test_raster_test_limit_covers_every_wall_that_can_vanish(device_name):
+    """Why walls and gaps are tested against the raster only below 1.1 pixels: the chord's
+    rectangle (width across, one pixel either side along) holds a pixel centre, at any angle
+    and offset, as soon as it is one (larger) pitch wide; narrower, it can miss them all. On
+    an all-material image every chord of 1.0 pitch finds material, and some of 0.95 do not."""
+    from rotoprint.check import _kernels as K
+    from rotoprint.check.core import _RASTER_TEST_PX
+
+    dev = load_device(device_name)
+    job = slice_mesh(box_mesh((2.0, 2.0, 0.2)), dev, layer_height_mm=0.1)
+    g = job.grid
+    p = max(g.pitch_x_mm, g.pitch_y_mm)
+    img = np.full((g.height, g.width), 255, np.uint8)
+    rng = np.random.default_rng(7)
+    n = 20000
+    th = rng.uniform(0, 2 * np.pi, n)
+    bx = rng.uniform(-3 * p, 3 * p, n) + float(g.pixel_to_model[0, 0] * g.width / 2 + g.pixel_to_model[0, 1] * g.height / 2 + g.pixel_to_model[0, 2])
+    by = rng.uniform(-3 * p, 3 * p, n) + float(g.pixel_to_model[1, 0] * g.width / 2 + g.pixel_to_model[1, 1] * g.height / 2 + g.pixel_to_model[1, 2])
+    ux, uy = np.cos(th), np.sin(th)
+    m2p, p2m = np.ascontiguousarray(g.model_to_pixel), np.ascontiguousarray(g.pixel_to_model)
+    for f, all_found in ((1.0, True), (0.95, False)):
+        # the 0.05-pitch margin to 1.1 leaves room for a centre strictly inside the wall
+        got = K.chord_presence(bx, by, ux, uy, np.full(n, f * p), img, 255, p2m, m2p, p)
+        assert got.all() == all_found, (f, int((~got).sum()))
+    assert _RASTER_TEST_PX >= 1.05

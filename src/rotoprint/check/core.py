@@ -52,8 +52,11 @@ _RAY_TMIN_MM = 1e-9
 _CELL_PX = 0.5
 #: Chords of one kind closer than this many pixels are reported as one finding.
 _GROUP_PX = 1
-#: Walls and gaps narrower than this many pixels are tested against the raster.
-_RASTER_TEST_PX = 2.0
+#: Walls and gaps narrower than this many pixels are tested against the raster. A chord's
+#: test rectangle (the width across, one pixel either side along) holds a pixel centre at any
+#: angle and offset once it is one pitch wide (tests/check/test_check_raster.py shows it), so a
+#: wall 1.1 pixels wide cannot vanish nor a gap that wide close: 2 pixels measured for nothing.
+_RASTER_TEST_PX = 1.1
 #: Walls and gaps narrower than this many pixels are tested against the exposure.
 _EXPOSURE_TEST_PX = 3.0
 #: Default resolution: widths are measured on the section simplified to this fraction of the
