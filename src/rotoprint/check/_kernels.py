@@ -588,6 +588,185 @@ def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_
 
 
 @njit(cache=True, nogil=True)
+def _piece_cells(sx, sy, ex, ey, x0, y0, h, ncx, ncy, grow):  # pragma: no cover - jit
+    """The listing of :func:`_cells` (every segment cut into pieces no longer than ``h``,
+    each piece in the cells its box grown by ``grow`` touches, same arithmetic, so the same
+    cells) without the pieces' coordinates: per piece its segment and the first cell column
+    and row it is listed in, and the CSR ``start, idx`` of pieces per cell."""
+    n = sx.shape[0]
+    pm = np.empty(n, np.int64)
+    npieces = 0
+    for k in range(n):
+        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
+        mk = max(1, int(math.ceil(L / h)))
+        pm[k] = mk
+        npieces += mk
+    par = np.empty(npieces, np.int64)
+    qx0 = np.empty(npieces, np.int64)
+    qx1 = np.empty(npieces, np.int64)
+    qy0 = np.empty(npieces, np.int64)
+    qy1 = np.empty(npieces, np.int64)
+    ncell = ncx * ncy
+    start = np.zeros(ncell + 1, np.int64)
+    pad = 1e-9 * h + grow
+    p = 0
+    for k in range(n):
+        mk = pm[k]
+        for j in range(mk):
+            f0 = j / mk
+            f1 = (j + 1) / mk
+            ax = sx[k] + f0 * (ex[k] - sx[k])
+            ay = sy[k] + f0 * (ey[k] - sy[k])
+            bx = ex[k] if j == mk - 1 else sx[k] + f1 * (ex[k] - sx[k])
+            by = ey[k] if j == mk - 1 else sy[k] + f1 * (ey[k] - sy[k])
+            cx0 = max(0, min(ncx - 1, int(math.floor((min(ax, bx) - pad - x0) / h))))
+            cx1 = max(0, min(ncx - 1, int(math.floor((max(ax, bx) + pad - x0) / h))))
+            cy0 = max(0, min(ncy - 1, int(math.floor((min(ay, by) - pad - y0) / h))))
+            cy1 = max(0, min(ncy - 1, int(math.floor((max(ay, by) + pad - y0) / h))))
+            par[p] = k
+            qx0[p] = cx0
+            qx1[p] = cx1
+            qy0[p] = cy0
+            qy1[p] = cy1
+            for cy in range(cy0, cy1 + 1):
+                for cx in range(cx0, cx1 + 1):
+                    start[cy * ncx + cx + 1] += 1
+            p += 1
+    for i in range(ncell):
+        start[i + 1] += start[i]
+    idx = np.empty(start[ncell], np.int64)
+    fill = start[:-1].copy()
+    for p in range(npieces):
+        for cy in range(qy0[p], qy1[p] + 1):
+            for cx in range(qx0[p], qx1[p] + 1):
+                c = cy * ncx + cx
+                idx[fill[c]] = p
+                fill[c] += 1
+    return par, qx0, qy0, start, idx
+
+
+@njit(cache=True, nogil=True)
+def _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, par, qx0, qy0, start, idx, ncx, ncy, near_mm, tol, touch_s, touch_e, rec_s, rec_t):  # pragma: no cover - jit
+    """The pair tests of the grid search: every pair of segments with pieces in a common
+    cell and overlapping boxes (grown by the near distance), each pair of pieces once: in the
+    first cell both are listed in (the later of their first columns, the later of their first
+    rows). The test is :func:`_pair`'s, step for step, written out here (called, or inlined,
+    it was several times slower). Returns the number of cuts, recorded as far as ``rec_s,
+    rec_t`` hold (the caller searches again with larger buffers when they overflow)."""
+    m = 0
+    for c in range(ncx * ncy):
+        cx = c % ncx
+        cy = c // ncx
+        a0 = start[c]
+        a1 = start[c + 1]
+        swept = a1 - a0 > 32
+        if swept:
+            # a crowded cell: its pieces by the left edge of their segment's box, each pair
+            # looked at only while the boxes can overlap in x (a sweep)
+            cell = idx[a0:a1]
+            idx[a0:a1] = cell[np.argsort(bx0[par[cell]], kind="mergesort")]
+        for a in range(a0, a1):
+            p = idx[a]
+            A0 = par[p]
+            ownx = qx0[p] == cx
+            owny = qy0[p] == cy
+            for b in range(a + 1, a1):
+                p2 = idx[b]
+                B0 = par[p2]
+                if swept and bx0[B0] > bx1[A0]:
+                    break  # this and every later box start right of A's box
+                if not (ownx or qx0[p2] == cx) or not (owny or qy0[p2] == cy):
+                    continue  # both are listed in an earlier cell: tested there
+                if A0 == B0:
+                    continue
+                A = min(A0, B0)  # the lower segment first
+                B = max(A0, B0)
+                if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
+                    continue
+                d0x = ex[A] - sx[A]
+                d0y = ey[A] - sy[A]
+                d1x = ex[B] - sx[B]
+                d1y = ey[B] - sy[B]
+                wx = sx[B] - sx[A]
+                wy = sy[B] - sy[A]
+                den = d0x * d1y - d0y * d1x
+                l0 = d0x * d0x + d0y * d0y
+                l1 = d1x * d1x + d1y * d1y
+                if l0 == 0.0 or l1 == 0.0:
+                    continue
+                if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
+                    # parallel: only collinear overlaps matter
+                    if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
+                        if _near(sx, sy, ex, ey, A, B, near_mm):
+                            _isolate(touch_s, touch_e, A, B)
+                        continue
+                    # B's ends along A: an overlap of positive length, or just a joint
+                    u0 = (wx * d0x + wy * d0y) / l0
+                    u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
+                    if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
+                        continue  # end to end (a straight run of a chain) or apart
+                    for q in range(2):
+                        X = A if q == 0 else B
+                        Y = B if q == 0 else A
+                        dx = ex[X] - sx[X]
+                        dy = ey[X] - sy[X]
+                        ll = dx * dx + dy * dy
+                        for r in range(2):  # Y's ends on X
+                            yx = sx[Y] if r == 0 else ex[Y]
+                            yy = sy[Y] if r == 0 else ey[Y]
+                            t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
+                            if tol < t < 1.0 - tol:
+                                if m < rec_s.shape[0]:
+                                    rec_s[m] = X
+                                    rec_t[m] = t
+                                m += 1
+                                if r == 0:
+                                    touch_s[Y] = True
+                                else:
+                                    touch_e[Y] = True
+                            elif -tol <= t <= 1.0 + tol:
+                                # ends meet on an overlap: neither end is an ordinary joint
+                                if t <= tol:
+                                    touch_s[X] = True
+                                else:
+                                    touch_e[X] = True
+                                if r == 0:
+                                    touch_s[Y] = True
+                                else:
+                                    touch_e[Y] = True
+                    continue
+                ta = (wx * d1y - wy * d1x) / den
+                tb = (wx * d0y - wy * d0x) / den
+                if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
+                    if _near(sx, sy, ex, ey, A, B, near_mm):
+                        _isolate(touch_s, touch_e, A, B)
+                    continue
+                ia = tol < ta < 1.0 - tol
+                ib = tol < tb < 1.0 - tol
+                if not ia and not ib:
+                    continue  # a shared vertex: an ordinary joint
+                if ia:
+                    if m < rec_s.shape[0]:
+                        rec_s[m] = A
+                        rec_t[m] = ta
+                    m += 1
+                elif ta <= tol:
+                    touch_s[A] = True
+                else:
+                    touch_e[A] = True
+                if ib:
+                    if m < rec_s.shape[0]:
+                        rec_s[m] = B
+                        rec_t[m] = tb
+                    m += 1
+                elif tb <= tol:
+                    touch_s[B] = True
+                else:
+                    touch_e[B] = True
+    return m
+
+
+@njit(cache=True, nogil=True)
 def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - jit
     """:func:`split_at_crossings`, by runs (``use_runs``, when it pays) or by the grid."""
     n = sx.shape[0]
@@ -620,117 +799,15 @@ def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - ji
         ncy = int((ymax - ymin) / h) + 1
         # pieces are listed in every cell their box grown by the near distance touches: two
         # segments that cross, touch or come within it share a cell
-        px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy, g)
-        # each cell's pieces by the left edge of their segment's box: a pair is looked at only
-        # while the boxes can overlap in x (a sweep; the same pairs meet, fewer are tried)
-        key = np.empty(idx.shape[0])
-        for j in range(idx.shape[0]):
-            key[j] = bx0[par[idx[j]]]
-        for c in range(ncx * ncy):
-            a0 = start[c]
-            a1 = start[c + 1]
-            if a1 - a0 > 32:
-                o = np.argsort(key[a0:a1], kind="mergesort")
-                tmp_i = idx[a0:a1][o]
-                tmp_k = key[a0:a1][o]
-                idx[a0:a1] = tmp_i
-                key[a0:a1] = tmp_k
-            else:
-                for j in range(a0 + 1, a1):  # insertion sort: cells hold few pieces
-                    pi = idx[j]
-                    kv = key[j]
-                    q = j - 1
-                    while q >= a0 and key[q] > kv:
-                        idx[q + 1] = idx[q]
-                        key[q + 1] = key[q]
-                        q -= 1
-                    idx[q + 1] = pi
-                    key[q + 1] = kv
-        for c in range(ncx * ncy):
-            for a in range(start[c], start[c + 1]):
-                A0 = par[idx[a]]
-                for b in range(a + 1, start[c + 1]):
-                    B0 = par[idx[b]]
-                    if bx0[B0] > bx1[A0]:
-                        break  # this and every later box start right of A's box
-                    if A0 == B0:
-                        continue
-                    A = min(A0, B0)  # the lower segment first, as without the sweep
-                    B = max(A0, B0)
-                    if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
-                        continue
-                    d0x = ex[A] - sx[A]
-                    d0y = ey[A] - sy[A]
-                    d1x = ex[B] - sx[B]
-                    d1y = ey[B] - sy[B]
-                    wx = sx[B] - sx[A]
-                    wy = sy[B] - sy[A]
-                    den = d0x * d1y - d0y * d1x
-                    l0 = d0x * d0x + d0y * d0y
-                    l1 = d1x * d1x + d1y * d1y
-                    if l0 == 0.0 or l1 == 0.0:
-                        continue
-                    if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
-                        # parallel: only collinear overlaps matter
-                        if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
-                            if _near(sx, sy, ex, ey, A, B, near_mm):
-                                _isolate(touch_s, touch_e, A, B)
-                            continue
-                        # B's ends along A: an overlap of positive length, or just a joint
-                        u0 = (wx * d0x + wy * d0y) / l0
-                        u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
-                        if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
-                            continue  # end to end (a straight run of a chain) or apart
-                        for q in range(2):
-                            X = A if q == 0 else B
-                            Y = B if q == 0 else A
-                            dx = ex[X] - sx[X]
-                            dy = ey[X] - sy[X]
-                            ll = dx * dx + dy * dy
-                            for r in range(2):  # Y's ends on X
-                                yx = sx[Y] if r == 0 else ex[Y]
-                                yy = sy[Y] if r == 0 else ey[Y]
-                                t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
-                                if tol < t < 1.0 - tol:
-                                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
-                                    if r == 0:
-                                        touch_s[Y] = True
-                                    else:
-                                        touch_e[Y] = True
-                                elif -tol <= t <= 1.0 + tol:
-                                    # ends meet on an overlap: neither end is an ordinary joint
-                                    ty = 0.0 if r == 0 else 1.0
-                                    if t <= tol:
-                                        touch_s[X] = True
-                                    else:
-                                        touch_e[X] = True
-                                    if ty == 0.0:
-                                        touch_s[Y] = True
-                                    else:
-                                        touch_e[Y] = True
-                        continue
-                    ta = (wx * d1y - wy * d1x) / den
-                    tb = (wx * d0y - wy * d0x) / den
-                    if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
-                        if _near(sx, sy, ex, ey, A, B, near_mm):
-                            _isolate(touch_s, touch_e, A, B)
-                        continue
-                    ia = tol < ta < 1.0 - tol
-                    ib = tol < tb < 1.0 - tol
-                    if not ia and not ib:
-                        continue  # a shared vertex: an ordinary joint
-                    if ia:
-                        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
-                    elif ta <= tol:
-                        touch_s[A] = True
-                    else:
-                        touch_e[A] = True
-                    if ib:
-                        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
-                    elif tb <= tol:
-                        touch_s[B] = True
-                    else:
-                        touch_e[B] = True
+        par, qx0, qy0, start, idx = _piece_cells(sx, sy, ex, ey, xmin, ymin, h, ncx, ncy, g)
+        cap = n + 64
+        while True:  # cuts are few: buffers for as many as segments, more if they overflow
+            rec_s = np.empty(cap, np.int64)
+            rec_t = np.empty(cap)
+            m = _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, par, qx0, qy0, start, idx, ncx, ncy, near_mm, tol, touch_s, touch_e, rec_s, rec_t)
+            if m <= cap:
+                break
+            cap = m
     # pieces: every segment from 0 to 1 through its sorted cut parameters
     cuts_n = np.zeros(n + 1, np.int64)
     for i in range(m):
