@@ -49,6 +49,9 @@ _RUN_MIN_SEGS = 3
 #: Sections with fewer segments than this are searched and measured without runs (finding
 #: the chains costs more than it saves).
 _RUNS_FROM = 16384
+#: The crossing search's cells are at least this times the side of a square per segment
+#: (:func:`_split_cell_size`).
+_SPLIT_CELL = 0.75
 #: :func:`simplify_section` replaces at most this many chained segments by one chord.
 _SIMPLIFY_SPAN = 64
 
@@ -277,6 +280,15 @@ def _cell_size(w, h, n, cell_mm):  # pragma: no cover - jit
     while (w / c + 1) * (h / c + 1) > 4e6:
         c *= 2.0
     return c
+
+
+@njit(cache=True, nogil=True)
+def _split_cell_size(w, h, n, cell_mm):  # pragma: no cover - jit
+    """Cell side of the crossing search's grid for ``n`` segments over a ``w`` x ``h`` mm box:
+    :func:`_cell_size`, or ``_SPLIT_CELL`` times the side of a square per segment if larger
+    (each pair of pieces is tested once, so a few more per cell cost less than listing long
+    segments in more cells)."""
+    return max(_cell_size(w, h, n, cell_mm), _SPLIT_CELL * math.sqrt(max(w * h, 0.0) / max(n, 1)))
 
 
 @njit(cache=True, nogil=True)
@@ -589,96 +601,104 @@ def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_
 
 @njit(cache=True, nogil=True)
 def _piece_cells(sx, sy, ex, ey, x0, y0, h, ncx, ncy, grow):  # pragma: no cover - jit
-    """The listing of :func:`_cells` (every segment cut into pieces no longer than ``h``,
-    each piece in the cells its box grown by ``grow`` touches, same arithmetic, so the same
-    cells) without the pieces' coordinates: per piece its segment and the first cell column
-    and row it is listed in, and the CSR ``start, idx`` of pieces per cell."""
+    """The cells of the grid search (square, side ``h``, from ``x0, y0``): every segment is
+    cut into pieces no longer than ``h`` and each piece is listed in the cells its box, grown
+    by ``grow`` mm, touches (as in :func:`_cells`). Returns the CSR ``start, ent`` of the
+    entries per cell, each entry ``4 * segment + 2 * (the cell is the first column the piece
+    is listed in) + (the cell is its first row)``: two pieces in a cell are listed together
+    in an earlier cell too unless their entries' low bits together make 3."""
     n = sx.shape[0]
     pm = np.empty(n, np.int64)
     npieces = 0
     for k in range(n):
-        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
-        mk = max(1, int(math.ceil(L / h)))
+        dx = ex[k] - sx[k]
+        dy = ey[k] - sy[k]
+        mk = max(1, int(math.ceil(math.sqrt(dx * dx + dy * dy) / h)))
         pm[k] = mk
         npieces += mk
-    par = np.empty(npieces, np.int64)
-    qx0 = np.empty(npieces, np.int64)
-    qx1 = np.empty(npieces, np.int64)
-    qy0 = np.empty(npieces, np.int64)
-    qy1 = np.empty(npieces, np.int64)
+    cr = np.empty((npieces, 4), np.int64)  # each piece's first and last cell column and row
     ncell = ncx * ncy
     start = np.zeros(ncell + 1, np.int64)
     pad = 1e-9 * h + grow
+    ih = 1.0 / h
     p = 0
     for k in range(n):
         mk = pm[k]
         for j in range(mk):
-            f0 = j / mk
-            f1 = (j + 1) / mk
-            ax = sx[k] + f0 * (ex[k] - sx[k])
-            ay = sy[k] + f0 * (ey[k] - sy[k])
-            bx = ex[k] if j == mk - 1 else sx[k] + f1 * (ex[k] - sx[k])
-            by = ey[k] if j == mk - 1 else sy[k] + f1 * (ey[k] - sy[k])
-            cx0 = max(0, min(ncx - 1, int(math.floor((min(ax, bx) - pad - x0) / h))))
-            cx1 = max(0, min(ncx - 1, int(math.floor((max(ax, bx) + pad - x0) / h))))
-            cy0 = max(0, min(ncy - 1, int(math.floor((min(ay, by) - pad - y0) / h))))
-            cy1 = max(0, min(ncy - 1, int(math.floor((max(ay, by) + pad - y0) / h))))
-            par[p] = k
-            qx0[p] = cx0
-            qx1[p] = cx1
-            qy0[p] = cy0
-            qy1[p] = cy1
+            if mk == 1:
+                ax = sx[k]
+                ay = sy[k]
+                bx = ex[k]
+                by = ey[k]
+            else:
+                f0 = j / mk
+                f1 = (j + 1) / mk
+                ax = sx[k] + f0 * (ex[k] - sx[k])
+                ay = sy[k] + f0 * (ey[k] - sy[k])
+                bx = ex[k] if j == mk - 1 else sx[k] + f1 * (ex[k] - sx[k])
+                by = ey[k] if j == mk - 1 else sy[k] + f1 * (ey[k] - sy[k])
+            # (truncation is the floor here: the negatives it rounds up are clamped to 0)
+            cx0 = max(0, min(ncx - 1, int((min(ax, bx) - pad - x0) * ih)))
+            cx1 = max(0, min(ncx - 1, int((max(ax, bx) + pad - x0) * ih)))
+            cy0 = max(0, min(ncy - 1, int((min(ay, by) - pad - y0) * ih)))
+            cy1 = max(0, min(ncy - 1, int((max(ay, by) + pad - y0) * ih)))
+            cr[p, 0] = cx0
+            cr[p, 1] = cx1
+            cr[p, 2] = cy0
+            cr[p, 3] = cy1
             for cy in range(cy0, cy1 + 1):
                 for cx in range(cx0, cx1 + 1):
                     start[cy * ncx + cx + 1] += 1
             p += 1
     for i in range(ncell):
         start[i + 1] += start[i]
-    idx = np.empty(start[ncell], np.int64)
+    ent = np.empty(start[ncell], np.int64)
     fill = start[:-1].copy()
-    for p in range(npieces):
-        for cy in range(qy0[p], qy1[p] + 1):
-            for cx in range(qx0[p], qx1[p] + 1):
-                c = cy * ncx + cx
-                idx[fill[c]] = p
-                fill[c] += 1
-    return par, qx0, qy0, start, idx
+    p = 0
+    for k in range(n):
+        for j in range(pm[k]):
+            cx0 = cr[p, 0]
+            cy0 = cr[p, 2]
+            for cy in range(cy0, cr[p, 3] + 1):
+                for cx in range(cx0, cr[p, 1] + 1):
+                    c = cy * ncx + cx
+                    ent[fill[c]] = 4 * k + (2 if cx == cx0 else 0) + (1 if cy == cy0 else 0)
+                    fill[c] += 1
+            p += 1
+    return start, ent
 
 
 @njit(cache=True, nogil=True)
-def _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, par, qx0, qy0, start, idx, ncx, ncy, near_mm, tol, touch_s, touch_e, rec_s, rec_t):  # pragma: no cover - jit
-    """The pair tests of the grid search: every pair of segments with pieces in a common
-    cell and overlapping boxes (grown by the near distance), each pair of pieces once: in the
-    first cell both are listed in (the later of their first columns, the later of their first
-    rows). The test is :func:`_pair`'s, step for step, written out here (called, or inlined,
-    it was several times slower). Returns the number of cuts, recorded as far as ``rec_s,
-    rec_t`` hold (the caller searches again with larger buffers when they overflow)."""
+def _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, start, ent, near_mm, tol, touch_s, touch_e, rec_s, rec_t):  # pragma: no cover - jit
+    """The pair tests of the grid search (:func:`_piece_cells`): every pair of segments with
+    pieces in a common cell and overlapping boxes (grown by the near distance), each pair of
+    pieces once, in the first cell both are listed in (the later of their first columns, the
+    later of their first rows). The test is :func:`_pair`'s, step for step, written out here
+    (called, or inlined, it was several times slower). Returns the number of cuts, recorded
+    as far as ``rec_s, rec_t`` hold (the caller searches again with larger buffers when they
+    overflow)."""
     m = 0
-    for c in range(ncx * ncy):
-        cx = c % ncx
-        cy = c // ncx
+    for c in range(start.shape[0] - 1):
         a0 = start[c]
         a1 = start[c + 1]
+        if a1 - a0 < 2:
+            continue
         swept = a1 - a0 > 32
         if swept:
-            # a crowded cell: its pieces by the left edge of their segment's box, each pair
+            # a crowded cell: its entries by the left edge of their segment's box, each pair
             # looked at only while the boxes can overlap in x (a sweep)
-            cell = idx[a0:a1]
-            idx[a0:a1] = cell[np.argsort(bx0[par[cell]], kind="mergesort")]
+            cell = ent[a0:a1]
+            ent[a0:a1] = cell[np.argsort(bx0[cell >> 2], kind="mergesort")]
         for a in range(a0, a1):
-            p = idx[a]
-            A0 = par[p]
-            ownx = qx0[p] == cx
-            owny = qy0[p] == cy
+            ea = ent[a]
+            A0 = ea >> 2
             for b in range(a + 1, a1):
-                p2 = idx[b]
-                B0 = par[p2]
+                eb = ent[b]
+                B0 = eb >> 2
                 if swept and bx0[B0] > bx1[A0]:
                     break  # this and every later box start right of A's box
-                if not (ownx or qx0[p2] == cx) or not (owny or qy0[p2] == cy):
-                    continue  # both are listed in an earlier cell: tested there
-                if A0 == B0:
-                    continue
+                if (ea | eb) & 3 != 3 or A0 == B0:
+                    continue  # listed together in an earlier cell, or one segment
                 A = min(A0, B0)  # the lower segment first
                 B = max(A0, B0)
                 if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
@@ -770,7 +790,6 @@ def _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, par, qx0, qy0, start, idx, n
 def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - jit
     """:func:`split_at_crossings`, by runs (``use_runs``, when it pays) or by the grid."""
     n = sx.shape[0]
-    keep = np.ones(n, np.bool_)
     tol = 1e-12
     touch_s = np.zeros(n, np.bool_)
     touch_e = np.zeros(n, np.bool_)
@@ -779,32 +798,48 @@ def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - ji
     m = 0
     done = False
     g = max(near_mm, 0.0)
-    bx0 = np.minimum(sx, ex) - g
-    bx1 = np.maximum(sx, ex) + g
-    by0 = np.minimum(sy, ey) - g
-    by1 = np.maximum(sy, ey) + g
+    # the segments' boxes grown by the near distance, and the section's box (one pass)
+    bx0 = np.empty(n)
+    bx1 = np.empty(n)
+    by0 = np.empty(n)
+    by1 = np.empty(n)
+    xlo = ylo = np.inf
+    xhi = yhi = -np.inf
+    for k in range(n):
+        lo = min(sx[k], ex[k])
+        hi = max(sx[k], ex[k])
+        bx0[k] = lo - g
+        bx1[k] = hi + g
+        xlo = min(xlo, lo)
+        xhi = max(xhi, hi)
+        lo = min(sy[k], ey[k])
+        hi = max(sy[k], ey[k])
+        by0[k] = lo - g
+        by1[k] = hi + g
+        ylo = min(ylo, lo)
+        yhi = max(yhi, hi)
     if use_runs and n >= _RUNS_FROM:
         done, rec_s, rec_t, m = _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
     if n > 0 and not done:
-        wx = max(sx.max(), ex.max()) - min(sx.min(), ex.min())
-        wy = max(sy.max(), ey.max()) - min(sy.min(), ey.min())
-        h = _cell_size(wx, wy, n, cell_mm)
+        wx = xhi - xlo
+        wy = yhi - ylo
+        h = _split_cell_size(wx, wy, n, cell_mm)
         if n <= _FEW:
             h = max(h, 2.0 * max(wx, wy), 1e-9)  # few segments: one cell holds them all (every pair)
-        xmin = min(sx.min(), ex.min()) - h
-        ymin = min(sy.min(), ey.min()) - h
-        xmax = max(sx.max(), ex.max()) + h
-        ymax = max(sy.max(), ey.max()) + h
+        xmin = xlo - h
+        ymin = ylo - h
+        xmax = xhi + h
+        ymax = yhi + h
         ncx = int((xmax - xmin) / h) + 1
         ncy = int((ymax - ymin) / h) + 1
         # pieces are listed in every cell their box grown by the near distance touches: two
         # segments that cross, touch or come within it share a cell
-        par, qx0, qy0, start, idx = _piece_cells(sx, sy, ex, ey, xmin, ymin, h, ncx, ncy, g)
+        start, ent = _piece_cells(sx, sy, ex, ey, xmin, ymin, h, ncx, ncy, g)
         cap = n + 64
         while True:  # cuts are few: buffers for as many as segments, more if they overflow
             rec_s = np.empty(cap, np.int64)
             rec_t = np.empty(cap)
-            m = _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, par, qx0, qy0, start, idx, ncx, ncy, near_mm, tol, touch_s, touch_e, rec_s, rec_t)
+            m = _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, start, ent, near_mm, tol, touch_s, touch_e, rec_s, rec_t)
             if m <= cap:
                 break
             cap = m
