@@ -351,10 +351,10 @@ def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch
     distance): record the cuts each makes in the other (``_push``) and flag the ends that are
     no ordinary joints. Returns the cut records and their count.
 
-    The search by runs calls this; the grid search in :func:`_split` keeps the same test
-    written out in its loop (called there, it made the check of the real meshes, a few
-    hundred segments per layer, 10-30 % slower). ``test_split_by_runs_equals_the_grid``
-    holds the two to the same results."""
+    The search by runs calls this; the grid search (:func:`_grid_pairs`) keeps the same test
+    written out in its loop, recording into fixed buffers (called or inlined there, the pair
+    tests took several times as long). ``test_split_by_runs_equals_the_grid`` holds the two
+    to the same results."""
     if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
         return rec_s, rec_t, m
     d0x = ex[A] - sx[A]
@@ -1580,10 +1580,17 @@ def _runs_at(rs, r0, r1, r, c):  # pragma: no cover - jit
 @njit(cache=True, nogil=True)
 def chord_presence_runs(bx, by, ux, uy, width, rs, r0, r1, H, W, want, p2m, m2p, half_along):  # pragma: no cover - jit
     """:func:`chord_presence` on the image given as runs (:func:`fill_runs`, ``H`` x ``W``):
-    the same pixel centres in the same order, material where a run covers the pixel."""
+    the same pixel centres (those of the window in the bounding box of the chord's rectangle,
+    where the others cannot be), material where a run covers the pixel."""
     n = bx.shape[0]
     out = np.zeros(n, np.bool_)
     wm = want != 0
+    # pixel_to_model's inverse (the pixels whose centres can be in a rectangle)
+    det = p2m[0, 0] * p2m[1, 1] - p2m[0, 1] * p2m[1, 0]
+    i00 = p2m[1, 1] / det
+    i01 = -p2m[0, 1] / det
+    i10 = -p2m[1, 0] / det
+    i11 = p2m[0, 0] / det
     for i in range(n):
         w = width[i]
         mx = bx[i] + 0.5 * w * ux[i]
@@ -1592,11 +1599,30 @@ def chord_presence_runs(bx, by, ux, uy, width, rs, r0, r1, H, W, want, p2m, m2p,
         mr = m2p[1, 0] * mx + m2p[1, 1] * my + m2p[1, 2]
         c0 = int(math.floor(mc)) - 2
         r0_ = int(math.floor(mr)) - 2
+        # the chord's rectangle in pixel indices (its corners by the inverse of p2m), grown
+        # by a rounding margin: only the window's pixels in its bounding box can pass the
+        # test below
+        tx = -uy[i] * half_along
+        ty = ux[i] * half_along
+        plo = qlo = np.inf
+        phi = qhi = -np.inf
+        for k in range(4):
+            cx_ = bx[i] + (w * ux[i] if k >= 2 else 0.0) + (tx if k == 0 or k == 3 else -tx)
+            cy_ = by[i] + (w * uy[i] if k >= 2 else 0.0) + (ty if k == 0 or k == 3 else -ty)
+            pc = i00 * (cx_ - p2m[0, 2]) + i01 * (cy_ - p2m[1, 2])
+            pr = i10 * (cx_ - p2m[0, 2]) + i11 * (cy_ - p2m[1, 2])
+            plo = min(plo, pc)
+            phi = max(phi, pc)
+            qlo = min(qlo, pr)
+            qhi = max(qhi, pr)
+        pad = 1e-6 * (1.0 + abs(plo) + abs(phi) + abs(qlo) + abs(qhi))
+        cs = max(0, c0, int(math.ceil(plo - pad)))
+        ce = min(W, c0 + 6, int(math.floor(phi + pad)) + 1)
         found = False
-        for r in range(max(0, r0_), min(H, r0_ + 6)):
+        for r in range(max(0, r0_, int(math.ceil(qlo - pad))), min(H, r0_ + 6, int(math.floor(qhi + pad)) + 1)):
             if found:
                 break
-            for c in range(max(0, c0), min(W, c0 + 6)):
+            for c in range(cs, ce):
                 qx = p2m[0, 0] * c + p2m[0, 1] * r + p2m[0, 2] - bx[i]
                 qy = p2m[1, 0] * c + p2m[1, 1] * r + p2m[1, 2] - by[i]
                 across = qx * ux[i] + qy * uy[i]
