@@ -291,18 +291,14 @@ def _split_cell_size(w, h, n, cell_mm):  # pragma: no cover - jit
     return max(_cell_size(w, h, n, cell_mm), _SPLIT_CELL * math.sqrt(max(w * h, 0.0) / max(n, 1)))
 
 
-@njit(cache=True, nogil=True)
-def _push(rec_s, rec_t, m, seg_id, t):  # pragma: no cover - jit
-    if m == rec_s.shape[0]:
-        ns = np.empty(2 * m, np.int64)
-        nt = np.empty(2 * m)
-        ns[:m] = rec_s[:m]
-        nt[:m] = rec_t[:m]
-        rec_s = ns
-        rec_t = nt
-    rec_s[m] = seg_id
-    rec_t[m] = t
-    return rec_s, rec_t, m + 1
+@njit(cache=True, nogil=True, inline="always")
+def _rec(rec_s, rec_t, m, seg_id, t):  # pragma: no cover - jit
+    """Record cut ``t`` of segment ``seg_id`` as the ``m``-th if the buffers hold it; returns
+    ``m + 1`` either way (the caller searches again with larger buffers when they overflow)."""
+    if m < rec_s.shape[0]:
+        rec_s[m] = seg_id
+        rec_t[m] = t
+    return m + 1
 
 
 @njit(cache=True, nogil=True)
@@ -348,15 +344,16 @@ def _near(sx, sy, ex, ey, A, B, d):  # pragma: no cover - jit
 @njit(cache=True, nogil=True, inline="always")
 def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m):  # pragma: no cover - jit
     """Test segments ``A < B`` of :func:`split_at_crossings` (boxes grown by the near
-    distance): record the cuts each makes in the other (``_push``) and flag the ends that are
-    no ordinary joints. Returns the cut records and their count.
+    distance): record the cuts each makes in the other (``_rec``) and flag the ends that are
+    no ordinary joints. Returns the new count of cuts, recorded as far as the buffers
+    ``rec_s, rec_t`` hold.
 
     The search by runs calls this; the grid search (:func:`_grid_pairs`) keeps the same test
     written out in its loop, recording into fixed buffers (called or inlined there, the pair
     tests took several times as long). ``test_split_by_runs_equals_the_grid`` holds the two
     to the same results."""
     if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
-        return rec_s, rec_t, m
+        return m
     d0x = ex[A] - sx[A]
     d0y = ey[A] - sy[A]
     d1x = ex[B] - sx[B]
@@ -367,18 +364,18 @@ def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch
     l0 = d0x * d0x + d0y * d0y
     l1 = d1x * d1x + d1y * d1y
     if l0 == 0.0 or l1 == 0.0:
-        return rec_s, rec_t, m
+        return m
     if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
         # parallel: only collinear overlaps matter
         if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
             if _near(sx, sy, ex, ey, A, B, near_mm):
                 _isolate(touch_s, touch_e, A, B)
-            return rec_s, rec_t, m
+            return m
         # B's ends along A: an overlap of positive length, or just a joint
         u0 = (wx * d0x + wy * d0y) / l0
         u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
         if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
-            return rec_s, rec_t, m  # end to end (a straight run of a chain) or apart
+            return m  # end to end (a straight run of a chain) or apart
         for q in range(2):
             X = A if q == 0 else B
             Y = B if q == 0 else A
@@ -390,7 +387,7 @@ def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch
                 yy = sy[Y] if r == 0 else ey[Y]
                 t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
                 if tol < t < 1.0 - tol:
-                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
+                    m = _rec(rec_s, rec_t, m, X, t)
                     if r == 0:
                         touch_s[Y] = True
                     else:
@@ -406,30 +403,30 @@ def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch
                         touch_s[Y] = True
                     else:
                         touch_e[Y] = True
-        return rec_s, rec_t, m
+        return m
     ta = (wx * d1y - wy * d1x) / den
     tb = (wx * d0y - wy * d0x) / den
     if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
         if _near(sx, sy, ex, ey, A, B, near_mm):
             _isolate(touch_s, touch_e, A, B)
-        return rec_s, rec_t, m
+        return m
     ia = tol < ta < 1.0 - tol
     ib = tol < tb < 1.0 - tol
     if not ia and not ib:
-        return rec_s, rec_t, m  # a shared vertex: an ordinary joint
+        return m  # a shared vertex: an ordinary joint
     if ia:
-        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
+        m = _rec(rec_s, rec_t, m, A, ta)
     elif ta <= tol:
         touch_s[A] = True
     else:
         touch_e[A] = True
     if ib:
-        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
+        m = _rec(rec_s, rec_t, m, B, tb)
     elif tb <= tol:
         touch_s[B] = True
     else:
         touch_e[B] = True
-    return rec_s, rec_t, m
+    return m
 
 
 @njit(cache=True, nogil=True)
@@ -480,7 +477,7 @@ def _rects_apart(P, Q):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
-def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m):  # pragma: no cover - jit
+def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t):  # pragma: no cover - jit
     """The pair tests of :func:`split_at_crossings` by runs: the segments are cut into runs of
     consecutive chained segments (:func:`chain_successors`, :func:`_chain_runs`) whose
     directions stay within 35 degrees of the first and whose segments are long enough that
@@ -491,15 +488,17 @@ def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_
     are tested, runs paired by a sweep over their boxes.
 
     Returns ``False`` (nothing done) when the runs are not at least 8 segments long on average
-    (the grid is the better search), else ``True`` and the cut records."""
+    (the grid is the better search), else ``True``; and the number of cuts, recorded as far
+    as ``rec_s, rec_t`` hold."""
     n = sx.shape[0]
     ones = np.ones(n, np.bool_)
     succ = chain_successors(sx, sy, ex, ey, ones, ones, _keys(sx, sy), _keys(ex, ey))
     min_len = max(_RUN_MIN_LEN_MM, 2.0 * max(near_mm, 0.0) / _RUN_COS)
     run, ptr, mem = _chain_runs(sx, sy, ex, ey, ones, succ, min_len)
     nu = ptr.shape[0] - 1
+    m = 0
     if 8 * nu > n:
-        return False, rec_s, rec_t, m
+        return False, m
     ux0 = np.full(nu, np.inf)
     ux1 = np.full(nu, -np.inf)
     uy0 = np.full(nu, np.inf)
@@ -586,17 +585,17 @@ def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_
                     q = j
                     while q < nB and lo[LB[q]] <= hi[a]:
                         B0 = LB[q]
-                        rec_s, rec_t, m = _pair(min(a, B0), max(a, B0), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+                        m = _pair(min(a, B0), max(a, B0), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
                         q += 1
                     i += 1
                 else:
                     q = i
                     while q < nA and lo[LA[q]] <= hi[b]:
                         A0 = LA[q]
-                        rec_s, rec_t, m = _pair(min(A0, b), max(A0, b), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+                        m = _pair(min(A0, b), max(A0, b), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
                         q += 1
                     j += 1
-    return True, rec_s, rec_t, m
+    return True, m
 
 
 @njit(cache=True, nogil=True)
@@ -819,7 +818,14 @@ def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - ji
         ylo = min(ylo, lo)
         yhi = max(yhi, hi)
     if use_runs and n >= _RUNS_FROM:
-        done, rec_s, rec_t, m = _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+        cap = n + 64
+        while True:  # cuts are few: buffers for as many as segments, more if they overflow
+            rec_s = np.empty(cap, np.int64)
+            rec_t = np.empty(cap)
+            done, m = _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t)
+            if m <= cap:
+                break
+            cap = m
     if n > 0 and not done:
         wx = xhi - xlo
         wy = yhi - ylo
