@@ -309,7 +309,7 @@ def test_near_segments_in_different_cells_are_compared():
     search. (Listed with a 1e-9-cell pad only, they were never compared.)"""
     for cell in (0.003, 0.01):
         xs = np.linspace(0.0, 1.0, 301)  # a straight chain of 300 segments, y = 0
-        h = K._cell_size(1.0, 0.5, 302, cell)
+        h = K._split_cell_size(1.0, 0.5, 302, cell)
         xb = -h + h * np.ceil((0.5 + h) / h)  # a cell boundary of the grid (x0 = min x - h)
         s = np.concatenate([np.stack([xs[:-1], np.zeros(300)], 1), [[xb - 2.5e-6, 0.5], [xb + 2.5e-6, 0.499]]])
         e = np.concatenate([np.stack([xs[1:], np.zeros(300)], 1), [[xb - 2.5e-6, 0.499], [xb + 2.5e-6, 0.5]]])

@@ -49,6 +49,9 @@ _RUN_MIN_SEGS = 3
 #: Sections with fewer segments than this are searched and measured without runs (finding
 #: the chains costs more than it saves).
 _RUNS_FROM = 16384
+#: The crossing search's cells are at least this times the side of a square per segment
+#: (:func:`_split_cell_size`).
+_SPLIT_CELL = 0.75
 #: :func:`simplify_section` replaces at most this many chained segments by one chord.
 _SIMPLIFY_SPAN = 64
 #: :func:`sample_widths_chained` lists the pieces in cells this many times the ray grid's.
@@ -286,17 +289,22 @@ def _cell_size(w, h, n, cell_mm):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
-def _push(rec_s, rec_t, m, seg_id, t):  # pragma: no cover - jit
-    if m == rec_s.shape[0]:
-        ns = np.empty(2 * m, np.int64)
-        nt = np.empty(2 * m)
-        ns[:m] = rec_s[:m]
-        nt[:m] = rec_t[:m]
-        rec_s = ns
-        rec_t = nt
-    rec_s[m] = seg_id
-    rec_t[m] = t
-    return rec_s, rec_t, m + 1
+def _split_cell_size(w, h, n, cell_mm):  # pragma: no cover - jit
+    """Cell side of the crossing search's grid for ``n`` segments over a ``w`` x ``h`` mm box:
+    :func:`_cell_size`, or ``_SPLIT_CELL`` times the side of a square per segment if larger
+    (each pair of pieces is tested once, so a few more per cell cost less than listing long
+    segments in more cells)."""
+    return max(_cell_size(w, h, n, cell_mm), _SPLIT_CELL * math.sqrt(max(w * h, 0.0) / max(n, 1)))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _rec(rec_s, rec_t, m, seg_id, t):  # pragma: no cover - jit
+    """Record cut ``t`` of segment ``seg_id`` as the ``m``-th if the buffers hold it; returns
+    ``m + 1`` either way (the caller searches again with larger buffers when they overflow)."""
+    if m < rec_s.shape[0]:
+        rec_s[m] = seg_id
+        rec_t[m] = t
+    return m + 1
 
 
 @njit(cache=True, nogil=True)
@@ -342,15 +350,16 @@ def _near(sx, sy, ex, ey, A, B, d):  # pragma: no cover - jit
 @njit(cache=True, nogil=True, inline="always")
 def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m):  # pragma: no cover - jit
     """Test segments ``A < B`` of :func:`split_at_crossings` (boxes grown by the near
-    distance): record the cuts each makes in the other (``_push``) and flag the ends that are
-    no ordinary joints. Returns the cut records and their count.
+    distance): record the cuts each makes in the other (``_rec``) and flag the ends that are
+    no ordinary joints. Returns the new count of cuts, recorded as far as the buffers
+    ``rec_s, rec_t`` hold.
 
-    The search by runs calls this; the grid search in :func:`_split` keeps the same test
-    written out in its loop (called there, it made the check of the real meshes, a few
-    hundred segments per layer, 10-30 % slower). ``test_split_by_runs_equals_the_grid``
-    holds the two to the same results."""
+    The search by runs calls this; the grid search (:func:`_grid_pairs`) keeps the same test
+    written out in its loop, recording into fixed buffers (called or inlined there, the pair
+    tests took several times as long). ``test_split_by_runs_equals_the_grid`` holds the two
+    to the same results."""
     if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
-        return rec_s, rec_t, m
+        return m
     d0x = ex[A] - sx[A]
     d0y = ey[A] - sy[A]
     d1x = ex[B] - sx[B]
@@ -361,18 +370,18 @@ def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch
     l0 = d0x * d0x + d0y * d0y
     l1 = d1x * d1x + d1y * d1y
     if l0 == 0.0 or l1 == 0.0:
-        return rec_s, rec_t, m
+        return m
     if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
         # parallel: only collinear overlaps matter
         if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
             if _near(sx, sy, ex, ey, A, B, near_mm):
                 _isolate(touch_s, touch_e, A, B)
-            return rec_s, rec_t, m
+            return m
         # B's ends along A: an overlap of positive length, or just a joint
         u0 = (wx * d0x + wy * d0y) / l0
         u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
         if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
-            return rec_s, rec_t, m  # end to end (a straight run of a chain) or apart
+            return m  # end to end (a straight run of a chain) or apart
         for q in range(2):
             X = A if q == 0 else B
             Y = B if q == 0 else A
@@ -384,7 +393,7 @@ def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch
                 yy = sy[Y] if r == 0 else ey[Y]
                 t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
                 if tol < t < 1.0 - tol:
-                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
+                    m = _rec(rec_s, rec_t, m, X, t)
                     if r == 0:
                         touch_s[Y] = True
                     else:
@@ -400,30 +409,30 @@ def _pair(A, B, sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch
                         touch_s[Y] = True
                     else:
                         touch_e[Y] = True
-        return rec_s, rec_t, m
+        return m
     ta = (wx * d1y - wy * d1x) / den
     tb = (wx * d0y - wy * d0x) / den
     if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
         if _near(sx, sy, ex, ey, A, B, near_mm):
             _isolate(touch_s, touch_e, A, B)
-        return rec_s, rec_t, m
+        return m
     ia = tol < ta < 1.0 - tol
     ib = tol < tb < 1.0 - tol
     if not ia and not ib:
-        return rec_s, rec_t, m  # a shared vertex: an ordinary joint
+        return m  # a shared vertex: an ordinary joint
     if ia:
-        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
+        m = _rec(rec_s, rec_t, m, A, ta)
     elif ta <= tol:
         touch_s[A] = True
     else:
         touch_e[A] = True
     if ib:
-        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
+        m = _rec(rec_s, rec_t, m, B, tb)
     elif tb <= tol:
         touch_s[B] = True
     else:
         touch_e[B] = True
-    return rec_s, rec_t, m
+    return m
 
 
 @njit(cache=True, nogil=True)
@@ -474,7 +483,7 @@ def _rects_apart(P, Q):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
-def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m):  # pragma: no cover - jit
+def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t):  # pragma: no cover - jit
     """The pair tests of :func:`split_at_crossings` by runs: the segments are cut into runs of
     consecutive chained segments (:func:`chain_successors`, :func:`_chain_runs`) whose
     directions stay within 35 degrees of the first and whose segments are long enough that
@@ -485,15 +494,17 @@ def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_
     are tested, runs paired by a sweep over their boxes.
 
     Returns ``False`` (nothing done) when the runs are not at least 8 segments long on average
-    (the grid is the better search), else ``True`` and the cut records."""
+    (the grid is the better search), else ``True``; and the number of cuts, recorded as far
+    as ``rec_s, rec_t`` hold."""
     n = sx.shape[0]
     ones = np.ones(n, np.bool_)
     succ = chain_successors(sx, sy, ex, ey, ones, ones, _keys(sx, sy), _keys(ex, ey))
     min_len = max(_RUN_MIN_LEN_MM, 2.0 * max(near_mm, 0.0) / _RUN_COS)
     run, ptr, mem = _chain_runs(sx, sy, ex, ey, ones, succ, min_len)
     nu = ptr.shape[0] - 1
+    m = 0
     if 8 * nu > n:
-        return False, rec_s, rec_t, m
+        return False, m
     ux0 = np.full(nu, np.inf)
     ux1 = np.full(nu, -np.inf)
     uy0 = np.full(nu, np.inf)
@@ -580,24 +591,210 @@ def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_
                     q = j
                     while q < nB and lo[LB[q]] <= hi[a]:
                         B0 = LB[q]
-                        rec_s, rec_t, m = _pair(min(a, B0), max(a, B0), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+                        m = _pair(min(a, B0), max(a, B0), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
                         q += 1
                     i += 1
                 else:
                     q = i
                     while q < nA and lo[LA[q]] <= hi[b]:
                         A0 = LA[q]
-                        rec_s, rec_t, m = _pair(min(A0, b), max(A0, b), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+                        m = _pair(min(A0, b), max(A0, b), sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
                         q += 1
                     j += 1
-    return True, rec_s, rec_t, m
+    return True, m
+
+
+@njit(cache=True, nogil=True)
+def _piece_cells(sx, sy, ex, ey, x0, y0, h, ncx, ncy, grow):  # pragma: no cover - jit
+    """The cells of the grid search (square, side ``h``, from ``x0, y0``): every segment is
+    cut into pieces no longer than ``h`` and each piece is listed in the cells its box, grown
+    by ``grow`` mm, touches (as in :func:`_cells`). Returns the CSR ``start, ent`` of the
+    entries per cell, each entry ``4 * segment + 2 * (the cell is the first column the piece
+    is listed in) + (the cell is its first row)``: two pieces in a cell are listed together
+    in an earlier cell too unless their entries' low bits together make 3."""
+    n = sx.shape[0]
+    pm = np.empty(n, np.int64)
+    npieces = 0
+    for k in range(n):
+        dx = ex[k] - sx[k]
+        dy = ey[k] - sy[k]
+        mk = max(1, int(math.ceil(math.sqrt(dx * dx + dy * dy) / h)))
+        pm[k] = mk
+        npieces += mk
+    cr = np.empty((npieces, 4), np.int64)  # each piece's first and last cell column and row
+    ncell = ncx * ncy
+    start = np.zeros(ncell + 1, np.int64)
+    pad = 1e-9 * h + grow
+    ih = 1.0 / h
+    p = 0
+    for k in range(n):
+        mk = pm[k]
+        for j in range(mk):
+            if mk == 1:
+                ax = sx[k]
+                ay = sy[k]
+                bx = ex[k]
+                by = ey[k]
+            else:
+                f0 = j / mk
+                f1 = (j + 1) / mk
+                ax = sx[k] + f0 * (ex[k] - sx[k])
+                ay = sy[k] + f0 * (ey[k] - sy[k])
+                bx = ex[k] if j == mk - 1 else sx[k] + f1 * (ex[k] - sx[k])
+                by = ey[k] if j == mk - 1 else sy[k] + f1 * (ey[k] - sy[k])
+            # (truncation is the floor here: the negatives it rounds up are clamped to 0)
+            cx0 = max(0, min(ncx - 1, int((min(ax, bx) - pad - x0) * ih)))
+            cx1 = max(0, min(ncx - 1, int((max(ax, bx) + pad - x0) * ih)))
+            cy0 = max(0, min(ncy - 1, int((min(ay, by) - pad - y0) * ih)))
+            cy1 = max(0, min(ncy - 1, int((max(ay, by) + pad - y0) * ih)))
+            cr[p, 0] = cx0
+            cr[p, 1] = cx1
+            cr[p, 2] = cy0
+            cr[p, 3] = cy1
+            for cy in range(cy0, cy1 + 1):
+                for cx in range(cx0, cx1 + 1):
+                    start[cy * ncx + cx + 1] += 1
+            p += 1
+    for i in range(ncell):
+        start[i + 1] += start[i]
+    ent = np.empty(start[ncell], np.int64)
+    fill = start[:-1].copy()
+    p = 0
+    for k in range(n):
+        for j in range(pm[k]):
+            cx0 = cr[p, 0]
+            cy0 = cr[p, 2]
+            for cy in range(cy0, cr[p, 3] + 1):
+                for cx in range(cx0, cr[p, 1] + 1):
+                    c = cy * ncx + cx
+                    ent[fill[c]] = 4 * k + (2 if cx == cx0 else 0) + (1 if cy == cy0 else 0)
+                    fill[c] += 1
+            p += 1
+    return start, ent
+
+
+@njit(cache=True, nogil=True)
+def _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, start, ent, near_mm, tol, touch_s, touch_e, rec_s, rec_t):  # pragma: no cover - jit
+    """The pair tests of the grid search (:func:`_piece_cells`): every pair of segments with
+    pieces in a common cell and overlapping boxes (grown by the near distance), each pair of
+    pieces once, in the first cell both are listed in (the later of their first columns, the
+    later of their first rows). The test is :func:`_pair`'s, step for step, written out here
+    (called, or inlined, it was several times slower). Returns the number of cuts, recorded
+    as far as ``rec_s, rec_t`` hold (the caller searches again with larger buffers when they
+    overflow)."""
+    m = 0
+    for c in range(start.shape[0] - 1):
+        a0 = start[c]
+        a1 = start[c + 1]
+        if a1 - a0 < 2:
+            continue
+        swept = a1 - a0 > 32
+        if swept:
+            # a crowded cell: its entries by the left edge of their segment's box, each pair
+            # looked at only while the boxes can overlap in x (a sweep)
+            cell = ent[a0:a1]
+            ent[a0:a1] = cell[np.argsort(bx0[cell >> 2], kind="mergesort")]
+        for a in range(a0, a1):
+            ea = ent[a]
+            A0 = ea >> 2
+            for b in range(a + 1, a1):
+                eb = ent[b]
+                B0 = eb >> 2
+                if swept and bx0[B0] > bx1[A0]:
+                    break  # this and every later box start right of A's box
+                if (ea | eb) & 3 != 3 or A0 == B0:
+                    continue  # listed together in an earlier cell, or one segment
+                A = min(A0, B0)  # the lower segment first
+                B = max(A0, B0)
+                if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
+                    continue
+                d0x = ex[A] - sx[A]
+                d0y = ey[A] - sy[A]
+                d1x = ex[B] - sx[B]
+                d1y = ey[B] - sy[B]
+                wx = sx[B] - sx[A]
+                wy = sy[B] - sy[A]
+                den = d0x * d1y - d0y * d1x
+                l0 = d0x * d0x + d0y * d0y
+                l1 = d1x * d1x + d1y * d1y
+                if l0 == 0.0 or l1 == 0.0:
+                    continue
+                if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
+                    # parallel: only collinear overlaps matter
+                    if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
+                        if _near(sx, sy, ex, ey, A, B, near_mm):
+                            _isolate(touch_s, touch_e, A, B)
+                        continue
+                    # B's ends along A: an overlap of positive length, or just a joint
+                    u0 = (wx * d0x + wy * d0y) / l0
+                    u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
+                    if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
+                        continue  # end to end (a straight run of a chain) or apart
+                    for q in range(2):
+                        X = A if q == 0 else B
+                        Y = B if q == 0 else A
+                        dx = ex[X] - sx[X]
+                        dy = ey[X] - sy[X]
+                        ll = dx * dx + dy * dy
+                        for r in range(2):  # Y's ends on X
+                            yx = sx[Y] if r == 0 else ex[Y]
+                            yy = sy[Y] if r == 0 else ey[Y]
+                            t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
+                            if tol < t < 1.0 - tol:
+                                if m < rec_s.shape[0]:
+                                    rec_s[m] = X
+                                    rec_t[m] = t
+                                m += 1
+                                if r == 0:
+                                    touch_s[Y] = True
+                                else:
+                                    touch_e[Y] = True
+                            elif -tol <= t <= 1.0 + tol:
+                                # ends meet on an overlap: neither end is an ordinary joint
+                                if t <= tol:
+                                    touch_s[X] = True
+                                else:
+                                    touch_e[X] = True
+                                if r == 0:
+                                    touch_s[Y] = True
+                                else:
+                                    touch_e[Y] = True
+                    continue
+                ta = (wx * d1y - wy * d1x) / den
+                tb = (wx * d0y - wy * d0x) / den
+                if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
+                    if _near(sx, sy, ex, ey, A, B, near_mm):
+                        _isolate(touch_s, touch_e, A, B)
+                    continue
+                ia = tol < ta < 1.0 - tol
+                ib = tol < tb < 1.0 - tol
+                if not ia and not ib:
+                    continue  # a shared vertex: an ordinary joint
+                if ia:
+                    if m < rec_s.shape[0]:
+                        rec_s[m] = A
+                        rec_t[m] = ta
+                    m += 1
+                elif ta <= tol:
+                    touch_s[A] = True
+                else:
+                    touch_e[A] = True
+                if ib:
+                    if m < rec_s.shape[0]:
+                        rec_s[m] = B
+                        rec_t[m] = tb
+                    m += 1
+                elif tb <= tol:
+                    touch_s[B] = True
+                else:
+                    touch_e[B] = True
+    return m
 
 
 @njit(cache=True, nogil=True)
 def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - jit
     """:func:`split_at_crossings`, by runs (``use_runs``, when it pays) or by the grid."""
     n = sx.shape[0]
-    keep = np.ones(n, np.bool_)
     tol = 1e-12
     touch_s = np.zeros(n, np.bool_)
     touch_e = np.zeros(n, np.bool_)
@@ -606,137 +803,58 @@ def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - ji
     m = 0
     done = False
     g = max(near_mm, 0.0)
-    bx0 = np.minimum(sx, ex) - g
-    bx1 = np.maximum(sx, ex) + g
-    by0 = np.minimum(sy, ey) - g
-    by1 = np.maximum(sy, ey) + g
+    # the segments' boxes grown by the near distance, and the section's box (one pass)
+    bx0 = np.empty(n)
+    bx1 = np.empty(n)
+    by0 = np.empty(n)
+    by1 = np.empty(n)
+    xlo = ylo = np.inf
+    xhi = yhi = -np.inf
+    for k in range(n):
+        lo = min(sx[k], ex[k])
+        hi = max(sx[k], ex[k])
+        bx0[k] = lo - g
+        bx1[k] = hi + g
+        xlo = min(xlo, lo)
+        xhi = max(xhi, hi)
+        lo = min(sy[k], ey[k])
+        hi = max(sy[k], ey[k])
+        by0[k] = lo - g
+        by1[k] = hi + g
+        ylo = min(ylo, lo)
+        yhi = max(yhi, hi)
     if use_runs and n >= _RUNS_FROM:
-        done, rec_s, rec_t, m = _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t, m)
+        cap = n + 64
+        while True:  # cuts are few: buffers for as many as segments, more if they overflow
+            rec_s = np.empty(cap, np.int64)
+            rec_t = np.empty(cap)
+            done, m = _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_e, rec_s, rec_t)
+            if m <= cap:
+                break
+            cap = m
     if n > 0 and not done:
-        wx = max(sx.max(), ex.max()) - min(sx.min(), ex.min())
-        wy = max(sy.max(), ey.max()) - min(sy.min(), ey.min())
-        h = _cell_size(wx, wy, n, cell_mm)
+        wx = xhi - xlo
+        wy = yhi - ylo
+        h = _split_cell_size(wx, wy, n, cell_mm)
         if n <= _FEW:
             h = max(h, 2.0 * max(wx, wy), 1e-9)  # few segments: one cell holds them all (every pair)
-        xmin = min(sx.min(), ex.min()) - h
-        ymin = min(sy.min(), ey.min()) - h
-        xmax = max(sx.max(), ex.max()) + h
-        ymax = max(sy.max(), ey.max()) + h
+        xmin = xlo - h
+        ymin = ylo - h
+        xmax = xhi + h
+        ymax = yhi + h
         ncx = int((xmax - xmin) / h) + 1
         ncy = int((ymax - ymin) / h) + 1
         # pieces are listed in every cell their box grown by the near distance touches: two
         # segments that cross, touch or come within it share a cell
-        px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy, g)
-        # each cell's pieces by the left edge of their segment's box: a pair is looked at only
-        # while the boxes can overlap in x (a sweep; the same pairs meet, fewer are tried)
-        key = np.empty(idx.shape[0])
-        for j in range(idx.shape[0]):
-            key[j] = bx0[par[idx[j]]]
-        for c in range(ncx * ncy):
-            a0 = start[c]
-            a1 = start[c + 1]
-            if a1 - a0 > 32:
-                o = np.argsort(key[a0:a1], kind="mergesort")
-                tmp_i = idx[a0:a1][o]
-                tmp_k = key[a0:a1][o]
-                idx[a0:a1] = tmp_i
-                key[a0:a1] = tmp_k
-            else:
-                for j in range(a0 + 1, a1):  # insertion sort: cells hold few pieces
-                    pi = idx[j]
-                    kv = key[j]
-                    q = j - 1
-                    while q >= a0 and key[q] > kv:
-                        idx[q + 1] = idx[q]
-                        key[q + 1] = key[q]
-                        q -= 1
-                    idx[q + 1] = pi
-                    key[q + 1] = kv
-        for c in range(ncx * ncy):
-            for a in range(start[c], start[c + 1]):
-                A0 = par[idx[a]]
-                for b in range(a + 1, start[c + 1]):
-                    B0 = par[idx[b]]
-                    if bx0[B0] > bx1[A0]:
-                        break  # this and every later box start right of A's box
-                    if A0 == B0:
-                        continue
-                    A = min(A0, B0)  # the lower segment first, as without the sweep
-                    B = max(A0, B0)
-                    if bx0[A] > bx1[B] or bx0[B] > bx1[A] or by0[A] > by1[B] or by0[B] > by1[A]:
-                        continue
-                    d0x = ex[A] - sx[A]
-                    d0y = ey[A] - sy[A]
-                    d1x = ex[B] - sx[B]
-                    d1y = ey[B] - sy[B]
-                    wx = sx[B] - sx[A]
-                    wy = sy[B] - sy[A]
-                    den = d0x * d1y - d0y * d1x
-                    l0 = d0x * d0x + d0y * d0y
-                    l1 = d1x * d1x + d1y * d1y
-                    if l0 == 0.0 or l1 == 0.0:
-                        continue
-                    if abs(den) <= 1e-12 * math.sqrt(l0 * l1):
-                        # parallel: only collinear overlaps matter
-                        if abs(wx * d0y - wy * d0x) > 1e-12 * (l0 + wx * wx + wy * wy):
-                            if _near(sx, sy, ex, ey, A, B, near_mm):
-                                _isolate(touch_s, touch_e, A, B)
-                            continue
-                        # B's ends along A: an overlap of positive length, or just a joint
-                        u0 = (wx * d0x + wy * d0y) / l0
-                        u1 = ((ex[B] - sx[A]) * d0x + (ey[B] - sy[A]) * d0y) / l0
-                        if min(max(u0, u1), 1.0) - max(min(u0, u1), 0.0) <= tol:
-                            continue  # end to end (a straight run of a chain) or apart
-                        for q in range(2):
-                            X = A if q == 0 else B
-                            Y = B if q == 0 else A
-                            dx = ex[X] - sx[X]
-                            dy = ey[X] - sy[X]
-                            ll = dx * dx + dy * dy
-                            for r in range(2):  # Y's ends on X
-                                yx = sx[Y] if r == 0 else ex[Y]
-                                yy = sy[Y] if r == 0 else ey[Y]
-                                t = ((yx - sx[X]) * dx + (yy - sy[X]) * dy) / ll
-                                if tol < t < 1.0 - tol:
-                                    rec_s, rec_t, m = _push(rec_s, rec_t, m, X, t)
-                                    if r == 0:
-                                        touch_s[Y] = True
-                                    else:
-                                        touch_e[Y] = True
-                                elif -tol <= t <= 1.0 + tol:
-                                    # ends meet on an overlap: neither end is an ordinary joint
-                                    ty = 0.0 if r == 0 else 1.0
-                                    if t <= tol:
-                                        touch_s[X] = True
-                                    else:
-                                        touch_e[X] = True
-                                    if ty == 0.0:
-                                        touch_s[Y] = True
-                                    else:
-                                        touch_e[Y] = True
-                        continue
-                    ta = (wx * d1y - wy * d1x) / den
-                    tb = (wx * d0y - wy * d0x) / den
-                    if ta < -tol or ta > 1.0 + tol or tb < -tol or tb > 1.0 + tol:
-                        if _near(sx, sy, ex, ey, A, B, near_mm):
-                            _isolate(touch_s, touch_e, A, B)
-                        continue
-                    ia = tol < ta < 1.0 - tol
-                    ib = tol < tb < 1.0 - tol
-                    if not ia and not ib:
-                        continue  # a shared vertex: an ordinary joint
-                    if ia:
-                        rec_s, rec_t, m = _push(rec_s, rec_t, m, A, ta)
-                    elif ta <= tol:
-                        touch_s[A] = True
-                    else:
-                        touch_e[A] = True
-                    if ib:
-                        rec_s, rec_t, m = _push(rec_s, rec_t, m, B, tb)
-                    elif tb <= tol:
-                        touch_s[B] = True
-                    else:
-                        touch_e[B] = True
+        start, ent = _piece_cells(sx, sy, ex, ey, xmin, ymin, h, ncx, ncy, g)
+        cap = n + 64
+        while True:  # cuts are few: buffers for as many as segments, more if they overflow
+            rec_s = np.empty(cap, np.int64)
+            rec_t = np.empty(cap)
+            m = _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, start, ent, near_mm, tol, touch_s, touch_e, rec_s, rec_t)
+            if m <= cap:
+                break
+            cap = m
     # pieces: every segment from 0 to 1 through its sorted cut parameters
     cuts_n = np.zeros(n + 1, np.int64)
     for i in range(m):
@@ -1708,10 +1826,17 @@ def _runs_at(rs, r0, r1, r, c):  # pragma: no cover - jit
 @njit(cache=True, nogil=True)
 def chord_presence_runs(bx, by, ux, uy, width, rs, r0, r1, H, W, want, p2m, m2p, half_along):  # pragma: no cover - jit
     """:func:`chord_presence` on the image given as runs (:func:`fill_runs`, ``H`` x ``W``):
-    the same pixel centres in the same order, material where a run covers the pixel."""
+    the same pixel centres (those of the window in the bounding box of the chord's rectangle,
+    where the others cannot be), material where a run covers the pixel."""
     n = bx.shape[0]
     out = np.zeros(n, np.bool_)
     wm = want != 0
+    # pixel_to_model's inverse (the pixels whose centres can be in a rectangle)
+    det = p2m[0, 0] * p2m[1, 1] - p2m[0, 1] * p2m[1, 0]
+    i00 = p2m[1, 1] / det
+    i01 = -p2m[0, 1] / det
+    i10 = -p2m[1, 0] / det
+    i11 = p2m[0, 0] / det
     for i in range(n):
         w = width[i]
         mx = bx[i] + 0.5 * w * ux[i]
@@ -1720,11 +1845,30 @@ def chord_presence_runs(bx, by, ux, uy, width, rs, r0, r1, H, W, want, p2m, m2p,
         mr = m2p[1, 0] * mx + m2p[1, 1] * my + m2p[1, 2]
         c0 = int(math.floor(mc)) - 2
         r0_ = int(math.floor(mr)) - 2
+        # the chord's rectangle in pixel indices (its corners by the inverse of p2m), grown
+        # by a rounding margin: only the window's pixels in its bounding box can pass the
+        # test below
+        tx = -uy[i] * half_along
+        ty = ux[i] * half_along
+        plo = qlo = np.inf
+        phi = qhi = -np.inf
+        for k in range(4):
+            cx_ = bx[i] + (w * ux[i] if k >= 2 else 0.0) + (tx if k == 0 or k == 3 else -tx)
+            cy_ = by[i] + (w * uy[i] if k >= 2 else 0.0) + (ty if k == 0 or k == 3 else -ty)
+            pc = i00 * (cx_ - p2m[0, 2]) + i01 * (cy_ - p2m[1, 2])
+            pr = i10 * (cx_ - p2m[0, 2]) + i11 * (cy_ - p2m[1, 2])
+            plo = min(plo, pc)
+            phi = max(phi, pc)
+            qlo = min(qlo, pr)
+            qhi = max(qhi, pr)
+        pad = 1e-6 * (1.0 + abs(plo) + abs(phi) + abs(qlo) + abs(qhi))
+        cs = max(0, c0, int(math.ceil(plo - pad)))
+        ce = min(W, c0 + 6, int(math.floor(phi + pad)) + 1)
         found = False
-        for r in range(max(0, r0_), min(H, r0_ + 6)):
+        for r in range(max(0, r0_, int(math.ceil(qlo - pad))), min(H, r0_ + 6, int(math.floor(qhi + pad)) + 1)):
             if found:
                 break
-            for c in range(max(0, c0), min(W, c0 + 6)):
+            for c in range(cs, ce):
                 qx = p2m[0, 0] * c + p2m[0, 1] * r + p2m[0, 2] - bx[i]
                 qy = p2m[1, 0] * c + p2m[1, 1] * r + p2m[1, 2] - by[i]
                 across = qx * ux[i] + qy * uy[i]
