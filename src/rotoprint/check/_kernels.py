@@ -605,7 +605,7 @@ def _run_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, near_mm, tol, touch_s, touch_
 
 
 @njit(cache=True, nogil=True)
-def _piece_cells(sx, sy, ex, ey, x0, y0, h, ncx, ncy, grow):  # pragma: no cover - jit
+def _split_cells(sx, sy, ex, ey, x0, y0, h, ncx, ncy, grow):  # pragma: no cover - jit
     """The cells of the grid search (square, side ``h``, from ``x0, y0``): every segment is
     cut into pieces no longer than ``h`` and each piece is listed in the cells its box, grown
     by ``grow`` mm, touches (as in :func:`_cells`). Returns the CSR ``start, ent`` of the
@@ -675,7 +675,7 @@ def _piece_cells(sx, sy, ex, ey, x0, y0, h, ncx, ncy, grow):  # pragma: no cover
 
 @njit(cache=True, nogil=True)
 def _grid_pairs(sx, sy, ex, ey, bx0, bx1, by0, by1, start, ent, near_mm, tol, touch_s, touch_e, rec_s, rec_t):  # pragma: no cover - jit
-    """The pair tests of the grid search (:func:`_piece_cells`): every pair of segments with
+    """The pair tests of the grid search (:func:`_split_cells`): every pair of segments with
     pieces in a common cell and overlapping boxes (grown by the near distance), each pair of
     pieces once, in the first cell both are listed in (the later of their first columns, the
     later of their first rows). The test is :func:`_pair`'s, step for step, written out here
@@ -846,7 +846,7 @@ def _split(sx, sy, ex, ey, cell_mm, near_mm, use_runs):  # pragma: no cover - ji
         ncy = int((ymax - ymin) / h) + 1
         # pieces are listed in every cell their box grown by the near distance touches: two
         # segments that cross, touch or come within it share a cell
-        start, ent = _piece_cells(sx, sy, ex, ey, xmin, ymin, h, ncx, ncy, g)
+        start, ent = _split_cells(sx, sy, ex, ey, xmin, ymin, h, ncx, ncy, g)
         cap = n + 64
         while True:  # cuts are few: buffers for as many as segments, more if they overflow
             rec_s = np.empty(cap, np.int64)
