@@ -11,7 +11,7 @@ open); the others are shut in: uncured resin that cannot drain (DLP), support or
 
 The work follows the runs, not the image, and is streamed: only the last layer's empty runs
 and one record per body are kept. :class:`CavityTracker` is the public face; the kernel is
-:func:`cavity_layer`.
+:func:`cavity_step`.
 """
 
 from __future__ import annotations
@@ -77,19 +77,26 @@ def _union(parent, a, b):  # pragma: no cover - jit
             parent[a] = b
 
 
-@njit(cache=True, nogil=True)
-def cavity_layer(es, e0, e1, W, ps, p0, p1, pcomp, npc):  # pragma: no cover - jit
-    """One layer's empty runs ``es, e0, e1`` (:func:`empty_runs`) as bodies of empty space,
-    joined to those of the layer below (its empty runs ``ps, p0, p1`` and the body of each,
-    ``pcomp`` in ``0..npc-1``; ``npc = 0`` and empty arrays for the first layer).
+#: Rows of a body record (:func:`cavity_step`).
+_FIRST, _LAST, _PIX, _SROW, _SCOL, _ROW0, _ROW1, _COL0, _COL1, _OPEN = range(10)
 
-    Returns ``comp`` ``(E,)`` the layer's own component of each run (4-neighbours, ``0..C-1``
-    in raster order), per component ``(7, C) float64`` statistics (pixels, sums of rows and of
-    columns, first and last row, first and last column) and ``(C,) bool`` whether it touches
-    the field's edge, then the group of each component ``(C,)`` and of each body below
-    ``(npc,)``: components and bodies below with the same group are one body now (groups
-    ``0..G-1``), and ``G``.
+
+@njit(cache=True, nogil=True)
+def cavity_step(rs, r0, r1, W, ps, p0, p1, pcomp, bodies, layer):  # pragma: no cover - jit
+    """One layer of the cavity search, in one call.
+
+    ``rs, r0, r1`` are the layer's material runs; ``ps, p0, p1`` the empty runs of the layer
+    below, ``pcomp`` the body (``0..B-1``) of each and ``bodies`` their ``(10, B) float64``
+    records (first and last layer, pixels, sums of rows and of columns, first and last row,
+    first and last column, open: 1.0 if any part reaches the field's edge); for the first
+    layer empty arrays and ``B = 0``.
+
+    The layer's empty runs are joined by 4-neighbours within the layer and to the empty runs
+    below that share a pixel; the bodies so joined merge. Returns the layer's empty runs
+    ``es, e0, e1``, the body of each ``(E,)``, the records of the bodies present in this layer
+    ``(10, B')``, and those of the bodies that ended in the layer below shut in ``(10, K)``.
     """
+    es, e0, e1 = empty_runs(rs, r0, r1, W)
     H = es.shape[0] - 1
     n = e0.shape[0]
     parent = np.arange(n)
@@ -112,29 +119,10 @@ def cavity_layer(es, e0, e1, W, ps, p0, p1, pcomp, npc):  # pragma: no cover - j
             root_c[r] = nc
             nc += 1
         comp[k] = root_c[r]
-    st = np.zeros((7, nc))
-    for c in range(nc):
-        st[3, c] = H
-        st[4, c] = -1
-        st[5, c] = W
-        st[6, c] = -1
-    edge = np.zeros(nc, np.bool_)
-    for j in range(H):
-        for k in range(es[j], es[j + 1]):
-            c = comp[k]
-            L = e1[k] - e0[k]
-            st[0, c] += L
-            st[1, c] += float(j) * L
-            st[2, c] += 0.5 * float(e0[k] + e1[k] - 1) * L
-            st[3, c] = min(st[3, c], j)
-            st[4, c] = max(st[4, c], j)
-            st[5, c] = min(st[5, c], e0[k])
-            st[6, c] = max(st[6, c], e1[k] - 1)
-            if j == 0 or j == H - 1 or e0[k] == 0 or e1[k] == W:
-                edge[c] = True
-    # join to the bodies below: nodes 0..nc-1 the components, nc..nc+npc-1 the bodies below
-    gp = np.arange(nc + npc)
-    if npc > 0:
+    nb = bodies.shape[1]
+    # groups: the layer's components (0..nc-1) and the bodies below (nc..nc+nb-1) joined
+    gp = np.arange(nc + nb)
+    if nb > 0:
         for j in range(H):
             q = ps[j]
             qe = ps[j + 1]
@@ -145,21 +133,83 @@ def cavity_layer(es, e0, e1, W, ps, p0, p1, pcomp, npc):  # pragma: no cover - j
                 while t < qe and p0[t] < e1[k]:
                     _union(gp, comp[k], nc + pcomp[t])
                     t += 1
-    grp = np.full(nc + npc, -1, np.int64)
-    root_g = np.full(nc + npc, -1, np.int64)
+    grp = np.full(nc + nb, -1, np.int64)
+    root_g = np.full(nc + nb, -1, np.int64)
     ng = 0
-    for v in range(nc + npc):
+    for v in range(nc + nb):
         r = _find(gp, v)
         if root_g[r] < 0:
             root_g[r] = ng
             ng += 1
         grp[v] = root_g[r]
-    return comp, st, edge, grp[:nc].copy(), grp[nc:].copy(), ng
+    agg = np.empty((10, ng))
+    for g in range(ng):
+        agg[_FIRST, g] = np.inf
+        agg[_LAST, g] = -np.inf
+        agg[_PIX, g] = 0.0
+        agg[_SROW, g] = 0.0
+        agg[_SCOL, g] = 0.0
+        agg[_ROW0, g] = np.inf
+        agg[_ROW1, g] = -np.inf
+        agg[_COL0, g] = np.inf
+        agg[_COL1, g] = -np.inf
+        agg[_OPEN, g] = 0.0
+    has = np.zeros(ng, np.bool_)
+    for b in range(nb):
+        g = grp[nc + b]
+        agg[_FIRST, g] = min(agg[_FIRST, g], bodies[_FIRST, b])
+        agg[_LAST, g] = max(agg[_LAST, g], bodies[_LAST, b])
+        agg[_PIX, g] += bodies[_PIX, b]
+        agg[_SROW, g] += bodies[_SROW, b]
+        agg[_SCOL, g] += bodies[_SCOL, b]
+        agg[_ROW0, g] = min(agg[_ROW0, g], bodies[_ROW0, b])
+        agg[_ROW1, g] = max(agg[_ROW1, g], bodies[_ROW1, b])
+        agg[_COL0, g] = min(agg[_COL0, g], bodies[_COL0, b])
+        agg[_COL1, g] = max(agg[_COL1, g], bodies[_COL1, b])
+        agg[_OPEN, g] = max(agg[_OPEN, g], bodies[_OPEN, b])
+    for j in range(H):
+        for k in range(es[j], es[j + 1]):
+            g = grp[comp[k]]
+            has[g] = True
+            L = e1[k] - e0[k]
+            agg[_FIRST, g] = min(agg[_FIRST, g], layer)
+            agg[_LAST, g] = layer
+            agg[_PIX, g] += L
+            agg[_SROW, g] += float(j) * L
+            agg[_SCOL, g] += 0.5 * float(e0[k] + e1[k] - 1) * L
+            agg[_ROW0, g] = min(agg[_ROW0, g], j)
+            agg[_ROW1, g] = max(agg[_ROW1, g], j)
+            agg[_COL0, g] = min(agg[_COL0, g], e0[k])
+            agg[_COL1, g] = max(agg[_COL1, g], e1[k] - 1)
+            if j == 0 or j == H - 1 or e0[k] == 0 or e1[k] == W:
+                agg[_OPEN, g] = 1.0
+    dense = np.full(ng, -1, np.int64)
+    nlive = 0
+    nend = 0
+    for g in range(ng):
+        if has[g]:
+            dense[g] = nlive
+            nlive += 1
+        elif agg[_OPEN, g] == 0.0:
+            nend += 1
+    live = np.empty((10, nlive))
+    ended = np.empty((10, nend))
+    q = 0
+    for g in range(ng):
+        if has[g]:
+            live[:, dense[g]] = agg[:, g]
+        elif agg[_OPEN, g] == 0.0:
+            ended[:, q] = agg[:, g]
+            q += 1
+    bcomp = np.empty(n, np.int64)
+    for k in range(n):
+        bcomp[k] = dense[grp[comp[k]]]
+    return es, e0, e1, bcomp, live, ended
 
 
 class CavityTracker:
     """Bodies of empty space followed layer by layer; :meth:`step` returns the bodies that
-    end shut in (their record) as the layer above closes them.
+    end shut in as the layer above closes them.
 
     A record: ``first_layer``, ``last_layer``, ``pixels`` (summed over the layers), mean
     ``row`` and ``col`` (pixel indices), and the pixel box ``row0, row1, col0, col1``.
@@ -168,90 +218,27 @@ class CavityTracker:
     def __init__(self, width: int, height: int) -> None:
         self.W = int(width)
         self.H = int(height)
-        self.prev: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self.prev_bodies: list[dict] = []  # the bodies present in the last layer, by dense index
+        self.prev = (np.zeros(self.H + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
         self.pcomp = np.zeros(0, np.int64)
+        self.bodies = np.zeros((10, 0))
 
     def step(self, rs: np.ndarray, r0: np.ndarray, r1: np.ndarray, layer: int) -> list[dict]:
-        es, e0, e1 = empty_runs(rs, r0, r1, self.W)
-        if self.prev is None:
-            ps = np.zeros(self.H + 1, np.int64)
-            p0 = p1 = np.zeros(0, np.int64)
-            pcomp = np.zeros(0, np.int64)
-        else:
-            ps, p0, p1 = self.prev
-            pcomp = self.pcomp
-        comp, st, edge, gc, gb, ng = cavity_layer(es, e0, e1, self.W, ps, p0, p1, pcomp, len(self.prev_bodies))
-        bodies: list[dict | None] = [None] * ng
-        # the bodies below merge into their group's body
-        for b, g in zip(self.prev_bodies, gb.tolist()):
-            cur = bodies[g]
-            bodies[g] = b if cur is None else _merge(cur, b)
-        has = np.zeros(ng, np.bool_)
-        has[gc] = True
-        ended = [g for g in range(ng) if bodies[g] is not None and not has[g]]
-        for c, g in enumerate(gc.tolist()):
-            rec = {
-                "first_layer": layer,
-                "last_layer": layer,
-                "pixels": float(st[0, c]),
-                "srow": float(st[1, c]),
-                "scol": float(st[2, c]),
-                "row0": int(st[3, c]),
-                "row1": int(st[4, c]),
-                "col0": int(st[5, c]),
-                "col1": int(st[6, c]),
-                "open": bool(edge[c]),
-            }
-            cur = bodies[g]
-            bodies[g] = rec if cur is None else _merge(cur, rec)
-        out = []
-        for g in ended:
-            b = bodies[g]
-            if not b["open"]:
-                out.append(_public(b))
-        # the bodies present now, densely numbered in the order of their groups
-        live = np.flatnonzero(has)
-        dense = np.full(ng, -1, np.int64)
-        dense[live] = np.arange(len(live))
-        self.prev_bodies = [bodies[g] for g in live.tolist()]
-        self.pcomp = dense[gc][comp]
+        es, e0, e1, self.pcomp, self.bodies, ended = cavity_step(rs, r0, r1, self.W, *self.prev, self.pcomp, self.bodies, float(layer))
         self.prev = (es, e0, e1)
+        out = []
+        for b in ended.T.tolist():
+            n = b[_PIX]
+            out.append(
+                {
+                    "first_layer": int(b[_FIRST]),
+                    "last_layer": int(b[_LAST]),
+                    "pixels": n,
+                    "row": b[_SROW] / n,
+                    "col": b[_SCOL] / n,
+                    "row0": int(b[_ROW0]),
+                    "row1": int(b[_ROW1]),
+                    "col0": int(b[_COL0]),
+                    "col1": int(b[_COL1]),
+                }
+            )
         return out
-
-    def finish(self) -> list[dict]:
-        """Bodies present in the last layer are open to what lies above the part: none ends
-        shut in. Returns ``[]`` (kept for symmetry with :meth:`step`)."""
-        self.prev = None
-        self.prev_bodies = []
-        return []
-
-
-def _merge(a: dict, b: dict) -> dict:
-    return {
-        "first_layer": min(a["first_layer"], b["first_layer"]),
-        "last_layer": max(a["last_layer"], b["last_layer"]),
-        "pixels": a["pixels"] + b["pixels"],
-        "srow": a["srow"] + b["srow"],
-        "scol": a["scol"] + b["scol"],
-        "row0": min(a["row0"], b["row0"]),
-        "row1": max(a["row1"], b["row1"]),
-        "col0": min(a["col0"], b["col0"]),
-        "col1": max(a["col1"], b["col1"]),
-        "open": a["open"] or b["open"],
-    }
-
-
-def _public(b: dict) -> dict:
-    n = b["pixels"]
-    return {
-        "first_layer": b["first_layer"],
-        "last_layer": b["last_layer"],
-        "pixels": n,
-        "row": b["srow"] / n,
-        "col": b["scol"] / n,
-        "row0": b["row0"],
-        "row1": b["row1"],
-        "col0": b["col0"],
-        "col1": b["col1"],
-    }

@@ -50,6 +50,8 @@ _RAY_TMIN_MM = 1e-9
 #: Smallest side of the cells (in pixels) in which rays look for the other side of a wall or gap
 #: (cells grow where segments are sparse, see ``_kernels._cell_size``).
 _CELL_PX = 0.5
+#: Samples along the boundary at most this many pixels apart.
+_SPACING_PX = 0.5
 #: Chords of one kind closer than this many pixels are reported as one finding.
 _GROUP_PX = 1
 #: Walls and gaps narrower than this many pixels are tested against the raster. A chord's
@@ -318,7 +320,7 @@ class _LayerChecker:
         self.m2p = np.ascontiguousarray(g.model_to_pixel)
         self.p2m = np.ascontiguousarray(g.pixel_to_model)
         self.pmax = max(g.pitch_x_mm, g.pitch_y_mm)
-        self.spacing = 0.5 * min(g.pitch_x_mm, g.pitch_y_mm)
+        self.spacing = _SPACING_PX * min(g.pitch_x_mm, g.pitch_y_mm)
         self.min_wall = min_wall_mm
         self.min_gap = min_gap_mm
         self.cap = measure_up_to_mm
