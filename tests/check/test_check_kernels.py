@@ -183,6 +183,11 @@ def test_group_chords_match_canvas_labelling(seed):
     lab, m = ndimage.label(canvas, structure=np.ones((3, 3), bool))
     want = lab[np.floor(ar + 0.5).astype(int) - r0, np.floor(ac + 0.5).astype(int) - c0] - 1
     assert ng == m and np.array_equal(g, want)
+    # on a shared buffer (larger than the canvas), twice: the same, and the buffer left zero
+    buf = np.zeros((r1 - r0 + 7) * (c1 - c0 + 3), np.int32)
+    for _ in range(2):
+        g2, ng2 = K.group_chords_in(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow, buf)
+        assert ng2 == ng and np.array_equal(g2, g) and not buf.any()
 
 
 def test_check_layer_equals_widths_on_the_image_and_islands(piece_mesh):

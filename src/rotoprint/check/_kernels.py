@@ -2049,8 +2049,20 @@ def group_chords(ac, ar, bc, br, c0, r0, Hc, Wc, grow):  # pragma: no cover - ji
 
     Work follows the painted pixels, not the canvas. Returns ``(n,) int64`` regions and
     their number."""
+    return group_chords_in(ac, ar, bc, br, c0, r0, Hc, Wc, grow, np.zeros(0, np.int32))
+
+
+@njit(cache=True, nogil=True)
+def group_chords_in(ac, ar, bc, br, c0, r0, Hc, Wc, grow, buf):  # pragma: no cover - jit
+    """:func:`group_chords` on the canvas ``buf`` (a flat ``int32`` buffer of zeros, used as
+    ``Hc`` x ``Wc`` when it is that large, else a new canvas is made), which is left all
+    zeros again: one buffer serves every call of a job, nothing is allocated or cleared in
+    proportion to the canvas."""
     n = ac.shape[0]
-    canvas = np.zeros((Hc, Wc), np.int32)  # 0 empty, -1 painted, -2 dilated, k > 0 region k - 1
+    if buf.shape[0] >= Hc * Wc:
+        canvas = buf[: Hc * Wc].reshape((Hc, Wc))  # 0 empty, -1 painted, -2 dilated, k > 0 region k - 1
+    else:
+        canvas = np.zeros((Hc, Wc), np.int32)
     npix = 0
     for i in range(n):
         L = math.hypot(bc[i] - ac[i], br[i] - ar[i])
@@ -2074,6 +2086,7 @@ def group_chords(ac, ar, bc, br, c0, r0, Hc, Wc, grow):  # pragma: no cover - ji
                 m_ += 1
     pr = np.sort(pr[:m_])
     nd = 0
+    dil = np.empty(m_ * (2 * grow + 1) * (2 * grow + 1), np.int64)  # the dilated pixels, to clear
     for q in range(m_):
         r = pr[q] // Wc
         c = pr[q] % Wc
@@ -2081,6 +2094,7 @@ def group_chords(ac, ar, bc, br, c0, r0, Hc, Wc, grow):  # pragma: no cover - ji
             for cc in range(max(0, c - grow), min(Wc, c + grow + 1)):
                 if canvas[rr, cc] == 0:
                     canvas[rr, cc] = -2
+                    dil[nd] = rr * Wc + cc
                     nd += 1
     stack = np.empty(m_ + nd + 1, np.int64)
     ng = 0
@@ -2111,6 +2125,10 @@ def group_chords(ac, ar, bc, br, c0, r0, Hc, Wc, grow):  # pragma: no cover - ji
         sc = np.int64(math.floor(ac[i] + 0.5)) - c0
         sr = np.int64(math.floor(ar[i] + 0.5)) - r0
         g[i] = canvas[sr, sc] - 1
+    for q in range(m_):
+        canvas[pr[q] // Wc, pr[q] % Wc] = 0
+    for q in range(nd):
+        canvas[dil[q] // Wc, dil[q] % Wc] = 0
     return g, ng
 
 
@@ -2299,7 +2317,7 @@ def layer_widths(start, end, image, cell_mm, near_mm, evenodd, side_eps, spacing
 
 
 @njit(cache=True, nogil=True)
-def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow):  # pragma: no cover - jit
+def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow, buf):  # pragma: no cover - jit
     """Everything a finding needs for the samples ``idx``: their chords ``(n, 4)`` in pixel
     indices, their regions (:func:`group_chords` on a canvas padded by ``grow + 1``), and
     ``(10, regions)`` per region (:func:`group_stats`): the narrowest width, the middle of
@@ -2344,7 +2362,7 @@ def emit_groups(idx, width, sgn, bx, by, ux, uy, ln, m2p, grow):  # pragma: no c
     r0 = int(math.floor(min(ar.min(), br.min()) + 0.5)) - pad
     c1 = int(math.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
     r1 = int(math.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
-    g, ng = group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow)
+    g, ng = group_chords_in(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow, buf)
     worst, length, lo_x, lo_y, hi_x, hi_y = group_stats(g, ng, w, l_, x0, y0, x1, y1)
     st = np.empty((10, ng))  # per region: width, x, y, col, row (its narrowest chord), length, bbox
     for k in range(ng):

@@ -342,6 +342,9 @@ class _LayerChecker:
         self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self.resolution = float(resolution_mm)
         self._pos = np.full(0, -1, np.int32)  # edge -> segment buffer of simplify_section
+        # canvas of emit_groups (all zeros between calls): the grid with a margin for chords
+        # that reach past it
+        self._canvas = np.zeros((g.height + 8) * (g.width + 8), np.int32)
 
     def _simplified(self, seg) -> tuple[np.ndarray, np.ndarray]:
         """The section on which widths are measured: as sliced, or simplified to the resolution."""
@@ -449,7 +452,7 @@ class _LayerChecker:
         closer than ``_GROUP_PX`` pixels join), one finding per region."""
         if not idx.size:
             return
-        ch, g, st = K.emit_groups(idx, width, sgn, bx, by, ux, uy, ln, self.m2p, _GROUP_PX)
+        ch, g, st = K.emit_groups(idx, width, sgn, bx, by, ux, uy, ln, self.m2p, _GROUP_PX, self._canvas)
         chords[kind] = ch
         ng = st.shape[1]
         val = None
