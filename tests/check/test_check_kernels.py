@@ -134,8 +134,8 @@ def test_sample_widths_measure_what_the_check_uses(piece_mesh, chained, simplifi
         cap, need_w, need_g = 8 * p, 2 * p, 2.5 * p
         start, end = seg.start, seg.end
         if simplified:
-            pos = np.full(int(max(seg.start_edge.max(), seg.end_edge.max())) + 1, -1, np.int64)
-            start, end = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, 0.01 * min(dev.pitch_x_mm, dev.pitch_y_mm), pos)
+            pos = np.full(int(max(seg.start_edge.max(), seg.end_edge.max())) + 1, -1, np.int32)
+            start, end, _ = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, 0.01 * min(dev.pitch_x_mm, dev.pitch_y_mm), pos)
         sx, sy, ex, ey = (np.ascontiguousarray(a) for a in (start[:, 0], start[:, 1], end[:, 0], end[:, 1]))
         sx, sy, ex, ey, _, js, je = K.split_at_crossings(sx, sy, ex, ey, cell, 1e-5)
         comp, nc = K.chain_components(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))

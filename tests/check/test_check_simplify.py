@@ -22,8 +22,10 @@ from rotoprint.testing import box_triangles
 def _simplify(seg, tol):
     top = int(max(seg.start_edge.max(), seg.end_edge.max())) + 1
     pos = np.full(top, -1, np.int32)
-    s, e = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, tol, pos)
-    assert (pos == -1).all()  # the buffer is left as it was given
+    s0, e0, need = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, tol, pos[: top - 1])
+    assert need == top and len(s0) == 0  # a buffer too short is refused with the length it needs
+    s, e, need = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, tol, pos)
+    assert need == 0 and (pos == -1).all()  # the buffer is left as it was given
     return s, e
 
 
@@ -68,17 +70,17 @@ def test_simplify_keeps_unchained_segments():
     se = np.array([0, 1, 2, 10, 11])
     ee = np.array([1, 2, 3, 11, -1])
     pos = np.full(20, -1, np.int32)
-    s, e = K.simplify_section(start, end, se, ee, 1e-3, pos)
+    s, e, _ = K.simplify_section(start, end, se, ee, 1e-3, pos)
     got = sorted(map(tuple, np.concatenate([s, e], axis=1)))
     assert got == [(0.0, 0.0, 3.0, 0.0), (5.0, 5.0, 7.0, 5.0 + 1e-9)]
     # two segments starting on edge 1: neither is chained to
     se2 = np.array([0, 1, 1, 10, 11])
-    s, e = K.simplify_section(start, end, se2, ee, 1e-3, pos)
+    s, e, _ = K.simplify_section(start, end, se2, ee, 1e-3, pos)
     assert len(s) == 5 - 1  # only 3 -> 4 joins
     # a joint that is not bit-identical does not chain
     end2 = end.copy()
     end2[0, 0] = np.nextafter(1.0, 2.0)
-    s, e = K.simplify_section(start, end2, se, ee, 1e-3, pos)
+    s, e, _ = K.simplify_section(start, end2, se, ee, 1e-3, pos)
     assert len(s) == 3
     assert (pos == -1).all()
 

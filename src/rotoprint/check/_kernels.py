@@ -2526,12 +2526,18 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
     kept as they are, so every point of the result lies within ``tol`` of the section and
     every point of the section within ``tol`` of the result.
 
-    ``pos`` is an ``int32`` buffer of at least ``max(edge) + 1`` entries, all -1, and is left
-    so (one buffer serves every layer of a job).
+    ``pos`` is an ``int32`` buffer of entries all -1, and is left so (one buffer serves every
+    layer of a job); it needs ``max(edge) + 1`` entries.
 
-    Returns ``(S', 2)`` starts and ends, ``S' <= S``, chain by chain in order.
+    Returns ``(S', 2)`` starts and ends, ``S' <= S``, chain by chain in order, and 0; or, when
+    ``pos`` is too short, two empty arrays and the length it needs.
     """
     n = start.shape[0]
+    top = -1
+    for i in range(n):
+        top = max(top, start_edge[i], end_edge[i])
+    if top >= pos.shape[0]:
+        return np.empty((0, 2)), np.empty((0, 2)), top + 1
     succ = np.full(n, -1, np.int32)
     npred = np.zeros(n, np.int32)
     dup = False
@@ -2610,4 +2616,4 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
                 m = _greedy_emit(px, py, far, k, tol, out_s, out_e, m)
             else:
                 m = _greedy_emit(px, py, 0, k, tol, out_s, out_e, m)
-    return out_s[:m], out_e[:m]
+    return out_s[:m], out_e[:m], 0

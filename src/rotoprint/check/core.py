@@ -350,10 +350,11 @@ class _LayerChecker:
         """The section on which widths are measured: as sliced, or simplified to the resolution."""
         if self.resolution <= 0.0 or len(seg) == 0:
             return seg.start, seg.end
-        top = int(max(seg.start_edge.max(), seg.end_edge.max())) + 1
-        if top > self._pos.shape[0]:
-            self._pos = np.full(max(top, 2 * self._pos.shape[0]), -1, np.int32)
-        return K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, self.resolution, self._pos)
+        s, e, need = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, self.resolution, self._pos)
+        if need:  # the edge buffer grows (once or twice per job)
+            self._pos = np.full(max(need, 2 * self._pos.shape[0]), -1, np.int32)
+            s, e, _ = K.simplify_section(seg.start, seg.end, seg.start_edge, seg.end_edge, self.resolution, self._pos)
+        return s, e
 
     def run(self, index: int) -> LayerCheck:
         job = self.job
