@@ -2456,8 +2456,8 @@ def check_layer(start, end, wstart, wend, uv, H, W, evenodd, ps, p0, p1, below, 
 @njit(cache=True, nogil=True)
 def _greedy_emit(px, py, a, b, tol, out_s, out_e, m):  # pragma: no cover - jit
     """Write to ``out_s[m:], out_e[m:]`` the chords of the polyline ``px[a..b], py[a..b]``
-    (``b`` included) that a greedy pass keeps, and return the new count: from each kept point, the farthest point (at most
-    ``_SIMPLIFY_SPAN`` on) such that every point in between lies within ``tol`` of the chord
+    (``b`` included) that a greedy pass keeps, and return the new count: from each kept
+    point, the farthest point (at most ``_SIMPLIFY_SPAN`` on) such that every point in between lies within ``tol`` of the chord
     to it and no farther from the kept point than the chord's end (so it projects onto the
     chord). The directions a chord may take form a wedge narrowed by each point passed (the
     tangents from the kept point to the point's ``tol`` disc): one pass, no trigonometry."""
@@ -2472,15 +2472,16 @@ def _greedy_emit(px, py, a, b, tol, out_s, out_e, m):  # pragma: no cover - jit
         tol2 = tol * tol
         j = i + 1
         c = i + 1
+        vx = px[c] - ax
+        vy = py[c] - ay
+        d2 = vx * vx + vy * vy
         while True:
             # the chord i..c is valid; can it reach c + 1?
             if c >= b or c + 1 - i > _SIMPLIFY_SPAN:
                 break
-            # point c joins the points in between: narrow the wedge by the tangents to its
-            # disc (the direction to it turned by -/+ asin(tol / d), scaled by d)
-            vx = px[c] - ax
-            vy = py[c] - ay
-            d2 = vx * vx + vy * vy
+            # point c (at vx, vy from i, d2 = its distance squared) joins the points in
+            # between: narrow the wedge by the tangents to its disc (the direction to it
+            # turned by -/+ asin(tol / d), scaled by d)
             if d2 > dmax2:
                 dmax2 = d2
             if d2 > tol2:
@@ -2501,12 +2502,16 @@ def _greedy_emit(px, py, a, b, tol, out_s, out_e, m):  # pragma: no cover - jit
                         break  # empty wedge: no chord past c
             qx = px[c + 1] - ax
             qy = py[c + 1] - ay
-            if qx * qx + qy * qy < dmax2:
+            q2 = qx * qx + qy * qy
+            if q2 < dmax2:
                 break
             if wedge and (lox * qy - loy * qx < 0.0 or qx * hiy - qy * hix < 0.0):
                 break
             c += 1
             j = c
+            vx = qx
+            vy = qy
+            d2 = q2
         out_s[m, 0] = px[i]
         out_s[m, 1] = py[i]
         out_e[m, 0] = px[j]
@@ -2585,35 +2590,17 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
             # points of the chain from h
             k = 0
             i = h
-            closed = False
             while True:
                 seen[i] = True
                 px[k] = start[i, 0]
                 py[k] = start[i, 1]
                 k += 1
                 j = succ[i]
-                if j < 0:
+                if j < 0 or j == h:  # an open chain's end, or back to a cycle's start
                     px[k] = end[i, 0]
                     py[k] = end[i, 1]
-                    break
-                if j == h:
-                    px[k] = end[i, 0]
-                    py[k] = end[i, 1]
-                    closed = True
                     break
                 i = j
-            # k segments, points 0..k
-            if closed and k >= 3:
-                # split the cycle at the point farthest from its first
-                far = 0
-                dmax = -1.0
-                for q in range(1, k):
-                    d = (px[q] - px[0]) ** 2 + (py[q] - py[0]) ** 2
-                    if d > dmax:
-                        dmax = d
-                        far = q
-                m = _greedy_emit(px, py, 0, far, tol, out_s, out_e, m)
-                m = _greedy_emit(px, py, far, k, tol, out_s, out_e, m)
-            else:
-                m = _greedy_emit(px, py, 0, k, tol, out_s, out_e, m)
+            # k segments, points 0..k (a cycle's last point is its first: it is kept)
+            m = _greedy_emit(px, py, 0, k, tol, out_s, out_e, m)
     return out_s[:m], out_e[:m], 0
