@@ -108,3 +108,23 @@ def test_two_cavities_and_a_merge():
     i, r = out[0]
     assert i == 4 and r["first_layer"] == 1 and r["last_layer"] == 3
     assert r["pixels"] == 9 + 9 + 9 + 9 + 24
+
+
+def test_cavity_box_on_the_overlay():
+    from rotoprint.check import check_layers, overlay_image
+    from rotoprint.check.overlay import COLOURS
+
+    dev = load_device("perfactory-sxga")
+    for lc in check_layers(_hollow((4.0, 3.0, 2.0), 0.5), dev, layer_height_mm=0.1, islands=False):
+        if any(f.kind == "cavity" for f in lc.findings):
+            ov = overlay_image(lc)
+            box = lc.chords["cavity"]
+            assert box.shape == (4, 4)
+            hit = np.all(ov == np.array(COLOURS["cavity"], np.uint8), axis=2)
+            rows, cols = np.nonzero(hit)
+            f = next(f for f in lc.findings if f.kind == "cavity")
+            # the box's outline, around the cavity's centroid
+            assert rows.min() < f.row < rows.max() and cols.min() < f.col < cols.max()
+            break
+    else:
+        raise AssertionError("no cavity found")

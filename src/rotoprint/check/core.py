@@ -406,8 +406,13 @@ class _LayerChecker:
                     vals[cand] = ext / 255.0
                     self._emit(kind, cand[bad], width, sgn, bx, by, ux, uy, ln, index, z, findings, chords, values=vals)
         if self.cavities is not None:
+            boxes = []
             for rec in self.cavities.step(rs, r0, r1, index):
                 findings.append(self._cavity(rec, index, z))
+                a, b, c, d = rec["col0"] - 0.5, rec["row0"] - 0.5, rec["col1"] + 0.5, rec["row1"] + 0.5
+                boxes += [(a, b, c, b), (c, b, c, d), (c, d, a, d), (a, d, a, b)]  # its box, on the overlay
+            if boxes:
+                chords["cavity"] = np.array(boxes, np.float64)
         island_mask = None
         if self.islands and ist.shape[1]:
             island_mask = self._islands(ist, isl, rs, r0, r1, index, z, findings)

@@ -18,6 +18,7 @@ COLOURS: dict[str, tuple[int, int, int]] = {
     "island": (255, 210, 0),
     "underexposed": (255, 140, 0),
     "cured_gap": (0, 200, 60),
+    "cavity": (170, 80, 255),
 }
 
 
