@@ -108,7 +108,7 @@ class LayerCheck:
 
     ``image`` is the layer's ``(H, W) uint8`` device image (the slicer's), ``chords[kind]``
     ``(n, 4) float64`` pixel-index chords ``(col0, row0, col1, row1)`` across each problem
-    wall or gap; ``islands`` the ``(H, W) bool`` unsupported pixels (``None``: no island).
+    wall or gap (for a cavity, the four sides of its box); ``islands`` the ``(H, W) bool`` unsupported pixels (``None``: no island).
     The check itself works on the exact section and the layer's runs of material; the two
     images are made when they are first read.
     """
