@@ -128,3 +128,31 @@ def test_cavity_box_on_the_overlay():
             break
     else:
         raise AssertionError("no cavity found")
+
+
+def _runs(img):
+    rs, s0, s1 = [0], [], []
+    for row in img:
+        d = np.diff(np.concatenate([[0], row.astype(int), [0]]))
+        s0 += np.flatnonzero(d == 1).tolist()
+        s1 += np.flatnonzero(d == -1).tolist()
+        rs.append(len(s0))
+    return np.array(rs), np.array(s0, np.int64), np.array(s1, np.int64)
+
+
+@pytest.mark.parametrize("floor, cavity", [(False, False), (True, True)])
+def test_hole_over_open_space_is_open(floor, cavity):
+    """A ring closed by a roof: a cavity when a floor is under it; open when nothing is (its
+    void reaches the outside through the layer below, which has no hole of its own)."""
+    W = H = 10
+    square = np.zeros((H, W), bool)
+    square[2:8, 2:8] = True
+    ring = square.copy()
+    ring[4:6, 4:6] = False
+    tr = CavityTracker(W, H)
+    out = []
+    for i, img in enumerate([square if floor else np.zeros((H, W), bool), ring, ring, square, np.zeros((H, W), bool)]):
+        out += tr.step(*_runs(img), i)
+    assert (len(out) == 1) == cavity
+    if cavity:
+        assert out[0]["first_layer"] == 1 and out[0]["last_layer"] == 2 and out[0]["pixels"] == 8

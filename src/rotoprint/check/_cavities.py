@@ -99,6 +99,25 @@ def cavity_step(rs, r0, r1, W, ps, p0, p1, pcomp, bodies, layer):  # pragma: no 
     es, e0, e1 = empty_runs(rs, r0, r1, W)
     H = es.shape[0] - 1
     n = e0.shape[0]
+    nb = bodies.shape[1]
+    # a layer with at most one material run per row has no hole: all its empty space reaches
+    # the field's edge. If nothing below is shut in either, the layer is one open body.
+    trivial = True
+    for j in range(H):
+        if rs[j + 1] - rs[j] > 1:
+            trivial = False
+            break
+    if trivial:
+        for b in range(nb):
+            if bodies[_OPEN, b] == 0.0:
+                trivial = False
+                break
+    if trivial:
+        live = np.zeros((10, 1))
+        live[_FIRST, 0] = layer
+        live[_LAST, 0] = layer
+        live[_OPEN, 0] = 1.0
+        return es, e0, e1, np.zeros(n, np.int64), live, np.zeros((10, 0))
     parent = np.arange(n)
     for j in range(1, H):
         q = es[j - 1]
@@ -119,7 +138,6 @@ def cavity_step(rs, r0, r1, W, ps, p0, p1, pcomp, bodies, layer):  # pragma: no 
             root_c[r] = nc
             nc += 1
         comp[k] = root_c[r]
-    nb = bodies.shape[1]
     # groups: the layer's components (0..nc-1) and the bodies below (nc..nc+nb-1) joined
     gp = np.arange(nc + nb)
     if nb > 0:
