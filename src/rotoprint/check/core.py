@@ -1,7 +1,9 @@
 """Printability: what a part loses on a device, layer by layer.
 
-Widths are measured on the exact cross-section (the slicer's segments), not on the image: from
-sample points at most half a pixel apart along the boundary, a ray along the inward normal
+Widths are measured on the cross-section (the slicer's segments, their chains simplified to
+``resolution_mm``, 1/100 pixel by default: widths within twice that of the exact section's; 0
+measures on the section as sliced), not on the image: from sample points at most half a pixel
+apart along the boundary, a ray along the inward normal
 meets the other side of the wall after exactly the wall's width, and one along the outward
 normal crosses the gap to the next material. A wall narrower than the minimum is what an
 opening by a disc of that diameter removes, a gap narrower than the minimum what a closing
@@ -14,7 +16,9 @@ Against the image (the device raster at the given fibre angle):
 - ``closed_gap``: a gap with no empty pixel centre in it (the two sides merge);
 - ``island``: a connected region (8-neighbours) with no material pixel directly below it;
 - with an exposure model (DLP masks): ``underexposed`` walls whose peak grey along their width
-  stays below the cure threshold, and ``cured_gap`` gaps whose darkest pixel across is above it.
+  stays below the cure threshold, and ``cured_gap`` gaps whose darkest pixel across is above it;
+- ``cavity``: empty space the part shuts in on every side (a resin trap), found on the layers'
+  runs of empty pixels joined through the layers (:mod:`._cavities`).
 
 See ``docs/check.md``.
 """
