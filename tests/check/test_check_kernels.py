@@ -126,7 +126,7 @@ def test_sample_widths_measure_what_the_check_uses(piece_mesh, chained, simplifi
     with the same widths, the same smallest width, no sample dropped that could matter.
     ``chained``: with the chain order, runs of segments are cleared as a whole.
     ``simplified``: on the section simplified as the check does by default (long segments,
-    whose rays are tested against the pieces their strip meets)."""
+    whose rays are tested against the segments their strip meets)."""
     n = dropped = 0
     for seg, dev in _sections(piece_mesh):
         p = max(dev.pitch_x_mm, dev.pitch_y_mm)
@@ -154,10 +154,10 @@ def test_sample_widths_measure_what_the_check_uses(piece_mesh, chained, simplifi
         for ref, got, need in ((rw, w, need_w), (rg, g, need_g)):
             below = ref < need
             assert set(np.flatnonzero(below)) <= set(pos)  # nothing that matters dropped
-            np.testing.assert_allclose(got[ref[pos] < need], ref[pos][ref[pos] < need], rtol=0, atol=1e-12)
+            assert np.array_equal(got[ref[pos] < need], ref[pos][ref[pos] < need])  # bit for bit
             assert not np.any(got[ref[pos] >= need] < need)
             if np.isfinite(ref).any():
-                assert got.min() == pytest.approx(ref.min(), abs=1e-12)
+                assert got.min() == ref.min()
             else:
                 assert not np.isfinite(got).any()
         n += 1

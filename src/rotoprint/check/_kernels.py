@@ -54,12 +54,13 @@ _RUNS_FROM = 16384
 _SPLIT_CELL = 0.75
 #: :func:`simplify_section` replaces at most this many chained segments by one chord.
 _SIMPLIFY_SPAN = 64
-#: :func:`sample_widths_chained` lists the pieces in cells this many times the ray grid's.
+#: :func:`sample_widths_chained` lists the segments in cells this many times the ray grid's.
 _GATHER_CELL = 1.0
 #: ... and walks a strip's cells row by row when its bounding box holds more than this many.
-_GATHER_BOX = 6
-#: ... and only for segments with at least this many samples (shorter ones cast their rays).
-_GATHER_MIN = 3
+_GATHER_BOX = 12
+#: ... and only for segments with at least this many samples (shorter ones cast their rays;
+#: 1: every segment gathers, segments being listed whole).
+_GATHER_MIN = 1
 
 
 # ---------------------------------------------------------------- bucketing helpers
@@ -221,61 +222,73 @@ def boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing):  # pragma: no cover
     return bx, by, ux, uy, seg, ln
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _clip_x(ax, ay, bx, by, y0, y1, lo, hi):  # pragma: no cover - jit
+    """``lo, hi`` widened by the x extent of the edge from ``(ax, ay)`` to ``(bx, by)`` within
+    the band ``y0 <= y <= y1`` (unchanged when the edge misses the band)."""
+    if max(ay, by) < y0 or min(ay, by) > y1:
+        return lo, hi
+    if ay == by:
+        return min(lo, ax, bx), max(hi, ax, bx)
+    f0 = min(1.0, max(0.0, (y0 - ay) / (by - ay)))
+    f1 = min(1.0, max(0.0, (y1 - ay) / (by - ay)))
+    x0 = ax + f0 * (bx - ax)
+    x1 = ax + f1 * (bx - ax)
+    return min(lo, x0, x1), max(hi, x0, x1)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _rows(ay, by, y0, h, ncy, pad):  # pragma: no cover - jit
+    """The first and last row of cells of side ``h`` (from ``y0``) that the y extent of a
+    segment, grown by ``pad``, touches."""
+    r0 = max(0, min(ncy - 1, int(math.floor((min(ay, by) - pad - y0) / h))))
+    r1 = max(0, min(ncy - 1, int(math.floor((max(ay, by) + pad - y0) / h))))
+    return r0, r1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _span(ax, ay, bx, by, gr, x0, y0, h, ncx, pad):  # pragma: no cover - jit
+    """The first and last column of the cells in row ``gr`` (cells of side ``h`` from
+    ``(x0, y0)``) that the segment from ``(ax, ay)`` to ``(bx, by)``, grown by ``pad``,
+    touches; first > last when it misses the row."""
+    yb = y0 + gr * h - pad
+    lo, hi = _clip_x(ax, ay, bx, by, yb, yb + h + 2.0 * pad, np.inf, -np.inf)
+    if lo > hi:
+        return 0, -1
+    c0 = max(0, min(ncx - 1, int(math.floor((lo - pad - x0) / h))))
+    c1 = max(0, min(ncx - 1, int(math.floor((hi + pad - x0) / h))))
+    return c0, c1
+
+
 @njit(cache=True, nogil=True)
-def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy, grow=0.0):  # pragma: no cover - jit
-    """CSR of (piece start x, y, end x, y, parent segment) per square cell of side ``h``:
-    every kept segment is cut into pieces no longer than ``h`` and each piece is listed in the
-    cells its bounding box, grown by ``grow`` mm, touches (at most four, nine on cell corners,
-    when ``grow`` is below a cell)."""
-    n = sx.shape[0]
-    npieces = 0
-    for k in range(n):
-        if keep[k]:
-            L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
-            npieces += max(1, int(math.ceil(L / h)))
-    px0 = np.empty(npieces)
-    py0 = np.empty(npieces)
-    px1 = np.empty(npieces)
-    py1 = np.empty(npieces)
-    par = np.empty(npieces, np.int64)
-    p = 0
-    for k in range(n):
-        if not keep[k]:
-            continue
-        L = math.hypot(ex[k] - sx[k], ey[k] - sy[k])
-        m = max(1, int(math.ceil(L / h)))
-        for j in range(m):
-            f0 = j / m
-            f1 = (j + 1) / m
-            px0[p] = sx[k] + f0 * (ex[k] - sx[k])
-            py0[p] = sy[k] + f0 * (ey[k] - sy[k])
-            px1[p] = ex[k] if j == m - 1 else sx[k] + f1 * (ex[k] - sx[k])
-            py1[p] = ey[k] if j == m - 1 else sy[k] + f1 * (ey[k] - sy[k])
-            par[p] = k
-            p += 1
+def _cells(sx, sy, ex, ey, keep, x0, y0, h, ncx, ncy):  # pragma: no cover - jit
+    """CSR ``start, idx`` of the kept segments per square cell of side ``h``: each segment,
+    whole, is listed in every cell its line (grown by a rounding margin) touches, row by row."""
     ncell = ncx * ncy
     count = np.zeros(ncell + 1, np.int64)
+    pad = 1e-9 * h
+    idx = np.empty(0, np.int64)
+    fill = count[:-1]
     for q in range(2):
         if q == 1:
             for i in range(ncell):
                 count[i + 1] += count[i]
             idx = np.empty(count[ncell], np.int64)
             fill = count[:-1].copy()
-        for p in range(npieces):
-            pad = 1e-9 * h + grow
-            cx0 = max(0, min(ncx - 1, int(math.floor((min(px0[p], px1[p]) - pad - x0) / h))))
-            cx1 = max(0, min(ncx - 1, int(math.floor((max(px0[p], px1[p]) + pad - x0) / h))))
-            cy0 = max(0, min(ncy - 1, int(math.floor((min(py0[p], py1[p]) - pad - y0) / h))))
-            cy1 = max(0, min(ncy - 1, int(math.floor((max(py0[p], py1[p]) + pad - y0) / h))))
-            for cy in range(cy0, cy1 + 1):
-                for cx in range(cx0, cx1 + 1):
+        for k in range(sx.shape[0]):
+            if not keep[k]:
+                continue
+            r0, r1 = _rows(sy[k], ey[k], y0, h, ncy, pad)
+            for cy in range(r0, r1 + 1):
+                c0, c1 = _span(sx[k], sy[k], ex[k], ey[k], cy, x0, y0, h, ncx, pad)
+                for cx in range(c0, c1 + 1):
                     c = cy * ncx + cx
                     if q == 0:
                         count[c + 1] += 1
                     else:
-                        idx[fill[c]] = p
+                        idx[fill[c]] = k
                         fill[c] += 1
-    return px0, py0, px1, py1, par, count, idx
+    return count, idx
 
 
 @njit(cache=True, nogil=True)
@@ -982,11 +995,11 @@ def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
 
 
 @njit(cache=True, nogil=True)
-def _ray(ox, oy, dx, dy, own, best, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
-    """Distance along unit ``(dx, dy)`` from ``(ox, oy)`` to the first piece (not of segment
-    ``own``) hit beyond ``tmin`` and at most ``best``; ``inf`` if none. The ray walks the
-    cells it crosses in order (a 2-D DDA) and stops as soon as its nearest hit lies before
-    the cell it would enter next."""
+def _ray(ox, oy, dx, dy, own, best, tmin, sx, sy, ex, ey, start, idx, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
+    """Distance along unit ``(dx, dy)`` from ``(ox, oy)`` to the first segment (not ``own``)
+    hit beyond ``tmin`` and at most ``best``; ``inf`` if none. The ray walks the cells it
+    crosses in order (a 2-D DDA; a segment listed in several is tested again, to the same
+    result) and stops as soon as its nearest hit lies before the cell it would enter next."""
     cx = int(math.floor((ox - xmin) / h))
     cy = int(math.floor((oy - ymin) / h))
     if dx > 0.0:
@@ -1018,16 +1031,16 @@ def _ray(ox, oy, dx, dy, own, best, tmin, px0, py0, px1, py1, par, start, idx, x
         if 0 <= cx < ncx and 0 <= cy < ncy:
             c = cy * ncx + cx
             for j in range(start[c], start[c + 1]):
-                p = idx[j]
-                if par[p] == own:
+                k = idx[j]
+                if k == own:
                     continue
-                e0 = px1[p] - px0[p]
-                e1 = py1[p] - py0[p]
+                e0 = ex[k] - sx[k]
+                e1 = ey[k] - sy[k]
                 den = dx * e1 - dy * e0
                 if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
                     continue
-                w0 = px0[p] - ox
-                w1 = py0[p] - oy
+                w0 = sx[k] - ox
+                w1 = sy[k] - oy
                 t = (w0 * e1 - w1 * e0) / den
                 if t <= tmin or t > best:
                     continue
@@ -1072,8 +1085,8 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
     (out of it: gap width) to the first other boundary segment, or ``inf`` beyond ``max_mm``:
     every width up to ``max_mm``, the reference for :func:`sample_widths`.
 
-    Segments are cut into pieces no longer than ``cell_mm`` and listed in a uniform grid of
-    cells of that size; every ray walks the cells it crosses (:func:`_ray`).
+    Segments are listed, whole, in a uniform grid of cells of about ``cell_mm`` (larger for
+    few segments, :func:`_cell_size`); every ray walks the cells it crosses (:func:`_ray`).
 
     Returns ``(P,) float64`` wall widths and ``(P,) float64`` gap widths.
     """
@@ -1083,10 +1096,10 @@ def cast_rays(bx, by, ux, uy, seg, sx, sy, ex, ey, keep, max_mm, tmin, cell_mm):
     if P == 0:
         return wall, gap
     h, xmin, ymin, ncx, ncy = _grid(sx, sy, ex, ey, keep, cell_mm)
-    px0, py0, px1, py1, par, start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
+    start, idx = _cells(sx, sy, ex, ey, keep, xmin, ymin, h, ncx, ncy)
     for i in range(P):
-        wall[i] = _ray(bx[i], by[i], ux[i], uy[i], seg[i], max_mm, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy)
-        gap[i] = _ray(bx[i], by[i], -ux[i], -uy[i], seg[i], max_mm, tmin, px0, py0, px1, py1, par, start, idx, xmin, ymin, h, ncx, ncy)
+        wall[i] = _ray(bx[i], by[i], ux[i], uy[i], seg[i], max_mm, tmin, sx, sy, ex, ey, start, idx, xmin, ymin, h, ncx, ncy)
+        gap[i] = _ray(bx[i], by[i], -ux[i], -uy[i], seg[i], max_mm, tmin, sx, sy, ex, ey, start, idx, xmin, ymin, h, ncx, ncy)
     return wall, gap
 
 
@@ -1192,7 +1205,7 @@ def _chain_runs(sx, sy, ex, ey, keep, succ, min_len):  # pragma: no cover - jit
 
 @njit(cache=True, nogil=True)
 def _run_clear(r, sgn, Lr, run, ptr, mem, sx, sy, ex, ey, nx, ny, spacing, px0, py0, px1, py1, par, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
-    """Whether no piece outside run ``r`` meets the rectangle (in the frame of the run's first
+    """Whether no segment outside run ``r`` meets the rectangle (in the frame of the run's first
     direction) holding every ray its samples cast on side ``sgn`` up to ``Lr``, grown by
     ``_STRIP_MARGIN_MM``: then none of those rays hits anything (the run cannot see itself).
     Returns 1 clear, 2 not clear or not worth testing."""
@@ -1278,79 +1291,42 @@ def sample_widths(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, 
     return sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, cell_mm, need_wall, need_gap, np.full(sx.shape[0], -1, np.int64))
 
 
-@njit(cache=True, nogil=True, inline="always")
-def _clip_x(ax, ay, bx, by, y0, y1, lo, hi):  # pragma: no cover - jit
-    """``lo, hi`` widened by the x extent of the edge from ``(ax, ay)`` to ``(bx, by)`` within
-    the band ``y0 <= y <= y1`` (unchanged when the edge misses the band)."""
-    if max(ay, by) < y0 or min(ay, by) > y1:
-        return lo, hi
-    if ay == by:
-        return min(lo, ax, bx), max(hi, ax, bx)
-    f0 = min(1.0, max(0.0, (y0 - ay) / (by - ay)))
-    f1 = min(1.0, max(0.0, (y1 - ay) / (by - ay)))
-    x0 = ax + f0 * (bx - ax)
-    x1 = ax + f1 * (bx - ax)
-    return min(lo, x0, x1), max(hi, x0, x1)
-
-
 @njit(cache=True, nogil=True)
-def _piece_cells(sx, sy, ex, ey, keep, seglen, run, h, x0, y0, hc, ncx, ncy):  # pragma: no cover - jit
-    """The pieces of :func:`_cells` (every kept segment cut into pieces no longer than ``h``,
-    by the same arithmetic; ``seglen`` the segments' lengths), each listed in the cells of
-    side ``hc`` its bounding box touches, in cell order: start x, y, end x, y, parent segment
-    and the parent's ``run``, and the CSR ``start`` of every cell."""
+def _seg_cells(sx, sy, ex, ey, keep, run, x0, y0, h, ncx, ncy):  # pragma: no cover - jit
+    """The kept segments listed whole in the cells of side ``h`` they touch (grown by a
+    rounding margin; row by row when their box spans several rows and columns, else the
+    cells of their box), in cell order: start x, y, end x, y, segment and its ``run`` per
+    entry, and the CSR ``start`` of every cell."""
     n = sx.shape[0]
-    npc = 0
-    for k in range(n):
-        if keep[k]:
-            npc += 1 if seglen[k] <= h else max(1, int(math.ceil(seglen[k] / h)))
-    qa0 = np.empty(npc)
-    qb0 = np.empty(npc)
-    qa1 = np.empty(npc)
-    qb1 = np.empty(npc)
-    qk = np.empty(npc, np.int64)
-    box = np.empty((npc, 4), np.int64)  # first and last cell column, row
     ncell = ncx * ncy
     count = np.zeros(ncell + 1, np.int64)
-    pad = 1e-9 * hc
-    inv = 1.0 / hc
-    q = 0
+    pad = 1e-9 * h
+    inv = 1.0 / h
+    box = np.empty((n, 4), np.int64)  # first and last cell column, row
     for k in range(n):
         if not keep[k]:
             continue
-        m = 1 if seglen[k] <= h else max(1, int(math.ceil(seglen[k] / h)))
-        for j in range(m):
-            if m == 1:
-                a0 = sx[k]
-                b0 = sy[k]
-            else:
-                f0 = j / m
-                a0 = sx[k] + f0 * (ex[k] - sx[k])
-                b0 = sy[k] + f0 * (ey[k] - sy[k])
-            if j == m - 1:
-                a1 = ex[k]
-                b1 = ey[k]
-            else:
-                f1 = (j + 1) / m
-                a1 = sx[k] + f1 * (ex[k] - sx[k])
-                b1 = sy[k] + f1 * (ey[k] - sy[k])
-            cx0 = max(0, min(ncx - 1, int(math.floor((min(a0, a1) - pad - x0) * inv))))
-            cx1 = max(0, min(ncx - 1, int(math.floor((max(a0, a1) + pad - x0) * inv))))
-            cy0 = max(0, min(ncy - 1, int(math.floor((min(b0, b1) - pad - y0) * inv))))
-            cy1 = max(0, min(ncy - 1, int(math.floor((max(b0, b1) + pad - y0) * inv))))
+        a0 = sx[k]
+        b0 = sy[k]
+        a1 = ex[k]
+        b1 = ey[k]
+        cx0 = max(0, min(ncx - 1, int(math.floor((min(a0, a1) - pad - x0) * inv))))
+        cx1 = max(0, min(ncx - 1, int(math.floor((max(a0, a1) + pad - x0) * inv))))
+        cy0 = max(0, min(ncy - 1, int(math.floor((min(b0, b1) - pad - y0) * inv))))
+        cy1 = max(0, min(ncy - 1, int(math.floor((max(b0, b1) + pad - y0) * inv))))
+        box[k, 0] = cx0
+        box[k, 1] = cx1
+        box[k, 2] = cy0
+        box[k, 3] = cy1
+        if cx0 == cx1 or cy0 == cy1:
             for cy in range(cy0, cy1 + 1):
                 for cx in range(cx0, cx1 + 1):
                     count[cy * ncx + cx + 1] += 1
-            qa0[q] = a0
-            qb0[q] = b0
-            qa1[q] = a1
-            qb1[q] = b1
-            qk[q] = k
-            box[q, 0] = cx0
-            box[q, 1] = cx1
-            box[q, 2] = cy0
-            box[q, 3] = cy1
-            q += 1
+        else:
+            for cy in range(cy0, cy1 + 1):
+                c0, c1 = _span(a0, b0, a1, b1, cy, x0, y0, h, ncx, pad)
+                for cx in range(max(c0, cx0), min(c1, cx1) + 1):
+                    count[cy * ncx + cx + 1] += 1
     for i in range(ncell):
         count[i + 1] += count[i]
     tot = count[ncell]
@@ -1361,26 +1337,42 @@ def _piece_cells(sx, sy, ex, ey, keep, seglen, run, h, x0, y0, hc, ncx, ncy):  #
     par = np.empty(tot, np.int64)
     prun = np.empty(tot, np.int64)
     fill = count[:-1].copy()
-    for q in range(npc):
-        k = qk[q]
-        for cy in range(box[q, 2], box[q, 3] + 1):
-            for cx in range(box[q, 0], box[q, 1] + 1):
+    for k in range(n):
+        if not keep[k]:
+            continue
+        a0 = sx[k]
+        b0 = sy[k]
+        a1 = ex[k]
+        b1 = ey[k]
+        cx0 = box[k, 0]
+        cx1 = box[k, 1]
+        cy0 = box[k, 2]
+        cy1 = box[k, 3]
+        rk = run[k]
+        for cy in range(cy0, cy1 + 1):
+            c0 = cx0
+            c1 = cx1
+            if cx0 != cx1 and cy0 != cy1:
+                c0, c1 = _span(a0, b0, a1, b1, cy, x0, y0, h, ncx, pad)
+                c0 = max(c0, cx0)
+                c1 = min(c1, cx1)
+            for cx in range(c0, c1 + 1):
                 c = cy * ncx + cx
                 w = fill[c]
-                px0[w] = qa0[q]
-                py0[w] = qb0[q]
-                px1[w] = qa1[q]
-                py1[w] = qb1[q]
+                px0[w] = a0
+                py0[w] = b0
+                px1[w] = a1
+                py1[w] = b1
                 par[w] = k
-                prun[w] = run[k]
+                prun[w] = rk
                 fill[c] = w + 1
     return px0, py0, px1, py1, par, prun, count
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _walk(ox, oy, dx, dy, own, best, tmin, px0, py0, px1, py1, prun, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
-    """:func:`_ray` on pieces in cell order (``start``: each cell's first), skipping the pieces
-    whose run ``prun`` is ``own``."""
+    """:func:`_ray` on the entries of :func:`_seg_cells` (``start``: each cell's first),
+    skipping the segments whose run ``prun`` is ``own``."""
     cx = int(math.floor((ox - xmin) / h))
     cy = int(math.floor((oy - ymin) / h))
     if dx > 0.0:
@@ -1452,13 +1444,14 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     A ray looks no further than ``max(need, smallest width found so far)``. A segment with
     fewer than ``_GATHER_MIN`` samples casts each ray through the cells it crosses (a 2-D DDA,
     :func:`_walk`, as :func:`cast_rays`) and keeps its samples. The rays of a longer segment
-    are parallel: per side, the pieces (as :func:`cast_rays` cuts the segments) that meet
-    the strip its rays sweep (from the first to the last sample, up to
-    the ray length when the segment comes, grown by ``_STRIP_MARGIN_MM``; tested exactly:
-    its axes, then the piece's normal) are gathered once from the cells the strip covers.
-    Each such piece is tested against the rays whose sample lies within its extent along
-    the segment, by the arithmetic of :func:`cast_rays` (every piece a ray hits within its
-    length lies in the strip, so each ray gets the nearest hit the reference finds); then
+    are parallel: per side, the segments that meet the strip its rays sweep (from the first
+    to the last sample, up to the ray length when the segment comes, grown by
+    ``_STRIP_MARGIN_MM``; tested exactly: its axes, then the segment's normal) are gathered
+    once from the cells the strip covers (segments are listed whole, :func:`_seg_cells`;
+    one listed in several of those cells is tested once). Each is tested against the rays
+    whose sample lies within its extent along the segment, by the arithmetic of
+    :func:`cast_rays` (on the segments' ends; every segment a ray hits within its length
+    meets the strip, so each ray gets the nearest hit the reference finds); then
     the rays, in order, keep the hits within their own length. A side whose strip meets
     nothing casts no rays; a segment clear on both sides gives no samples at all (none of
     them could be a finding or the thinnest). Samples keep their order.
@@ -1467,8 +1460,8 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     cut into runs (:func:`_chain_runs`) that cannot see themselves: a run of at least
     ``_RUN_MIN_SEGS`` segments is tested once per side, when its first segment in index
     order comes, by :func:`_run_clear` (the rectangle holding all its rays up to the ray
-    length then, which only shrinks later); a clear side casts no rays. Rays skip the pieces
-    of their own run.
+    length then, which only shrinks later); a clear side casts no rays. Rays skip the
+    segments of their own run.
 
     Returns ``(P,)`` x, y, inward normal x, y, length each stands for, wall and gap widths.
     """
@@ -1499,8 +1492,8 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     gap = np.empty(total)
     if total == 0:
         return bx, by, ux, uy, ln, wall, gap
-    # the pieces are cut as cast_rays cuts them (cells of side h: the hit arithmetic is the
-    # reference's) and listed in cells of side hc
+    # the segments are listed whole in cells of side hc (the hit arithmetic is the
+    # reference's: on a segment's ends)
     h = _cell_size(xhi - xlo, yhi - ylo, nk, cell_mm)
     hc = h * _GATHER_CELL
     xmin = xlo - hc
@@ -1513,12 +1506,13 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     run, rptr, rmem = _chain_runs(sx, sy, ex, ey, keep, succ, _RUN_MIN_LEN_MM)
     nrun = rptr.shape[0] - 1
     rstate = np.zeros((nrun, 2), np.int8)  # 0 untested, 1 clear, 2 not clear
-    px0, py0, px1, py1, par, prun, start = _piece_cells(sx, sy, ex, ey, keep, seglen, run, h, xmin, ymin, hc, ncx, ncy)
+    px0, py0, px1, py1, par, prun, start = _seg_cells(sx, sy, ex, ey, keep, run, xmin, ymin, hc, ncx, ncy)
     low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
     need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
     skip = np.zeros(2, np.bool_)
-    cand0 = np.empty(px0.shape[0], np.int64)  # the pieces the wall strip meets
-    cand1 = np.empty(px0.shape[0], np.int64)  # ... and the gap strip
+    cand0 = np.empty(n, np.int64)  # the entries of the segments the wall strip meets
+    cand1 = np.empty(n, np.int64)  # ... and the gap strip
+    seen = np.full(n, -1, np.int64)  # the last segment whose strips tested this one
     ncand = np.zeros(2, np.int64)
     mg = _STRIP_MARGIN_MM
     pad = 1e-9 * hc
@@ -1654,7 +1648,11 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
             for pc in range(start[gr * ncx + gc0], start[gr * ncx + gc1 + 1]):
                 if prun[pc] == own:  # its own segment, or its run (which it cannot see)
                     continue
-                # separating axes: the strips' own (along, across), then the piece's normal
+                q = par[pc]
+                if seen[q] == k:  # listed in an earlier cell of the strip
+                    continue
+                seen[q] = k
+                # separating axes: the strips' own (along, across), then the segment's normal
                 ax_ = px0[pc]
                 ay_ = py0[pc]
                 bx_ = px1[pc]
@@ -1701,7 +1699,7 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
             uy[p] = ny[k]
             ln[p] = L / m
             p += 1
-        # per side: each candidate piece is tested against the rays whose sample lies within
+        # per side: each candidate segment is tested against the rays whose sample lies within
         # its extent along the segment (the rays are normal to it), giving each ray the
         # nearest hit up to the strip's length; the rays then take, in order, the hits within
         # their own length (which shrinks with the smallest width found)
