@@ -1168,11 +1168,22 @@ def _chain_runs(sx, sy, ex, ey, keep, succ, min_len):  # pragma: no cover - jit
     n = sx.shape[0]
     run = np.full(n, -1, np.int64)
     has_pred = np.zeros(n, np.bool_)
+    chained = False
     for k in range(n):
         if succ[k] >= 0 and keep[k]:
             has_pred[succ[k]] = True
+            chained = True
     ptr = np.zeros(n + 1, np.int64)
     mem = np.empty(n, np.int64)
+    if not chained:  # no chain order: every kept segment is a run of its own, in index order
+        nr = 0
+        for k in range(n):
+            if keep[k]:
+                run[k] = nr
+                mem[nr] = k
+                nr += 1
+                ptr[nr] = nr
+        return run, ptr[: nr + 1], mem[:nr]
     nr = 0
     pos = 0
     for sweep in range(2):  # chain heads first, then what is left (closed chains)
@@ -1204,7 +1215,7 @@ def _chain_runs(sx, sy, ex, ey, keep, succ, min_len):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
-def _run_clear(r, sgn, Lr, run, ptr, mem, sx, sy, ex, ey, nx, ny, spacing, px0, py0, px1, py1, par, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
+def _run_clear(r, sgn, Lr, run, ptr, mem, sx, sy, ex, ey, nx, ny, spacing, ent, par, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
     """Whether no segment outside run ``r`` meets the rectangle (in the frame of the run's first
     direction) holding every ray its samples cast on side ``sgn`` up to ``Lr``, grown by
     ``_STRIP_MARGIN_MM``: then none of those rays hits anything (the run cannot see itself).
@@ -1266,20 +1277,24 @@ def _run_clear(r, sgn, Lr, run, ptr, mem, sx, sy, ex, ey, nx, ny, spacing, px0, 
             for pc in range(start[cell], start[cell + 1]):
                 if run[par[pc]] == r:
                     continue
-                ua_ = (px0[pc] - ox) * tx + (py0[pc] - oy) * ty
-                ub_ = (px1[pc] - ox) * tx + (py1[pc] - oy) * ty
+                a0 = ent[pc, 0]
+                b0 = ent[pc, 1]
+                a1 = ent[pc, 2]
+                b1 = ent[pc, 3]
+                ua_ = (a0 - ox) * tx + (b0 - oy) * ty
+                ub_ = (a1 - ox) * tx + (b1 - oy) * ty
                 if max(ua_, ub_) < a_lo or min(ua_, ub_) > a_hi:
                     continue
-                va_ = (px0[pc] - ox) * qx + (py0[pc] - oy) * qy
-                vb_ = (px1[pc] - ox) * qx + (py1[pc] - oy) * qy
+                va_ = (a0 - ox) * qx + (b0 - oy) * qy
+                vb_ = (a1 - ox) * qx + (b1 - oy) * qy
                 if max(va_, vb_) < c_lo or min(va_, vb_) > c_hi:
                     continue
-                e0 = px1[pc] - px0[pc]
-                e1 = py1[pc] - py0[pc]
-                w0 = e0 * (q0y - py0[pc]) - e1 * (q0x - px0[pc])
-                w1 = e0 * (q1y - py0[pc]) - e1 * (q1x - px0[pc])
-                w2 = e0 * (q2y - py0[pc]) - e1 * (q2x - px0[pc])
-                w3 = e0 * (q3y - py0[pc]) - e1 * (q3x - px0[pc])
+                e0 = a1 - a0
+                e1 = b1 - b0
+                w0 = e0 * (q0y - b0) - e1 * (q0x - a0)
+                w1 = e0 * (q1y - b0) - e1 * (q1x - a0)
+                w2 = e0 * (q2y - b0) - e1 * (q2x - a0)
+                w3 = e0 * (q3y - b0) - e1 * (q3x - a0)
                 if min(w0, w1, w2, w3) <= 0.0 <= max(w0, w1, w2, w3):
                     return 2
     return 1
@@ -1330,12 +1345,8 @@ def _seg_cells(sx, sy, ex, ey, keep, run, x0, y0, h, ncx, ncy):  # pragma: no co
     for i in range(ncell):
         count[i + 1] += count[i]
     tot = count[ncell]
-    px0 = np.empty(tot)
-    py0 = np.empty(tot)
-    px1 = np.empty(tot)
-    py1 = np.empty(tot)
+    ent = np.empty((tot, 4))
     par = np.empty(tot, np.int64)
-    prun = np.empty(tot, np.int64)
     fill = count[:-1].copy()
     for k in range(n):
         if not keep[k]:
@@ -1348,7 +1359,6 @@ def _seg_cells(sx, sy, ex, ey, keep, run, x0, y0, h, ncx, ncy):  # pragma: no co
         cx1 = box[k, 1]
         cy0 = box[k, 2]
         cy1 = box[k, 3]
-        rk = run[k]
         for cy in range(cy0, cy1 + 1):
             c0 = cx0
             c1 = cx1
@@ -1359,20 +1369,19 @@ def _seg_cells(sx, sy, ex, ey, keep, run, x0, y0, h, ncx, ncy):  # pragma: no co
             for cx in range(c0, c1 + 1):
                 c = cy * ncx + cx
                 w = fill[c]
-                px0[w] = a0
-                py0[w] = b0
-                px1[w] = a1
-                py1[w] = b1
+                ent[w, 0] = a0
+                ent[w, 1] = b0
+                ent[w, 2] = a1
+                ent[w, 3] = b1
                 par[w] = k
-                prun[w] = rk
                 fill[c] = w + 1
-    return px0, py0, px1, py1, par, prun, count
+    return ent, par, count
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _walk(ox, oy, dx, dy, own, best, tmin, px0, py0, px1, py1, prun, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
+def _walk(ox, oy, dx, dy, own, best, tmin, ent, par, run, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
     """:func:`_ray` on the entries of :func:`_seg_cells` (``start``: each cell's first),
-    skipping the segments whose run ``prun`` is ``own``."""
+    skipping the segments whose ``run`` is ``own``."""
     cx = int(math.floor((ox - xmin) / h))
     cy = int(math.floor((oy - ymin) / h))
     if dx > 0.0:
@@ -1404,15 +1413,19 @@ def _walk(ox, oy, dx, dy, own, best, tmin, px0, py0, px1, py1, prun, start, xmin
         if 0 <= cx < ncx and 0 <= cy < ncy:
             c = cy * ncx + cx
             for pc in range(start[c], start[c + 1]):
-                if prun[pc] == own:  # its own segment, or its run (which it cannot see)
+                if run[par[pc]] == own:  # its own segment, or its run (which it cannot see)
                     continue
-                e0 = px1[pc] - px0[pc]
-                e1 = py1[pc] - py0[pc]
+                a0 = ent[pc, 0]
+                b0 = ent[pc, 1]
+                a1 = ent[pc, 2]
+                b1 = ent[pc, 3]
+                e0 = a1 - a0
+                e1 = b1 - b0
                 den = dx * e1 - dy * e0
                 if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
                     continue
-                w0 = px0[pc] - ox
-                w1 = py0[pc] - oy
+                w0 = a0 - ox
+                w1 = b0 - oy
                 t = (w0 * e1 - w1 * e0) / den
                 if t <= tmin or t > best:
                     continue
@@ -1506,7 +1519,7 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
     run, rptr, rmem = _chain_runs(sx, sy, ex, ey, keep, succ, _RUN_MIN_LEN_MM)
     nrun = rptr.shape[0] - 1
     rstate = np.zeros((nrun, 2), np.int8)  # 0 untested, 1 clear, 2 not clear
-    px0, py0, px1, py1, par, prun, start = _seg_cells(sx, sy, ex, ey, keep, run, xmin, ymin, hc, ncx, ncy)
+    ent, par, start = _seg_cells(sx, sy, ex, ey, keep, run, xmin, ymin, hc, ncx, ncy)
     low = np.array([max_mm, max_mm])  # smallest wall, gap found so far
     need = np.array([min(need_wall, max_mm), min(need_gap, max_mm)])
     skip = np.zeros(2, np.bool_)
@@ -1531,7 +1544,7 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
             for side in range(2):
                 if rstate[r, side] == 0:
                     sgn = 1.0 if side == 0 else -1.0
-                    rstate[r, side] = _run_clear(r, sgn, max(need[side], low[side]), run, rptr, rmem, sx, sy, ex, ey, nx, ny, spacing, px0, py0, px1, py1, par, start, xmin, ymin, hc, ncx, ncy)
+                    rstate[r, side] = _run_clear(r, sgn, max(need[side], low[side]), run, rptr, rmem, sx, sy, ex, ey, nx, ny, spacing, ent, par, start, xmin, ymin, hc, ncx, ncy)
                 skip[side] = rstate[r, side] == 1
             if skip[0] and skip[1]:
                 continue
@@ -1556,7 +1569,7 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
                         continue
                     sgn = 1.0 if side == 0 else -1.0
                     best = max(need[side], low[side])
-                    t = _walk(bx[i], by[i], sgn * ux[i], sgn * uy[i], own, best, tmin, px0, py0, px1, py1, prun, start, xmin, ymin, hc, ncx, ncy)
+                    t = _walk(bx[i], by[i], sgn * ux[i], sgn * uy[i], own, best, tmin, ent, par, run, start, xmin, ymin, hc, ncx, ncy)
                     if t < low[side]:
                         low[side] = t
                     if side == 0:
@@ -1628,6 +1641,10 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
         by_rows = (gr1 - gr0 + 1) * (bc1 - bc0 + 1) > _GATHER_BOX
         n0 = 0
         n1 = 0
+        # its own segment is skipped as already seen, the rest of its run (which it cannot
+        # see) by its run
+        seen[k] = k
+        lone = r < 0 or rptr[r + 1] - rptr[r] == 1
         for gr in range(gr0, gr1 + 1):
             gc0 = bc0
             gc1 = bc1
@@ -1646,17 +1663,17 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
                 gc0 = max(bc0, int(math.floor((lo - pad - xmin) * inv)))
                 gc1 = min(bc1, int(math.floor((hi + pad - xmin) * inv)))
             for pc in range(start[gr * ncx + gc0], start[gr * ncx + gc1 + 1]):
-                if prun[pc] == own:  # its own segment, or its run (which it cannot see)
-                    continue
                 q = par[pc]
                 if seen[q] == k:  # listed in an earlier cell of the strip
                     continue
                 seen[q] = k
+                if not lone and run[q] == own:
+                    continue
                 # separating axes: the strips' own (along, across), then the segment's normal
-                ax_ = px0[pc]
-                ay_ = py0[pc]
-                bx_ = px1[pc]
-                by_ = py1[pc]
+                ax_ = ent[pc, 0]
+                ay_ = ent[pc, 1]
+                bx_ = ent[pc, 2]
+                by_ = ent[pc, 3]
                 ua_ = (ax_ - ox) * tx + (ay_ - oy) * ty
                 ub_ = (bx_ - ox) * tx + (by_ - oy) * ty
                 if max(ua_, ub_) < a_lo or min(ua_, ub_) > a_hi:
@@ -1718,13 +1735,17 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
             Lr = max(need[side], low[side])
             for c in range(ncand[side]):
                 pc = cand0[c] if side == 0 else cand1[c]
-                e0 = px1[pc] - px0[pc]
-                e1 = py1[pc] - py0[pc]
+                a0 = ent[pc, 0]
+                b0 = ent[pc, 1]
+                a1 = ent[pc, 2]
+                b1 = ent[pc, 3]
+                e0 = a1 - a0
+                e1 = b1 - b0
                 j0 = 0
                 j1 = m - 1
                 if m > 1:
-                    ua_ = (px0[pc] - ox) * tx + (py0[pc] - oy) * ty
-                    ub_ = (px1[pc] - ox) * tx + (py1[pc] - oy) * ty
+                    ua_ = (a0 - ox) * tx + (b0 - oy) * ty
+                    ub_ = (a1 - ox) * tx + (b1 - oy) * ty
                     j0 = max(0, int(math.ceil((min(ua_, ub_) - mg) * scale - 0.5)))
                     j1 = min(m - 1, int(math.floor((max(ua_, ub_) + mg) * scale - 0.5)))
                 for j in range(j0, j1 + 1):
@@ -1734,8 +1755,8 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
                     den = dx * e1 - dy * e0
                     if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
                         continue
-                    w0 = px0[pc] - bx[i]
-                    w1 = py0[pc] - by[i]
+                    w0 = a0 - bx[i]
+                    w1 = b0 - by[i]
                     t = (w0 * e1 - w1 * e0) / den
                     if t <= tmin or t > Lr or t >= tbest[j]:
                         continue
