@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from rotoprint.check import check_layers, check_printability
+from rotoprint.check.core import _RESOLUTION_PX
 from rotoprint.devices import load_device
 from rotoprint.mesh import Mesh
 from rotoprint.pieces import Feature, feature_test_piece
@@ -78,7 +79,7 @@ def test_check_piece_no_miss_no_false_report(piece, device_name, threshold_mm, r
     T = threshold_mm if threshold_mm is not None else (p if dev.kind == "projector" else max(p, dev.head.drop_diameter_um / 1000))
     layers = list(check_layers(job, dev, min_wall_mm=threshold_mm, min_gap_mm=threshold_mm, islands=False, resolution_mm=resolution_mm))
     # widths on the simplified section are within twice the resolution of the section's
-    res = 0.01 * min(dev.pitch_x_mm, dev.pitch_y_mm) if resolution_mm is None else resolution_mm
+    res = _RESOLUTION_PX * min(dev.pitch_x_mm, dev.pitch_y_mm) if resolution_mm is None else resolution_mm
     feature_layers = [lc for lc in layers if lc.z_mm > feats[0].z0]
     assert feature_layers
     for lc in feature_layers:
@@ -112,7 +113,7 @@ def test_check_piece_report_counts(piece):
     # every layer above the base: walls of 10..40 um (straight and ring) and gaps of 10..40 um,
     # measured within twice the resolution (and exactly on the section as sliced)
     res = rep.settings["resolution_mm"]
-    assert res == pytest.approx(0.01 * min(dev.pitch_x_mm, dev.pitch_y_mm))
+    assert res == pytest.approx(_RESOLUTION_PX * min(dev.pitch_x_mm, dev.pitch_y_mm))
     assert rep.thinnest_wall["width_mm"] == pytest.approx(0.010, abs=1e-6 + 2 * res)
     assert rep.narrowest_gap["width_mm"] == pytest.approx(0.010, abs=1e-6 + 2 * res)
     exact = check_printability(mesh, dev, layer_height_mm=0.4, min_wall_mm=0.045, min_gap_mm=0.045, resolution_mm=0)
