@@ -11,6 +11,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import numpy as np
+
 TITLE = "Printability: check time vs slicing time (same part, same layers)"
 
 SHARED = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes"
@@ -36,6 +38,11 @@ def _cases(quick: bool):
     piece = Mesh.from_triangles(feature_test_piece()[0])
     yield "feature piece (10 mm, 55k segments/layer)", piece, "perfactory-sxga", 0.1 if not quick else 0.4, {}
     yield "feature piece (10 mm, 55k segments/layer)", piece, "omnidot760", 0.1 if not quick else 0.4, {}
+    # tilted 5 degrees about x: no side wall is vertical, every layer's section differs
+    a = np.radians(5.0)
+    rot = np.array([[1.0, 0.0, 0.0], [0.0, np.cos(a), -np.sin(a)], [0.0, np.sin(a), np.cos(a)]])
+    tilted = Mesh.from_triangles(feature_test_piece()[0] @ rot.T)
+    yield "feature piece tilted 5 deg", tilted, "perfactory-sxga", 0.1 if not quick else 0.4, {}
     # the same on the section as sliced (no simplification): the exact path
     yield "feature piece, resolution 0", piece, "perfactory-sxga", 0.1 if not quick else 0.4, {"resolution_mm": 0.0}
     if (SHARED / "sphere_openscad.stl").exists():
