@@ -156,3 +156,26 @@ def test_hole_over_open_space_is_open(floor, cavity):
     assert (len(out) == 1) == cavity
     if cavity:
         assert out[0]["first_layer"] == 1 and out[0]["last_layer"] == 2 and out[0]["pixels"] == 8
+
+
+def test_nested_cavities_stay_two_regions():
+    """A sealed hollow inside another (roofs one layer apart, boxes overlapping) is two
+    regions, each with its own volume and layers."""
+    inv = lambda t: t[:, ::-1, :]  # noqa: E731 - an inward-facing box (a void)
+    tris = np.concatenate(
+        [
+            box_triangles((4, 4, 2)),
+            inv(box_triangles((3, 3, 1.4), (0.5, 0.5, 0.3))),
+            box_triangles((2, 2, 1.18), (1, 1, 0.5)),
+            inv(box_triangles((1, 1, 0.8), (1.5, 1.5, 0.8))),
+        ]
+    )
+    rep = check_printability(Mesh.from_triangles(tris), load_device("perfactory-sxga"), layer_height_mm=0.1, islands=False)
+    cav = [f for f in rep.findings if f.kind == "cavity"]
+    regs = [r for r in rep.regions() if r["kind"] == "cavity"]
+    assert len(cav) == 2 and len(regs) == 2
+    assert sorted(r["volume_mm3"] for r in regs) == sorted(f.volume_mm3 for f in cav)
+    for r in regs:
+        assert r["z_mm"][0] < r["z_mm"][1] and r["first_layer"] < r["last_layer"]
+    inner = min(regs, key=lambda r: r["volume_mm3"])
+    assert inner["volume_mm3"] == pytest.approx(1.0 * 1.0 * 0.8, rel=0.1)

@@ -87,6 +87,9 @@ def test_check_cli_limits_only(run_cli):
         ("--layer-height", "0.2", "--resolution", "-0.001"),
         ("--layer-height", "0.2", "--resolution", "nan"),
         ("--layer-height", "0.2", "--resolution", "0.01"),  # over a quarter pixel
+        ("--layer-height", "0.2", "--resolution", "abc"),  # not a number: one line too
+        ("--layer-height", "0.2", "--bogus"),
+        ("--layer-height", "0.2", "--no-cavities=no"),
         (),  # no layer height
     ],
 )

@@ -116,3 +116,27 @@ def test_resolution_validated():
     for bad in (-1e-6, float("nan"), float("inf"), 0.01, "x"):
         with pytest.raises(ConfigError, match="resolution"):
             resolution_for(dev, bad)
+
+
+def test_small_loops_are_not_flattened():
+    """A pin smaller than the resolution keeps an inside: its thin-wall findings are those of
+    the section as sliced (a loop simplified to out-and-back would have none)."""
+    from rotoprint.testing import extrude_polygon
+
+    dev = load_device("perfactory-sxga")
+    p = min(dev.pitch_x_mm, dev.pitch_y_mm)
+    a = np.linspace(0, 2 * np.pi, 8, endpoint=False) + 0.1
+    r = 0.45 * p / 2  # a 9 um octagonal pin
+    tris = np.concatenate([box_triangles((0.5, 0.5, 1.0)), extrude_polygon(np.c_[1 + r * np.cos(a), 1 + r * np.sin(a)], 1.0)])
+    mesh = Mesh.from_triangles(tris)
+    want = check_printability(mesh, dev, layer_height_mm=0.1, resolution_mm=0.0, islands=False).counts()
+    for res in (0.01 * p, 0.25 * p):
+        got = check_printability(mesh, dev, layer_height_mm=0.1, resolution_mm=res, islands=False).counts()
+        assert got["thin_wall"] == want["thin_wall"] > 0 and got["vanished_wall"] == want["vanished_wall"]
+    # the kernel: the pin's loop keeps at least three chords and an inside
+    seg = _section(tris, 0.5)
+    s, e = _simplify(seg, 0.25 * p)
+    pin = np.hypot(s[:, 0] - 1, s[:, 1] - 1) < 2 * r
+    assert pin.sum() >= 3
+    area = 0.5 * np.sum(s[pin, 0] * e[pin, 1] - e[pin, 0] * s[pin, 1])
+    assert area > 0.05 * np.pi * r * r  # squashed within the tolerance, but not to nothing

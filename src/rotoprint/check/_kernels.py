@@ -2570,8 +2570,9 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
     segments (one ends on the mesh edge the next starts on, bit-identical joint, neither edge
     shared by another segment) are replaced by chords along which every dropped joint lies
     within ``tol`` mm (and between the chord's ends). Joints are never moved, chains are never
-    joined to others, and segments that do not chain (gap closing, non-manifold edges) are
-    kept as they are, so every point of the result lies within ``tol`` of the section and
+    joined to others, a closed chain keeps at least three chords (a loop smaller than the
+    tolerance is kept whole rather than flattened to nothing), and segments that do not chain
+    (gap closing, non-manifold edges) are kept as they are, so every point of the result lies within ``tol`` of the section and
     every point of the section within ``tol`` of the result.
 
     ``pos`` is an ``int32`` buffer of entries all -1, and is left so (one buffer serves every
@@ -2645,5 +2646,16 @@ def simplify_section(start, end, start_edge, end_edge, tol, pos):  # pragma: no 
                     break
                 i = j
             # k segments, points 0..k (a cycle's last point is its first: it is kept)
+            m0 = m
             m = _greedy_emit(px, py, 0, k, tol, out_s, out_e, m)
+            if j == h and m - m0 < 3 and k >= 3:
+                # a loop within the tolerance of a line would become a sliver with no inside
+                # (out and back): it is kept as it is
+                m = m0
+                for q in range(k):
+                    out_s[m, 0] = px[q]
+                    out_s[m, 1] = py[q]
+                    out_e[m, 0] = px[q + 1]
+                    out_e[m, 1] = py[q + 1]
+                    m += 1
     return out_s[:m], out_e[:m], 0

@@ -81,9 +81,9 @@ class Finding:
     lowest (cured gap) exposure as a fraction of full.
 
     A ``cavity`` (empty space the part shuts in on every side: resin that cannot drain) is
-    reported at the layer that closes it over (its roof), with ``first_layer`` the first
-    layer it is in, ``volume_mm3`` its volume (pixels times pixel area times layer height),
-    its centroid and its box over all its layers.
+    reported at the layer that closes it over (its roof), with ``first_layer`` and
+    ``first_z_mm`` the first layer it is in, ``volume_mm3`` its volume (pixels times pixel
+    area times layer height), its centroid and its box over all its layers.
     """
 
     kind: str
@@ -100,6 +100,7 @@ class Finding:
     bbox_mm: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     volume_mm3: float | None = None
     first_layer: int | None = None
+    first_z_mm: float | None = None
 
     def to_json(self) -> dict:
         d = asdict(self)
@@ -159,7 +160,7 @@ class LayerCheck:
 def join_regions(findings: Sequence[Finding], grow_mm: float = 0.0) -> list[dict]:
     """Findings of one kind in consecutive layers whose bounding boxes (grown by ``grow_mm``)
     overlap, joined into regions through the part: one thin fin is one region, not one
-    finding per layer.
+    finding per layer. A cavity is one region as it is (its finding is the whole body).
 
     Returns one dict per region, in order of kind (:data:`KINDS`), first layer and position:
     ``kind``, ``first_layer``, ``last_layer``, ``z_mm`` ``[lo, hi]``, ``findings`` (how many),
@@ -171,6 +172,9 @@ def join_regions(findings: Sequence[Finding], grow_mm: float = 0.0) -> list[dict
     for kind in KINDS:
         fs = [f for f in findings if f.kind == kind]
         if not fs:
+            continue
+        if kind == "cavity":  # each is one body through its layers already: never joined
+            out.extend(_cavity_region(f) for f in sorted(fs, key=lambda f: (f.first_layer, f.bbox_mm[1], f.bbox_mm[0])))
             continue
         n = len(fs)
         parent = list(range(n))
@@ -208,20 +212,18 @@ def join_regions(findings: Sequence[Finding], grow_mm: float = 0.0) -> list[dict
             g = [fs[i] for i in members]
             if kind == "island":
                 worst = max(g, key=lambda f: f.area_mm2 or 0.0)
-            elif kind == "cavity":
-                worst = max(g, key=lambda f: f.volume_mm3 or 0.0)
             else:
                 worst = min(g, key=lambda f: f.width_mm)
             regs.append(
                 {
                     "kind": kind,
-                    "first_layer": min(f.layer if f.first_layer is None else f.first_layer for f in g),
+                    "first_layer": min(f.layer for f in g),
                     "last_layer": max(f.layer for f in g),
                     "z_mm": [min(f.z_mm for f in g), max(f.z_mm for f in g)],
                     "findings": len(g),
                     "width_mm": worst.width_mm,
                     "area_mm2": sum(f.area_mm2 or 0.0 for f in g) if kind == "island" else None,
-                    "volume_mm3": sum(f.volume_mm3 or 0.0 for f in g) if kind == "cavity" else None,
+                    "volume_mm3": None,
                     "layer": worst.layer,
                     "x_mm": worst.x_mm,
                     "y_mm": worst.y_mm,
@@ -231,6 +233,24 @@ def join_regions(findings: Sequence[Finding], grow_mm: float = 0.0) -> list[dict
         regs.sort(key=lambda r: (r["first_layer"], r["bbox_mm"][1], r["bbox_mm"][0]))
         out.extend(regs)
     return out
+
+
+def _cavity_region(f: Finding) -> dict:
+    first = f.layer if f.first_layer is None else f.first_layer
+    return {
+        "kind": f.kind,
+        "first_layer": first,
+        "last_layer": f.layer,
+        "z_mm": [f.z_mm if f.first_z_mm is None else f.first_z_mm, f.z_mm],
+        "findings": 1,
+        "width_mm": None,
+        "area_mm2": None,
+        "volume_mm3": f.volume_mm3,
+        "layer": f.layer,
+        "x_mm": f.x_mm,
+        "y_mm": f.y_mm,
+        "bbox_mm": list(f.bbox_mm),
+    }
 
 
 @dataclass
@@ -446,6 +466,7 @@ class _LayerChecker:
             bbox_mm=(float(X.min()), float(Y.min()), float(X.max()), float(Y.max())),
             volume_mm3=float(rec["pixels"] * g.pitch_x_mm * g.pitch_y_mm * float(self.job.plan.layer_height_mm)),
             first_layer=int(rec["first_layer"]),
+            first_z_mm=float(self.job.plan.z_slice_mm[int(rec["first_layer"])]),
         )
 
     def _extreme(self, i, width, bx, by, ux, uy, sgn, index, z) -> dict | None:

@@ -79,10 +79,14 @@ def _run(argv: list[str] | None) -> int:
         return 130
     except typer.TyperException as exc:  # usage errors carry their own exit code (2)
         show = getattr(exc, "show", None)
-        if show is not None:
-            show()
-        else:  # pragma: no cover
-            console.print(f"rotoprint: error: {exc}")
+        if type(exc).__name__ == "NoArgsIsHelpError" and show is not None:
+            show()  # a bare command: its help, as asked
+        else:  # anything else that could not be parsed: one line, like every other error
+            fmt = getattr(exc, "format_message", None)
+            msg = " ".join((fmt() if fmt is not None else str(exc)).split())
+            ctx = getattr(exc, "ctx", None)
+            cmd = getattr(ctx, "command_path", "") or "rotoprint"
+            console.print(styled(("rotoprint: error:", "red"), f" {cmd}: {msg}"), soft_wrap=True)
         return int(getattr(exc, "exit_code", EXIT_BAD_INPUT))
     return 0
 
