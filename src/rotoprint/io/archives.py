@@ -108,7 +108,24 @@ class JobInfo:
 
 
 def format_from_path(path: str | Path, fmt: str | None = None) -> str:
-    """The output format: ``fmt`` if given, else from the suffix (.sl1, .sl1s), else 'png'."""
+    """The output format: ``fmt`` if given, else from the suffix (.sl1, .sl1s), else 'png'.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output; only its suffix is looked at, and only when ``fmt`` is None or ``'auto'``.
+    fmt : {'auto', 'sl1', 'sl1s', 'png', 'perfactory'}, optional
+
+    Returns
+    -------
+    {'sl1', 'sl1s', 'png', 'perfactory'}
+
+    Raises
+    ------
+    ConfigError
+        ``fmt`` is not one of the above, or it is not given and the suffix is one of
+        ``.zip``, ``.png``, ``.cws``, ``.ctb``, ``.pwmx`` (a file format rotoprint does not write).
+    """
     if fmt is not None and fmt != "auto":
         if fmt not in FORMATS:
             raise ConfigError(f"format must be one of auto, {', '.join(FORMATS)}, got {fmt!r}")
@@ -505,6 +522,17 @@ def read_job(path: str | Path) -> ArchiveContents:
     Raises :class:`InputFileError` when a required key or file is missing, when the layer
     count in ``config.ini`` disagrees with the layers present, or when names are out of
     sequence.
+
+    Parameters
+    ----------
+    path : str or Path
+        An ``.sl1`` / ``.sl1s`` archive (any other file is opened as a zip and reported as
+        ``sl1``), or a folder holding ``manifest.json``.
+
+    Returns
+    -------
+    ArchiveContents
+        Archives are read into memory whole; folders read each mask when it is asked for.
     """
     path = Path(path)
     if not path.exists():

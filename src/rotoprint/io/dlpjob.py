@@ -37,7 +37,48 @@ def write_dlp_job(
     """Make every mask of ``job`` with ``options`` (a :class:`rotoprint.masks.MaskOptions`)
     and write the job to ``out`` as ``fmt`` (default: from the suffix). The bytes are the same
     for any ``workers`` or ``scheduler`` (set ``SOURCE_DATE_EPOCH`` to fix the archive's
-    creation time too); ``resume`` continues a killed run."""
+    creation time too); ``resume`` continues a killed run.
+
+    Parameters
+    ----------
+    job : SliceJob
+    out : str or Path
+        ``.sl1`` / ``.sl1s`` file, or a folder (``png`` or ``perfactory``). Masks are made in
+        ``<out>.partial`` (see :mod:`rotoprint.io.resumable`) and ``out`` is written only
+        when all are there.
+    info : JobInfo
+        Printer and exposure settings written with the masks.
+    options : MaskOptions
+        How each layer's image becomes its mask(s); ``options.copies`` masks per layer.
+    fmt : {'auto', 'sl1', 'sl1s', 'png', 'perfactory'}, optional
+        Default: from the suffix of ``out`` (see :func:`~rotoprint.io.archives.format_from_path`).
+    workers : int
+        Local processes making layers (at least 1).
+    scheduler : str, optional
+        Address ``[tcp://]HOST:PORT`` of a Dask scheduler to make the layers on instead.
+    resume : bool
+        Keep the verified layers of an earlier run of the same job in ``<out>.partial``.
+    on_mask : callable, optional
+        Called with the number of every mask once it is made (resumed ones included).
+
+    Returns
+    -------
+    dict
+        The summary of :func:`~rotoprint.io.archives.write_job` (the manifest for folders).
+
+    Raises
+    ------
+    ConfigError
+        Unknown ``fmt`` or a suffix it cannot be told from, ``workers < 1``, or a malformed
+        ``scheduler`` address.
+    InputFileError
+        ``out`` must not be written or replaced (missing parent folder, a file where a folder
+        goes or the reverse, a non-empty folder that is not ours), or ``<out>.partial``
+        exists without a journal.
+    ResourceError
+        The run would need more disk or memory than is available (checked before any mask is
+        written).
+    """
     from ..masks.pipeline import plain_from_image
 
     fmt = format_from_path(out, fmt)

@@ -15,7 +15,24 @@ __all__ = ["png_bytes", "write_png", "read_grey_image"]
 
 
 def png_bytes(image: np.ndarray, *, compress_level: int = 3) -> bytes:
-    """Encode a ``(H, W) uint8`` image as an 8-bit greyscale PNG."""
+    """Encode a ``(H, W) uint8`` image as an 8-bit greyscale PNG.
+
+    Parameters
+    ----------
+    image : (H, W) uint8
+    compress_level : int
+        zlib level passed to Pillow (0 none ... 9 smallest); the pixels are the same for any.
+
+    Returns
+    -------
+    bytes
+        The PNG file's content.
+
+    Raises
+    ------
+    ImageError
+        ``image`` is not 2-D or not ``uint8``.
+    """
     if image.dtype != np.uint8 or image.ndim != 2:
         raise ImageError(f"layer images must be 2-D uint8, got {image.ndim}-D {image.dtype}")
     buf = io.BytesIO()
@@ -24,14 +41,52 @@ def png_bytes(image: np.ndarray, *, compress_level: int = 3) -> bytes:
 
 
 def write_png(path: str | Path, image: np.ndarray, *, compress_level: int = 3) -> str:
-    """Write ``image`` as PNG; returns the SHA-256 of the bytes written."""
+    """Write ``image`` as PNG; returns the SHA-256 of the bytes written.
+
+    Parameters
+    ----------
+    path : str or Path
+        Written directly (not atomically), replacing an existing file.
+    image : (H, W) uint8
+    compress_level : int
+        See :func:`png_bytes`.
+
+    Returns
+    -------
+    str
+        Hex SHA-256 digest of the PNG bytes.
+
+    Raises
+    ------
+    ImageError
+        ``image`` is not 2-D or not ``uint8``.
+    """
     data = png_bytes(image, compress_level=compress_level)
     Path(path).write_bytes(data)
     return hashlib.sha256(data).hexdigest()
 
 
 def read_grey_image(path: str | Path) -> np.ndarray:
-    """Read an image as ``(H, W) uint8``; colour and 16-bit images are refused."""
+    """Read an image as ``(H, W) uint8``; colour and 16-bit images are refused.
+
+    Parameters
+    ----------
+    path : str or Path
+        A greyscale (``L``), 1-bit (``1``, read as 0 / 255) or palette (``P``, without
+        transparency) image in any format Pillow reads.
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        C-contiguous; palette images converted to their grey values.
+
+    Raises
+    ------
+    InputFileError
+        The file does not exist.
+    ImageError
+        Pillow cannot read it, or its mode is another (colour, 16-bit, with alpha, ...).
+    """
     path = Path(path)
     if not path.exists():
         raise InputFileError("no such image file", path=path)

@@ -27,11 +27,37 @@ log = logging.getLogger(__name__)
 
 
 def layer_filename(index: int) -> str:
+    """File name of layer ``index`` in a layer folder.
+
+    Parameters
+    ----------
+    index : int
+        0-based layer index.
+
+    Returns
+    -------
+    str
+        ``layer_NNNNN.png``, the index zero-padded to five digits.
+    """
     return f"layer_{index:05d}.png"
 
 
 def task_from_job(job: SliceJob, *, mask_options: dict | None = None) -> LayerTask:
-    """The picklable task for ``job``, keyed by its fingerprint."""
+    """The picklable task for ``job``, keyed by its fingerprint.
+
+    Parameters
+    ----------
+    job : SliceJob
+        Its mesh, device and slicing options go into the task.
+    mask_options : dict, optional
+        JSON form of the mask options (:meth:`MaskOptions.to_json`) when the task makes DLP
+        masks; None for plain layer images.
+
+    Returns
+    -------
+    LayerTask
+        With ``_key`` set to :func:`~rotoprint.runner.task_fingerprint` of the task.
+    """
     task = LayerTask(
         vertices=job.mesh.vertices,
         faces=job.mesh.faces,
@@ -57,7 +83,36 @@ def run_layers(n_layers: int, px: int, task: LayerTask, partial: PartialOutput, 
                copies_on_disk: int = 1) -> Iterator:
     """Size the run (three sample layers made first), then yield the results of every layer
     not already done, in order. ``px`` is the pixel count of one layer's raster(s). Nothing
-    is written before the size check passes."""
+    is written before the size check passes.
+
+    Parameters
+    ----------
+    n_layers : int
+    px : int
+    task : LayerTask
+    partial : PartialOutput
+        Layers in ``partial.done`` are skipped; ``partial.open()`` is called after the size
+        check.
+    workers : int
+        Local processes (at least 1).
+    scheduler : str, optional
+        Dask scheduler address ``[tcp://]HOST:PORT``.
+    copies_on_disk : int
+        How many copies of each layer's output the disk must hold at once (for the disk check).
+
+    Yields
+    ------
+    LayerResult
+        One per layer not yet done, in index order.
+
+    Raises
+    ------
+    ConfigError
+        ``workers < 1`` or a malformed ``scheduler`` address.
+    ResourceError
+        The estimated output exceeds the free disk space beside ``partial``, or the estimated
+        memory exceeds what is available.
+    """
     if workers < 1:
         raise ConfigError(f"workers must be at least 1, got {workers}")
     if scheduler is not None:
@@ -102,6 +157,42 @@ def write_layer_folder(
     ``(col, row)`` (centre of pixel (0, 0) at (0, 0)) to platform and model mm. The bytes
     are identical for any ``workers`` or ``scheduler``; ``resume`` continues a killed run
     (see :mod:`rotoprint.io.resumable`).
+
+    Parameters
+    ----------
+    job : SliceJob
+    out_dir : str or Path
+        The folder to write; built in ``<out_dir>.partial`` and renamed onto ``out_dir`` when
+        complete (replacing an earlier output of ours).
+    device_name : str
+    device : dict
+    options : dict
+        Written as they are into the manifest.
+    workers : int
+        Local processes making layers (at least 1).
+    scheduler : str, optional
+        Address ``[tcp://]HOST:PORT`` of a Dask scheduler to make the layers on instead.
+    resume : bool
+        Keep the verified layers of an earlier run of the same job.
+    on_layer : callable, optional
+        Called with the index of every layer once it is made (resumed ones included).
+
+    Returns
+    -------
+    dict
+        The manifest, as written to ``manifest.json``.
+
+    Raises
+    ------
+    ConfigError
+        ``workers < 1`` or a malformed ``scheduler`` address.
+    InputFileError
+        ``out_dir`` must not be written or replaced (missing parent folder, a file, or a
+        non-empty folder without ``manifest.json``), or ``<out_dir>.partial`` exists without
+        a journal.
+    ResourceError
+        The run would need more disk or memory than is available (checked before any layer is
+        written).
     """
     out = Path(out_dir)
     check_target(out, is_dir=True)

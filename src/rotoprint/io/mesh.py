@@ -28,6 +28,26 @@ def make_transform(
 ) -> np.ndarray:
     """A ``(4, 4) float64`` affine: scale, then rotate about X, Y, Z (degrees), then translate.
 
+    Parameters
+    ----------
+    translate_mm : (3,) float
+        Translation along X, Y, Z, applied last.
+    rotate_deg : (3,) float
+        Rotations about X, then Y, then Z, in degrees.
+    scale : float or (3,) float
+        One factor for all axes, or one per axis; applied first. Must be finite and non-zero.
+
+    Returns
+    -------
+    (4, 4) float64 ndarray
+        The affine for column vectors ``[x, y, z, 1]``.
+
+    Raises
+    ------
+    ConfigError
+        ``scale`` is zero or not finite, or ``rotate_deg`` / ``translate_mm`` is not three
+        finite numbers.
+
     Examples
     --------
     >>> T = make_transform(translate_mm=(1, 2, 3), rotate_deg=(0, 0, 90))
@@ -60,7 +80,27 @@ def _check_path(path: Path) -> None:
 
 
 def load_triangles(path: str | Path) -> np.ndarray:
-    """Read a mesh file into ``(N, 3, 3) float64`` triangles in the file's own units."""
+    """Read a mesh file into ``(N, 3, 3) float64`` triangles in the file's own units.
+
+    Parameters
+    ----------
+    path : str or Path
+        A ``.stl`` file (read natively) or one of the other :data:`SUPPORTED_SUFFIXES`
+        (read through trimesh, without processing).
+
+    Returns
+    -------
+    (N, 3, 3) float64 ndarray
+        Triangles, then corners, then X, Y, Z; no units conversion or transform.
+
+    Raises
+    ------
+    InputFileError
+        The file is missing, is a directory, or cannot be read (permission denied).
+    MeshError
+        Unsupported suffix, an empty non-STL file, a file trimesh cannot read or that holds
+        no triangles, or an invalid STL.
+    """
     path = Path(path)
     _check_path(path)
     suffix = path.suffix.lower()

@@ -27,18 +27,70 @@ JOURNAL = "journal.jsonl"
 
 
 def partial_path(out: str | Path) -> Path:
+    """The work folder of a run writing ``out``.
+
+    Parameters
+    ----------
+    out : str or Path
+
+    Returns
+    -------
+    Path
+        ``<out>.partial`` in the folder of ``out``.
+    """
     out = Path(out)
     return out.parent / f"{out.name}.partial"
 
 
 def check_target(out: Path, *, is_dir: bool) -> None:
-    """Refuse targets we must not replace (see :func:`rotoprint.io.atomic.check_output_target`)."""
+    """Refuse targets we must not replace (see :func:`rotoprint.io.atomic.check_output_target`).
+
+    Parameters
+    ----------
+    out : Path
+        The output file or folder.
+    is_dir : bool
+        Whether the output is a folder.
+
+    Raises
+    ------
+    InputFileError
+        The parent folder does not exist, a file is where a folder goes (or the reverse), or
+        the folder is not empty and holds no ``manifest.json``.
+    """
     check_output_target(out, is_dir=is_dir)
 
 
 def check_resources(*, n_layers: int, bytes_per_layer: float, copies_on_disk: int, per_process_bytes: int,
                     processes: int, in_flight_bytes: int, where: Path) -> dict:
-    """Refuse a run, before it starts, that needs more disk or memory than the machine has."""
+    """Refuse a run, before it starts, that needs more disk or memory than the machine has.
+
+    Parameters
+    ----------
+    n_layers : int
+    bytes_per_layer : float
+        Output bytes of one layer (e.g. the mean of sample layers).
+    copies_on_disk : int
+        Copies of the output the disk holds at once.
+    per_process_bytes : int
+        Memory of one working process.
+    processes : int
+    in_flight_bytes : int
+        Memory of results made but not yet written.
+    where : Path
+        Folder whose file system must hold the output.
+
+    Returns
+    -------
+    dict
+        ``estimated_output_bytes`` and ``estimated_memory_bytes``, ints.
+
+    Raises
+    ------
+    ResourceError
+        The estimated output exceeds the free space at ``where``, or the estimated memory
+        exceeds the available memory.
+    """
     est_disk = int(bytes_per_layer * n_layers * 1.25 * copies_on_disk) + 64 * 1024 + 2048 * n_layers
     free = shutil.disk_usage(where).free
     if est_disk > free:

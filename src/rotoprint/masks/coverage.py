@@ -65,6 +65,20 @@ def accumulate_numpy(x0, y0, x1, y1, height: int, width: int) -> np.ndarray:
     """Pure-numpy reference of the accumulation kernel: ``(height, width + 1) float64``.
 
     Same contract as ``_coverage_kernels.accumulate_jit`` (see that module's doc).
+
+    Parameters
+    ----------
+    x0, y0, x1, y1 : (S,) float64
+        Segment ends in continuous pixel coordinates (centre of pixel ``(c, r)`` at
+        ``(c, r)``); not validated here.
+    height, width : int
+        Raster size.
+
+    Returns
+    -------
+    (height, width + 1) float64 ndarray
+        Per-row differences: the cumulative sum along a row of the first ``width`` columns
+        is the signed winding integral over each pixel.
     """
     x0, y0, x1, y1 = (np.asarray(v, dtype=np.float64) + 0.5 for v in (x0, y0, x1, y1))
     acc = np.zeros((height, width + 1), np.float64)
@@ -178,6 +192,16 @@ def fraction_to_grey(fraction: np.ndarray) -> np.ndarray:
     """``(H, W) float`` fractions in [0, 1] to ``(H, W) uint8`` grey levels, round half up.
 
     Each grey level is within 0.5 / 255 of ``255 * fraction``.
+
+    Parameters
+    ----------
+    fraction : array_like of float
+        Coverage fractions, any shape; values outside [0, 1] are clipped.
+
+    Returns
+    -------
+    uint8 ndarray
+        ``floor(255 * fraction + 0.5)``, the shape of ``fraction``.
     """
     f = np.asarray(fraction, dtype=np.float64)
     return np.floor(np.clip(f, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
@@ -185,6 +209,30 @@ def fraction_to_grey(fraction: np.ndarray) -> np.ndarray:
 
 def coverage_mask(start_px, end_px, shape, *, backend: str = "jit") -> np.ndarray:
     """``(H, W) uint8`` mask, grey level ``round(255 * coverage)``; see :func:`coverage_fraction`.
+
+    Parameters
+    ----------
+    start_px, end_px : (S, 2) float64
+        Oriented segments ``(col, row)`` in continuous pixel coordinates, forming closed loops.
+    shape : (int, int)
+        ``(height, width)`` of the mask.
+    backend : {'jit', 'numpy'}
+        The numba kernels (working in the segments' bounding window) or the pure-numpy
+        reference followed by :func:`fraction_to_grey`.
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+
+    Raises
+    ------
+    ConfigError
+        Unknown ``backend``, or ``shape`` is not two positive integers.
+    GeometryError
+        ``start_px`` and ``end_px`` are not two ``(S, 2)`` arrays of the same shape, or hold
+        a non-finite coordinate.
+    RasterTooLargeError
+        The raster would not fit in the available memory.
 
     Examples
     --------
@@ -240,6 +288,22 @@ def segments_area_px(start_px, end_px) -> float:
 
     Positive for loops counter-clockwise in ``(col, row)`` axes (clockwise as an image is
     viewed, rows down).
+
+    Parameters
+    ----------
+    start_px, end_px : (S, 2) float64
+        Segment start and end points ``(col, row)``.
+
+    Returns
+    -------
+    float
+        ``0.5 * sum(x0 * y1 - x1 * y0)``, in square pixels.
+
+    Raises
+    ------
+    GeometryError
+        ``start_px`` and ``end_px`` are not two ``(S, 2)`` arrays of the same shape, or hold
+        a non-finite coordinate.
     """
     s, e = _check_segments(start_px, end_px)
     return float(0.5 * np.sum(s[:, 0] * e[:, 1] - e[:, 0] * s[:, 1]))

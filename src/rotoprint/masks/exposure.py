@@ -150,11 +150,34 @@ def exposure_table(
     ``kept_fraction``, and whether the feature was kept along all its length at every
     placement.
 
+    Parameters
+    ----------
+    modes : sequence of {'binary', 'coverage', 'smooth'}
+        Masks to compare: the binary slice, the exact-coverage mask, the binary slice after
+        :func:`~rotoprint.masks.ops.smooth_mask`.
+    cure_threshold : float
+        Fraction of full exposure a pixel needs to cure, in [0, 1].
+    phases : int
+        Sub-pixel placements per axis (``phases ** 2`` slices per mode).
+    device : str
+        Name of the projector preset (see :func:`rotoprint.devices.load_device`).
+    widths_mm : sequence of float, optional
+        Feature widths of the test piece; default ``rotoprint.pieces.DEFAULT_WIDTHS_MM``.
+    ring_segments : int
+        Segments of each ring feature of the test piece.
+
     Returns
     -------
     list of dict
         Keys ``kind``, ``width_um``, and per mode ``<mode>_level``, ``<mode>_kept``,
         ``<mode>_kept_all``.
+
+    Raises
+    ------
+    ConfigError
+        A mode is not one of the three, or ``cure_threshold`` is outside [0, 1].
+    DeviceError
+        ``device`` is not a known preset.
     """
     from ..devices import load_device
     from ..mesh import Mesh
@@ -204,7 +227,25 @@ def narrowest_kept_um(rows: list[dict], mode: str, kind: str, *, cure_threshold:
     """Smallest width (um) of ``kind`` from which every wider feature is kept at every
     placement; ``None`` if even the widest is not. With ``cure_threshold``, re-decide from
     the recorded levels (valid for rows whose features were kept along their whole length
-    exactly when their level passes, which holds for the worst-placement ``level``)."""
+    exactly when their level passes, which holds for the worst-placement ``level``).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`exposure_table`.
+    mode : str
+        One of the modes the rows were made with.
+    kind : str
+        Feature kind (``'wall'``, ``'channel'``, ...); rows of other kinds are ignored.
+    cure_threshold : float, optional
+        Decide from ``<mode>_level`` (walls: ``>=``, channels: ``<``) instead of
+        ``<mode>_kept_all``.
+
+    Returns
+    -------
+    float or None
+        ``width_um`` of that row.
+    """
     rs = sorted((r for r in rows if r["kind"] == kind), key=lambda r: r["width_um"])
     wall = kind in ("wall", "ring_wall")
 
@@ -224,7 +265,20 @@ def narrowest_kept_um(rows: list[dict], mode: str, kind: str, *, cure_threshold:
 
 def format_exposure_table(rows: list[dict], modes=("binary", "coverage", "smooth")) -> str:
     """A markdown table of :func:`exposure_table` rows: ``level / kept %`` per mode (the
-    percentage is rounded down, so 100 % means all of it)."""
+    percentage is rounded down, so 100 % means all of it).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Rows of :func:`exposure_table`.
+    modes : sequence of str
+        Columns, in order; each must be among the modes the rows were made with.
+
+    Returns
+    -------
+    str
+        The table's lines joined with newlines, no trailing newline.
+    """
     head = "| feature | width (um) | " + " | ".join(modes) + " |"
     lines = [head, "|---|---:|" + "---:|" * len(modes)]
     for r in rows:

@@ -69,6 +69,24 @@ def erm_shift(mask: np.ndarray, *, shift_px: tuple[int, int] = (1, 1), fill: int
     """The second ERM copy: ``mask`` moved ``shift_px = (cols, rows)`` (right and down for
     positive values), vacated pixels set to ``fill``.
 
+    Parameters
+    ----------
+    mask : (H, W) uint8
+    shift_px : (int, int)
+        ``(cols, rows)``; a shift as large as the mask leaves only ``fill``.
+    fill : int
+        Grey level of the vacated pixels.
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        A new array; ``mask`` is not changed.
+
+    Raises
+    ------
+    ImageError
+        ``mask`` is not a 2-D uint8 array.
+
     Examples
     --------
     >>> erm_shift(np.array([[255, 0], [0, 0]], np.uint8)).tolist()
@@ -89,12 +107,46 @@ def erm_shift(mask: np.ndarray, *, shift_px: tuple[int, int] = (1, 1), fill: int
 
 
 def invert_mask(mask: np.ndarray) -> np.ndarray:
-    """``255 - mask``: black becomes exposure (for projectors that want it that way)."""
+    """``255 - mask``: black becomes exposure (for projectors that want it that way).
+
+    Parameters
+    ----------
+    mask : (H, W) uint8
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        A new array.
+
+    Raises
+    ------
+    ImageError
+        ``mask`` is not a 2-D uint8 array.
+    """
     return np.subtract(np.uint8(255), _check_mask(mask))
 
 
 def mirror_mask(mask: np.ndarray, *, mirror_x: bool = False, mirror_y: bool = False) -> np.ndarray:
-    """Flip left-right (``mirror_x``) and/or top-bottom (``mirror_y``); a contiguous copy."""
+    """Flip left-right (``mirror_x``) and/or top-bottom (``mirror_y``); a contiguous copy.
+
+    Parameters
+    ----------
+    mask : (H, W) uint8
+    mirror_x : bool
+        Reverse the column order.
+    mirror_y : bool
+        Reverse the row order.
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        C-contiguous; with neither flip, ``mask`` itself when it is already contiguous.
+
+    Raises
+    ------
+    ImageError
+        ``mask`` is not a 2-D uint8 array.
+    """
     m = _check_mask(mask)
     if mirror_x:
         m = m[:, ::-1]
@@ -152,6 +204,24 @@ def inset_mask(mask: np.ndarray, *, inset_mm: float, pitch_x_mm: float, pitch_y_
 def first_layer_offsets_um(n_layers: int, *, first_layers: int, first_layer_offset_um: float) -> np.ndarray:
     """``(n_layers,) float64`` inset per layer: ``first_layer_offset_um`` on layer 0, fading
     linearly to zero over ``first_layers`` layers (layer ``i < N`` gets ``offset * (N - i) / N``).
+
+    Parameters
+    ----------
+    n_layers : int
+    first_layers : int
+        ``N`` above, >= 0; 0 gives no inset on any layer.
+    first_layer_offset_um : float
+        Inset of layer 0, a finite number >= 0.
+
+    Returns
+    -------
+    (n_layers,) float64 ndarray
+        Inset in micrometres; zero from layer ``N`` on.
+
+    Raises
+    ------
+    ConfigError
+        ``first_layers < 0``, or ``first_layer_offset_um`` is negative or not finite.
 
     Examples
     --------

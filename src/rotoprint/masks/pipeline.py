@@ -102,7 +102,30 @@ class Mask:
 
 
 def render_layer(job, index: int, options: MaskOptions, *, backend: str = "jit") -> np.ndarray:
-    """``(H, W) uint8`` mask of layer ``index`` before ERM, mirroring and inversion."""
+    """``(H, W) uint8`` mask of layer ``index`` before ERM, mirroring and inversion.
+
+    Parameters
+    ----------
+    job : SliceJob
+    index : int
+        0-based layer index.
+    options : MaskOptions
+        ``mode`` chooses the raster; layers ``index < first_layers`` are inset by
+        :func:`~rotoprint.masks.ops.first_layer_offsets_um`.
+    backend : {'jit', 'numpy'}
+        Coverage kernel (``mode='coverage'`` only; see
+        :func:`~rotoprint.masks.coverage.coverage_mask`).
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        ``(H, W)`` is ``job.grid.shape``; white = expose.
+
+    Raises
+    ------
+    ConfigError
+        ``mode='coverage'`` on a job sliced with a fill rule other than ``'nonzero'``.
+    """
     if options.mode == "coverage":
         if job.fill != "nonzero":
             raise ConfigError(f"coverage masks use the nonzero rule; the job was sliced with {job.fill!r}")
@@ -123,7 +146,28 @@ def render_layer(job, index: int, options: MaskOptions, *, backend: str = "jit")
 
 
 def layer_masks(job, index: int, options: MaskOptions, *, backend: str = "jit") -> list[Mask]:
-    """The ``options.copies`` masks of layer ``index``, numbered in projection order."""
+    """The ``options.copies`` masks of layer ``index``, numbered in projection order.
+
+    Parameters
+    ----------
+    job : SliceJob
+    index : int
+        0-based layer index.
+    options : MaskOptions
+    backend : {'jit', 'numpy'}
+        See :func:`render_layer`.
+
+    Returns
+    -------
+    list of Mask
+        One, or two with ``erm`` (the second shifted by :func:`~rotoprint.masks.ops.erm_shift`);
+        mask ``c`` has ``number = index * options.copies + c``.
+
+    Raises
+    ------
+    ConfigError
+        See :func:`render_layer`.
+    """
     base = render_layer(job, index, options, backend=backend)
     z = float(job.plan.z_slice_mm[index])
     out = []
@@ -138,7 +182,25 @@ def layer_masks(job, index: int, options: MaskOptions, *, backend: str = "jit") 
 
 
 def plain_from_image(image: np.ndarray, options: MaskOptions) -> np.ndarray:
-    """Undo inversion and mirroring: the mask as seen from above, white = expose."""
+    """Undo inversion and mirroring: the mask as seen from above, white = expose.
+
+    Parameters
+    ----------
+    image : (H, W) uint8
+        A projected mask (:attr:`Mask.image`) made with ``options``.
+    options : MaskOptions
+        Only ``invert``, ``mirror_x`` and ``mirror_y`` are used.
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        ``image`` itself when ``options`` neither inverts nor mirrors.
+
+    Raises
+    ------
+    ImageError
+        ``image`` is not a 2-D uint8 array (checked only when it is inverted or mirrored).
+    """
     img = invert_mask(image) if options.invert else image
     if options.mirror_x or options.mirror_y:
         img = mirror_mask(img, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
@@ -146,6 +208,24 @@ def plain_from_image(image: np.ndarray, options: MaskOptions) -> np.ndarray:
 
 
 def iter_masks(job, options: MaskOptions, *, backend: str = "jit") -> Iterator[Mask]:
-    """Yield every mask of ``job`` in projection order (``len(job) * options.copies`` masks)."""
+    """Yield every mask of ``job`` in projection order (``len(job) * options.copies`` masks).
+
+    Parameters
+    ----------
+    job : SliceJob
+    options : MaskOptions
+    backend : {'jit', 'numpy'}
+        See :func:`render_layer`.
+
+    Yields
+    ------
+    Mask
+        Layer by layer, made one layer at a time.
+
+    Raises
+    ------
+    ConfigError
+        See :func:`render_layer`.
+    """
     for i in range(len(job)):
         yield from layer_masks(job, i, options, backend=backend)

@@ -48,7 +48,21 @@ def material_colour(name: str, order: list[str]) -> tuple[int, int, int]:
 
 
 def composite_image(masks: dict[str, np.ndarray], order: list[str]) -> np.ndarray:
-    """``(H, W, 3) uint8``: each material's pixels in its colour on white (later on top)."""
+    """``(H, W, 3) uint8``: each material's pixels in its colour on white (later on top).
+
+    Parameters
+    ----------
+    masks : dict of str to (H, W) bool
+        Each material's pixels; all of the same shape. Must not be empty.
+    order : list of str
+        Drawing order; materials not in it are not drawn.
+
+    Returns
+    -------
+    (H, W, 3) uint8 ndarray
+        RGB; colours from ``MATERIAL_COLOURS``, else from a fixed cycle by position in
+        ``order``.
+    """
     shape = next(iter(masks.values())).shape
     img = np.full(shape + (3,), 255, np.uint8)
     for m in order:

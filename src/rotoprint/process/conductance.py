@@ -28,21 +28,65 @@ CORNER_SQUARES = 0.559
 
 
 def pixel_centres_model(grid: Placement, part: PartPlacement) -> tuple[np.ndarray, np.ndarray]:
-    """``(W,)`` model X of the columns' centres and ``(H,)`` model Y of the rows' centres."""
+    """``(W,)`` model X of the columns' centres and ``(H,)`` model Y of the rows' centres.
+
+    Parameters
+    ----------
+    grid : Placement
+        Raster of ``height_px x width_px`` pixels of ``pitch_x_mm x pitch_y_mm``.
+    part : PartPlacement
+        Column 0 starts at the part's footprint X minimum; the rows are centred on its
+        ``y_centre_mm``, row 0 at the top (largest Y).
+
+    Returns
+    -------
+    x_mm : (W,) float64
+    y_mm : (H,) float64
+        Decreasing with the row index.
+    """
     x = part.footprint_mm[0] + (np.arange(grid.width_px) + 0.5) * grid.pitch_x_mm
     y = part.y_centre_mm + (grid.height_px / 2.0 - np.arange(grid.height_px) - 0.5) * grid.pitch_y_mm
     return x, y
 
 
 def terminal_mask(grid: Placement, part: PartPlacement, rect_mm) -> np.ndarray:
-    """``(H, W) bool``: pixels whose centre lies in the model rectangle ``(x0, y0, x1, y1)``."""
+    """``(H, W) bool``: pixels whose centre lies in the model rectangle ``(x0, y0, x1, y1)``.
+
+    Parameters
+    ----------
+    grid : Placement
+    part : PartPlacement
+        See :func:`pixel_centres_model`.
+    rect_mm : (4,) float
+        ``(x0, y0, x1, y1)`` in the model frame, mm; the edges count as inside.
+
+    Returns
+    -------
+    (H, W) bool ndarray
+    """
     x, y = pixel_centres_model(grid, part)
     x0, y0, x1, y1 = rect_mm
     return ((y >= y0) & (y <= y1))[:, None] & ((x >= x0) & (x <= x1))[None, :]
 
 
 def thickness_map_um(plan, material: str, grid: Placement) -> np.ndarray:
-    """``(H, W) float64``: the material's planned thickness per layer at every pixel, um."""
+    """``(H, W) float64``: the material's planned thickness per layer at every pixel, um.
+
+    Parameters
+    ----------
+    plan : BuildPlan
+        Gives the placement, the heads' drop density at each radius and the material's
+        planned cycles per layer.
+    material : str
+        Name of one of the job's materials.
+    grid : Placement
+
+    Returns
+    -------
+    (H, W) float64 ndarray
+        ``cycles * cycle_thickness_um`` with the drop densities at every pixel centre's
+        radius.
+    """
     part = plan.placement
     x, y = pixel_centres_model(grid, part)
     xl, yl = part.model_to_local(x, y)
@@ -92,7 +136,25 @@ def resistance_from_masks(plan, spec, masks: list[np.ndarray], grid: Placement) 
 
 def coil_hand_check(plan, spec, *, track_layers: int) -> dict | None:
     """``R = R_s (L / w - (1 - 0.559) corners)`` for a built-in square coil, with the sheet
-    thickness of ``track_layers`` layers (the track's own layers; the pads are terminals)."""
+    thickness of ``track_layers`` layers (the track's own layers; the pads are terminals).
+
+    Parameters
+    ----------
+    plan : BuildPlan
+    spec : ResistanceSpec
+        Its part and its two terminals.
+    track_layers : int
+        Layers of the track; the thickness is ``track_layers`` times the material's smallest
+        planned thickness per layer.
+
+    Returns
+    -------
+    dict or None
+        ``track_length_mm``, ``track_width_mm``, ``corners``, ``squares``, ``thickness_um``,
+        ``sheet_resistance_ohm``, ``resistance_ohm``, ``formula``, ``straight_ohm``
+        (``R_s L / w``, None when ``R_s`` is not finite). None unless the part is a
+        built-in ``square_coil`` and the terminals are ``outer`` and ``inner``.
+    """
     part_spec = plan.job.part(spec.part)
     sh = part_spec.shape
     if sh is None or sh.kind != "square_coil" or set(spec.between) != {"outer", "inner"}:

@@ -49,6 +49,16 @@ _PL_TO_L = 1e-12
 def drops_per_mm2(dpi_x: float, dpi_y: float) -> float:
     """Drops per mm^2 of a Cartesian ``dpi_x x dpi_y`` raster.
 
+    Parameters
+    ----------
+    dpi_x, dpi_y : float
+        Drops per inch along each axis.
+
+    Returns
+    -------
+    float
+        ``(dpi_x / 25.4) * (dpi_y / 25.4)``.
+
     Examples
     --------
     >>> round(drops_per_mm2(360, 360), 2)
@@ -59,6 +69,18 @@ def drops_per_mm2(dpi_x: float, dpi_y: float) -> float:
 
 def wet_film_um(drop_volume_pl: float, density_per_mm2) -> np.ndarray | float:
     """Wet film per pass, um: ``V_drop * drops per area``.
+
+    Parameters
+    ----------
+    drop_volume_pl : float
+        Volume of one drop, picolitres.
+    density_per_mm2 : float or array_like
+        Drops per mm^2.
+
+    Returns
+    -------
+    float or float64 ndarray
+        A float for a scalar density, else an array of the density's shape.
 
     Examples
     --------
@@ -72,7 +94,26 @@ def wet_film_um(drop_volume_pl: float, density_per_mm2) -> np.ndarray | float:
 def moles_per_m2(drop_volume_pl: float, concentration_mol_per_l: float, density_per_mm2, *, stoichiometry: float = 1.0,
                  repeats: int = 1):
     """Moles of product per m^2 one ink can make in ``repeats`` passes:
-    ``V_drop c drops_per_area stoichiometry repeats``. Scalars or arrays (elementwise)."""
+    ``V_drop c drops_per_area stoichiometry repeats``. Scalars or arrays (elementwise).
+
+    Parameters
+    ----------
+    drop_volume_pl : float
+        Volume of one drop, picolitres.
+    concentration_mol_per_l : float
+        Concentration of the ink's reactant.
+    density_per_mm2 : float or array_like
+        Drops per mm^2 in one pass.
+    stoichiometry : float
+        Moles of product per mole of the ink's reactant.
+    repeats : int
+        Passes of the ink.
+
+    Returns
+    -------
+    float64 or float64 ndarray
+        Moles per m^2, the shape of ``density_per_mm2``.
+    """
     d = np.asarray(density_per_mm2, np.float64) * 1e6  # per m^2
     return drop_volume_pl * _PL_TO_L * concentration_mol_per_l * d * stoichiometry * repeats
 
@@ -80,7 +121,22 @@ def moles_per_m2(drop_volume_pl: float, concentration_mol_per_l: float, density_
 def cycle_moles_per_m2(material: Material, drop_volume_pl: float, density_per_mm2: dict[str, np.ndarray] | float):
     """Moles of product per m^2 of one cycle (every ink, each ``repeats`` times): the minimum
     over the inks (the limiting reactant). ``density_per_mm2``: one value or array for all
-    inks, or a dict ink name -> density (inks on different heads)."""
+    inks, or a dict ink name -> density (inks on different heads).
+
+    Parameters
+    ----------
+    material : Material
+        Its ``inks`` give the concentration, stoichiometry and repeats of each.
+    drop_volume_pl : float
+        Volume of one drop, picolitres.
+    density_per_mm2 : float, array_like or dict of str to array_like
+        Drops per mm^2; a dict must hold every ink's name.
+
+    Returns
+    -------
+    float64 or float64 ndarray
+        Moles per m^2, elementwise minimum over the inks.
+    """
     vals = []
     for ink in material.inks:
         d = density_per_mm2[ink.name] if isinstance(density_per_mm2, dict) else density_per_mm2
@@ -94,6 +150,21 @@ def cycle_moles_per_m2(material: Material, drop_volume_pl: float, density_per_mm
 
 def cycle_thickness_um(material: Material, drop_volume_pl: float, density_per_mm2):
     """Solid thickness one cycle forms, um: ``n M / (rho (1 - porosity))``.
+
+    Parameters
+    ----------
+    material : Material
+        ``n`` from its inks (:func:`cycle_moles_per_m2`); ``M``, ``rho`` and the porosity
+        from its ``product``.
+    drop_volume_pl : float
+        Volume of one drop, picolitres.
+    density_per_mm2 : float, array_like or dict of str to array_like
+        As for :func:`cycle_moles_per_m2`.
+
+    Returns
+    -------
+    float64 or float64 ndarray
+        Micrometres; a scalar for scalar densities, else the densities' shape.
 
     Examples
     --------
@@ -110,6 +181,23 @@ def cycle_thickness_um(material: Material, drop_volume_pl: float, density_per_mm
 
 def cycles_for_height(height_um: float, per_cycle_um: float) -> int:
     """Whole cycles needed to reach ``height_um`` (at least 1).
+
+    Parameters
+    ----------
+    height_um : float
+    per_cycle_um : float
+        Thickness one cycle forms, a finite number > 0.
+
+    Returns
+    -------
+    int
+        ``ceil(height_um / per_cycle_um)`` (a ratio within 1e-9 above a whole number counts
+        as that number), at least 1.
+
+    Raises
+    ------
+    ConfigError
+        ``per_cycle_um`` is not a finite number > 0.
 
     Examples
     --------
@@ -149,6 +237,23 @@ def track_density_per_mm2(tracks, *, equalised: bool) -> tuple[np.ndarray, np.nd
 
 def sheet_resistance_ohm(conductivity_s_per_m: float, thickness_um: float) -> float:
     """``R_s = 1 / (sigma t)``, ohm per square.
+
+    Parameters
+    ----------
+    conductivity_s_per_m : float
+        ``sigma``, > 0.
+    thickness_um : float
+        ``t``, > 0.
+
+    Returns
+    -------
+    float
+        Ohm per square.
+
+    Raises
+    ------
+    ConfigError
+        ``conductivity_s_per_m`` or ``thickness_um`` is not > 0.
 
     Examples
     --------

@@ -298,7 +298,32 @@ def _check_refs(spec: JobSpec, lib: MaterialLibrary, src: str | None) -> None:
 
 
 def parse_job(data: dict, *, base_dir: str | Path = ".", source: str | None = None) -> ResolvedJob:
-    """Validate a job given as a dict (the parsed TOML)."""
+    """Validate a job given as a dict (the parsed TOML).
+
+    Parameters
+    ----------
+    data : dict
+        The job's tables, as :func:`tomllib.loads` gives them.
+    base_dir : str or Path
+        Folder that relative paths (``materials_file``, mesh files) are resolved against.
+    source : str, optional
+        Name of the job file, for error messages.
+
+    Returns
+    -------
+    ResolvedJob
+        With its materials taken from the built-ins, then ``materials_file``, then the job's
+        own ``[materials]`` tables (later ones override earlier ones).
+
+    Raises
+    ------
+    ConfigError
+        A field is missing or invalid, a reference (material, part, ink, terminal) does not
+        resolve, or ``materials_file`` is not valid TOML or holds an invalid material; the
+        message names the field.
+    InputFileError
+        ``materials_file`` is missing or is not a file.
+    """
     try:
         spec = JobSpec.model_validate(data)
     except ValidationError as exc:
@@ -316,6 +341,16 @@ def parse_job(data: dict, *, base_dir: str | Path = ".", source: str | None = No
 
 def load_job(path: str | Path) -> ResolvedJob:
     """Read and validate a job file.
+
+    Parameters
+    ----------
+    path : str or Path
+        A UTF-8 TOML job file; relative paths in it are resolved against its folder.
+
+    Returns
+    -------
+    ResolvedJob
+        See :func:`parse_job`.
 
     Raises
     ------

@@ -208,7 +208,20 @@ BUILTIN_MATERIALS: dict[str, dict] = {
 
 
 def validation_message(exc: ValidationError, prefix: str = "") -> str:
-    """One line: the first error's field path and problem (``parts[1].material: ...``)."""
+    """One line: the first error's field path and problem (``parts[1].material: ...``).
+
+    Parameters
+    ----------
+    exc : pydantic.ValidationError
+    prefix : str
+        Put before the field path (e.g. ``materials.silver``).
+
+    Returns
+    -------
+    str
+        ``PATH: PROBLEM``, with ``, got VALUE`` for a scalar input and a count of the other
+        problems when there are more; the path is ``job`` when it is empty.
+    """
     errs = exc.errors()
     e = errs[0]
     loc = prefix
@@ -263,6 +276,11 @@ def _materials_from_dict(data: dict, origin: str | None) -> dict[str, Material]:
 def builtin_library() -> MaterialLibrary:
     """The paper's four systems: plaster, silver, epoxy, polyamide.
 
+    Returns
+    -------
+    MaterialLibrary
+        A new library holding only the built-in materials.
+
     Examples
     --------
     >>> lib = builtin_library()
@@ -276,7 +294,29 @@ def builtin_library() -> MaterialLibrary:
 
 def load_materials(source: str | Path | dict, *, base: MaterialLibrary | None = None) -> MaterialLibrary:
     """User materials from a TOML file (``[materials.NAME]`` tables) or a dict, on top of
-    ``base`` (default: the built-ins)."""
+    ``base`` (default: the built-ins).
+
+    Parameters
+    ----------
+    source : str, Path or dict
+        A TOML file holding only ``[materials.NAME]`` tables, or a dict of material name to
+        its fields (the content of the ``materials`` table).
+    base : MaterialLibrary, optional
+        Materials to start from; default :func:`builtin_library`. Not modified.
+
+    Returns
+    -------
+    MaterialLibrary
+        ``base`` with the user materials added; a user material overrides one of the same name.
+
+    Raises
+    ------
+    InputFileError
+        The file is missing or is not a file.
+    ConfigError
+        Not UTF-8 TOML, a top-level table other than ``materials``, or a material that is not a
+        table or has a missing or invalid field.
+    """
     base = builtin_library() if base is None else base
     if isinstance(source, dict):
         return base.with_materials(_materials_from_dict(source, None))

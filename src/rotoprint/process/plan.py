@@ -188,7 +188,28 @@ class LayerSchedule:
 
 
 def load_part_mesh(job: ResolvedJob, part) -> Mesh:
-    """A part's mesh in the job's model frame (mm)."""
+    """A part's mesh in the job's model frame (mm).
+
+    Parameters
+    ----------
+    job : ResolvedJob
+        A relative mesh path is resolved against its ``base_dir``.
+    part : PartSpec
+        Its mesh file (read in its ``units``) or built-in shape, moved by its
+        ``rotate_deg`` then ``translate_mm``.
+
+    Returns
+    -------
+    Mesh
+
+    Raises
+    ------
+    ConfigError
+        ``rotate_deg`` or ``translate_mm`` is not three finite numbers, or unknown ``units``.
+    InputFileError, MeshError
+        The mesh file cannot be read or is not a usable mesh (see
+        :func:`rotoprint.io.mesh.load_mesh`).
+    """
     from ..io.mesh import load_mesh, make_transform
 
     T = make_transform(translate_mm=tuple(part.translate_mm), rotate_deg=tuple(part.rotate_deg), scale=1.0)

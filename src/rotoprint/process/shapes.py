@@ -76,6 +76,21 @@ def coil_centreline(outer_mm: float, pitch_mm: float, turns: int, lead_mm: float
     Starts at ``(-lead, 0)`` going +X; segment lengths ``D + lead, D, D, D - p, D - p, D - 2p,
     D - 2p, ...`` (``D = outer_mm``, ``p = pitch_mm``).
 
+    Parameters
+    ----------
+    outer_mm : float
+        ``D``, side of the outer turn.
+    pitch_mm : float
+        ``p``, distance between the centrelines of neighbouring turns.
+    turns : int
+    lead_mm : float
+        Extra length of the first segment, before the outer corner.
+
+    Returns
+    -------
+    (4 * turns + 1, 2) float64 ndarray
+        Corner points, mm.
+
     Examples
     --------
     >>> coil_centreline(10.0, 1.0, 1, 0.0).tolist()

@@ -173,6 +173,30 @@ def rasterize_section(seg: Segments, part: PartPlacement, design: Placement, *, 
 
     Pixel centres are sampled with the slicer's exact fibre rules; this is the first step of
     the two-step path (Cartesian bitmap, then transform) and the simulator's reference image.
+
+    Parameters
+    ----------
+    seg : Segments
+        The cross-section in model XY, mm.
+    part : PartPlacement
+        Maps model XY to the part's local frame.
+    design : Placement
+        The grid: ``height_px x width_px`` pixels of ``pitch_x_mm x pitch_y_mm``, column 0
+        starting at ``inner_radius_mm``, rows centred on the part's centre line.
+    fill : {'nonzero', 'evenodd'}
+        Not checked: any value other than ``'evenodd'`` fills by the nonzero rule.
+    backend : {'jit', 'numpy'}
+        Not checked: any value other than ``'numpy'`` uses the compiled kernel.
+
+    Returns
+    -------
+    (H, W) uint8 ndarray
+        255 where the pixel centre is inside, else 0.
+
+    Raises
+    ------
+    RasterTooLargeError
+        The image would not fit in the available memory.
     """
     xl0, yl0 = part.model_to_local(seg.start[:, 0], seg.start[:, 1])
     xl1, yl1 = part.model_to_local(seg.end[:, 0], seg.end[:, 1])

@@ -38,6 +38,22 @@ def firing_range(phi_rad: np.ndarray, angle_lo_rad: float, angle_hi_rad: float, 
 
     Nozzle ``k`` lands at ``phi_k - direction * i * dphi``.
 
+    Parameters
+    ----------
+    phi_rad : (N,) float64
+        Angle ``phi_k`` of every nozzle at firing 0; must not be empty.
+    angle_lo_rad, angle_hi_rad : float
+        The angular window ``[lo, hi]``.
+    dphi_rad : float
+        Platform rotation per firing, > 0 (see :func:`~rotoprint.rotary.printdata.clock_dphi`).
+    direction : int
+        +1 (counter-clockwise); any other value is taken as -1.
+
+    Returns
+    -------
+    (int, int)
+        ``(i_min, i_max)``, inclusive; rounded outwards, with a 1e-9 tolerance.
+
     Examples
     --------
     >>> firing_range(np.array([0.0]), -0.01, 0.01, 0.001, 1)

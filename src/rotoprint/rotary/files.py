@@ -31,6 +31,19 @@ __all__ = ["write_print", "read_print", "swathe_filenames", "sidecar_path"]
 
 
 def swathe_filenames(out_png: Path, n: int) -> list[Path]:
+    """File names of the swathe images of a print written as ``out_png``.
+
+    Parameters
+    ----------
+    out_png : Path
+    n : int
+        Number of swathes.
+
+    Returns
+    -------
+    list of Path
+        ``[out_png]`` for one swathe, else ``PRINT-s1.png`` ... ``PRINT-sN.png`` beside it.
+    """
     out_png = Path(out_png)
     if n == 1:
         return [out_png]
@@ -51,7 +64,29 @@ def print_files(pr: RotaryPrint, png_name: str, *, device_name: str = "", design
 
 
 def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", design: dict | None = None) -> dict:
-    """Write the swathe images and the sidecar; returns the sidecar dict."""
+    """Write the swathe images and the sidecar; returns the sidecar dict.
+
+    Parameters
+    ----------
+    pr : RotaryPrint
+    out_png : str or Path
+        ``PRINT.png``; the swathe images are named by :func:`swathe_filenames` and the sidecar
+        ``PRINT.json``, all in the same folder. Each file is written atomically.
+    device_name : str
+        Recorded in the sidecar as ``device``.
+    design : dict, optional
+        Extra fields for the sidecar's ``design`` table (beside ``kind``).
+
+    Returns
+    -------
+    dict
+        The sidecar as written, with the SHA-256 of every swathe image.
+
+    Raises
+    ------
+    InputFileError
+        ``out_png`` does not end in ``.png``, or its folder does not exist.
+    """
     out_png = Path(out_png)
     if out_png.suffix.lower() != ".png":
         raise InputFileError("output must be a .png file", path=out_png)
@@ -63,7 +98,20 @@ def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", 
 
 
 def sidecar_path(path: str | Path) -> Path:
-    """The sidecar of a print: ``X.json`` itself, ``X.png`` -> ``X.json``, ``X-s2.png`` -> ``X.json``."""
+    """The sidecar of a print: ``X.json`` itself, ``X.png`` -> ``X.json``, ``X-s2.png`` -> ``X.json``.
+
+    Parameters
+    ----------
+    path : str or Path
+        The sidecar or one of the print's images.
+
+    Returns
+    -------
+    Path
+        ``path`` with the suffix ``.json`` when that file exists or the stem has no ``-sN``
+        ending; else the name with ``-sN`` dropped (``X-s2.png`` -> ``X.json``). The returned
+        file need not exist.
+    """
     p = Path(path)
     if p.suffix.lower() == ".json":
         return p

@@ -103,6 +103,12 @@ class NozzleLayout:
 def nozzle_offsets(head: InkjetHead) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Along-head ``s`` (mm), across-head ``t`` (mm) and row of every nozzle.
 
+    Parameters
+    ----------
+    head : InkjetHead
+        Nozzle ``k`` is at ``s = k * pitch_mm`` in row ``k % rows``; rows are
+        ``row_separation_mm`` apart, centred on ``t = 0``.
+
     Returns
     -------
     s_mm : (N,) float64
@@ -130,6 +136,16 @@ def _row_extent_mm(head: InkjetHead) -> float:
 def max_tilt_deg(head: InkjetHead) -> float:
     """Tilt at which the projected swathe ``ps cos(theta) - d sin(theta)`` reaches 0.
 
+    Parameters
+    ----------
+    head : InkjetHead
+        ``ps`` is its ``swathe_mm``, ``d`` the distance between its first and last rows.
+
+    Returns
+    -------
+    float
+        Degrees, ``atan2(ps, d)``; 90.0 for a single-row head.
+
     Examples
     --------
     >>> from rotoprint import load_device
@@ -141,7 +157,22 @@ def max_tilt_deg(head: InkjetHead) -> float:
 
 
 def check_tilt(head: InkjetHead, tilt_deg: float) -> None:
-    """Raise :class:`GeometryError` when ``|tilt_deg|`` is at or beyond the maximum tilt."""
+    """Raise :class:`GeometryError` when ``|tilt_deg|`` is at or beyond the maximum tilt.
+
+    Parameters
+    ----------
+    head : InkjetHead
+    tilt_deg : float
+        Head tilt; only its magnitude is checked.
+
+    Raises
+    ------
+    ConfigError
+        ``tilt_deg`` is not finite.
+    GeometryError
+        ``|tilt_deg|`` is at or beyond :func:`max_tilt_deg`, or 90 degrees or more, or leaves a
+        projected swathe ``ps_p_mm`` shorter than one nozzle pitch.
+    """
     if not math.isfinite(tilt_deg):
         raise ConfigError(f"tilt must be a finite number of degrees, got {tilt_deg!r}")
     tmax = max_tilt_deg(head)
@@ -211,6 +242,27 @@ def paper_figures(head: InkjetHead, tilt_deg: float, *, pivot_radius_mm: float =
 
     Returns a dict with ``cx_T_mm`` (1), ``ps_p_mm`` (2), ``dpi_xp`` (3), ``pitch_radial_mm``
     (``p cos(theta)``, Figure 5 (b)), ``single_row_band_mm`` (``d sin(theta)``).
+
+    Parameters
+    ----------
+    head : InkjetHead
+    tilt_deg : float
+        Head tilt; the formulas use ``|tilt_deg|``.
+    pivot_radius_mm : float
+        Radius of the pivot; only ``cx_T_mm`` depends on it.
+    check : bool
+        First call :func:`check_tilt` (and raise what it raises).
+
+    Returns
+    -------
+    dict
+        The keys above as floats (lengths in mm, ``dpi_xp`` in drops per inch), and
+        ``tilt_deg`` as given.
+
+    Raises
+    ------
+    ConfigError, GeometryError
+        With ``check=True``: see :func:`check_tilt`.
 
     Examples
     --------
@@ -287,6 +339,28 @@ def head_figures(head: InkjetHead, *, tilt_deg: float, pivot_radius_mm: float, m
     where only one row prints, the radial pitch between successive nozzles of a row
     (divided by ``rows`` so it compares with ``p cos(theta)``), and the largest and smallest
     gap between neighbouring live tracks inside the band (a dead nozzle widens the gap).
+
+    Parameters
+    ----------
+    head : InkjetHead
+        Its ``dead_nozzles`` are left out of ``tracks_in_band`` and the track gaps.
+    tilt_deg : float
+    pivot_radius_mm : float
+    mount_angle_deg : float
+        Angle of the radial line through the pivot (see :class:`Mount`).
+
+    Returns
+    -------
+    HeadFigures
+        Lengths in mm; the pitch and gap figures are NaN when there is nothing to measure.
+
+    Raises
+    ------
+    ConfigError
+        ``tilt_deg``, ``pivot_radius_mm`` or ``mount_angle_deg`` is not finite.
+    GeometryError
+        The tilt is at or beyond the head's maximum (see :func:`check_tilt`), or a nozzle
+        would sit at or behind the axis of rotation.
     """
     paper = paper_figures(head, tilt_deg, pivot_radius_mm=pivot_radius_mm)
     lay = nozzle_layout(head, Mount(pivot_radius_mm, tilt_deg=tilt_deg, mount_angle_deg=mount_angle_deg))

@@ -38,6 +38,22 @@ def paper_shifts(head: InkjetHead, *, tilt_deg: float, cx_T_mm: float, pitch_y_m
     ``coff_1 = sx sin(theta) + coff_0 - (t_q / p_y) tan(delta)``-style parallax, eqs (4)-(6)
     with ``t_q = -/+ d_nzr / 2`` for rows A and B.
 
+    Parameters
+    ----------
+    head : InkjetHead
+    tilt_deg : float
+        ``theta``, signed.
+    cx_T_mm : float
+        The paper's ``cx_T`` (see :func:`~rotoprint.rotary.head.paper_figures`); used only in
+        the parallax term.
+    pitch_y_mm : float
+        Design pixel pitch the shifts are expressed in.
+
+    Returns
+    -------
+    (N,) float64 ndarray
+        Shift of every nozzle, pixels; linear along each row from ``coff_0`` to ``coff_1``.
+
     Examples
     --------
     >>> from rotoprint import load_device

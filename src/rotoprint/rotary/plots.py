@@ -22,6 +22,23 @@ def figure5(head: InkjetHead, *, pivot_radius_mm: float = 60.0, step_deg: float 
     (a) ``dpi_xp`` (eq. 3) and ``ps_p`` (eq. 2) against tilt, with the exact full-density band
     at ``pivot_radius_mm``; (b) the nozzle pitch ``p cos(theta)`` against tilt, with the exact
     largest gap between neighbouring tracks at ``pivot_radius_mm``.
+
+    Parameters
+    ----------
+    head : InkjetHead
+    pivot_radius_mm : float
+        Pivot radius of the exact figures.
+    step_deg : float
+        Tilt step of the closed-form curves, from 0 up to :func:`~rotoprint.rotary.head.max_tilt_deg`;
+        the exact figures are drawn about every 2 degrees and stop at the first tilt that
+        has none.
+    title : str
+        Figure title; none when empty.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Not attached to pyplot; save it with :func:`save_figure`.
     """
     from matplotlib.figure import Figure
 
@@ -66,7 +83,21 @@ def figure5(head: InkjetHead, *, pivot_radius_mm: float = 60.0, step_deg: float 
 
 
 def save_figure(fig, path: str | Path) -> None:
-    """Save a figure atomically; the format follows the suffix (png, svg, pdf)."""
+    """Save a figure atomically; the format follows the suffix (png, svg, pdf).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        Rendered at 150 dpi.
+    path : str or Path
+
+    Raises
+    ------
+    ConfigError
+        The suffix is not ``.png``, ``.svg`` or ``.pdf``.
+    InputFileError
+        The folder of ``path`` does not exist.
+    """
     path = Path(path)
     fmt = path.suffix.lower().lstrip(".")
     if fmt not in ("png", "svg", "pdf"):

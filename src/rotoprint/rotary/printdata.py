@@ -27,6 +27,23 @@ SIDECAR_FORMAT = "rotoprint-rotary-print"
 def clock_dphi(dpi_y: float, ref_radius_mm: float) -> float:
     """Platform rotation per firing, radians: ``(25.4 / dpi_y) / r_ref``.
 
+    Parameters
+    ----------
+    dpi_y : float
+        Drops per inch along the track at the reference radius.
+    ref_radius_mm : float
+        Reference radius ``r_ref`` at which the drop pitch is ``25.4 / dpi_y`` mm.
+
+    Returns
+    -------
+    float
+        Radians per firing.
+
+    Raises
+    ------
+    ConfigError
+        ``dpi_y`` or ``ref_radius_mm`` is not a finite number > 0.
+
     Examples
     --------
     >>> round(clock_dphi(360.0, 60.0), 9)
@@ -40,19 +57,53 @@ def clock_dphi(dpi_y: float, ref_radius_mm: float) -> float:
 
 
 def levels_to_png(levels: np.ndarray, grey_levels: int) -> np.ndarray:
-    """``(F, N) uint8`` levels 0..grey_levels to PNG values 0..255."""
+    """``(F, N) uint8`` levels 0..grey_levels to PNG values 0..255.
+
+    Parameters
+    ----------
+    levels : (F, N) uint8
+    grey_levels : int
+        Largest level; with 1, every non-zero level becomes 255.
+
+    Returns
+    -------
+    (F, N) uint8 ndarray
+        ``round(level * 255 / grey_levels)``.
+    """
     if grey_levels == 1:
         return (levels > 0).astype(np.uint8) * np.uint8(255)
     return np.rint(levels.astype(np.float64) * (255.0 / grey_levels)).astype(np.uint8)
 
 
 def png_to_levels(png: np.ndarray, grey_levels: int) -> np.ndarray:
-    """Inverse of :func:`levels_to_png`."""
+    """Inverse of :func:`levels_to_png`.
+
+    Parameters
+    ----------
+    png : (F, N) uint8
+        PNG values 0..255.
+    grey_levels : int
+
+    Returns
+    -------
+    (F, N) uint8 ndarray
+        ``round(png * grey_levels / 255)``.
+    """
     return np.rint(png.astype(np.float64) * (grey_levels / 255.0)).astype(np.uint8)
 
 
 def design_kind(design: np.ndarray) -> str:
-    """``"binary"`` when the design holds at most one non-zero value, else ``"grey"``."""
+    """``"binary"`` when the design holds at most one non-zero value, else ``"grey"``.
+
+    Parameters
+    ----------
+    design : array_like
+        Design pixel values; an empty array is ``"binary"``.
+
+    Returns
+    -------
+    {'binary', 'grey'}
+    """
     d = np.asarray(design)
     m = d.max() if d.size else 0
     return "grey" if m and bool(np.any((d != 0) & (d != m))) else "binary"
@@ -63,6 +114,20 @@ def design_levels(samples: np.ndarray, grey_levels: int, *, kind: str) -> np.nda
 
     Binary designs: any non-zero value prints the largest drop. Grey designs: value / 255 is
     the wanted coverage, rounded to the nearest level (for a one-level head: at least 50 %).
+
+    Parameters
+    ----------
+    samples : ndarray
+        Design values (0..255 for a grey design), any shape.
+    grey_levels : int
+        Largest drop level of the head.
+    kind : {'binary', 'grey'}
+        From :func:`design_kind`; any value other than ``'binary'`` is treated as grey.
+
+    Returns
+    -------
+    uint8 ndarray
+        Levels 0..grey_levels, the shape of ``samples``.
     """
     if kind == "binary":
         return np.where(samples > 0, np.uint8(grey_levels), np.uint8(0)).astype(np.uint8)

@@ -122,7 +122,20 @@ def place_drops(pr: RotaryPrint, *, jitter_um: float = 0.0, dead_nozzles: tuple[
 
 
 def design_mask(design: np.ndarray, grey_levels: int) -> np.ndarray:
-    """``(H, W) bool``: pixels the design asks to print (binary: non-zero; grey: >= one level)."""
+    """``(H, W) bool``: pixels the design asks to print (binary: non-zero; grey: >= one level).
+
+    Parameters
+    ----------
+    design : (H, W) uint8
+        The design image; see :func:`~rotoprint.rotary.printdata.design_kind`.
+    grey_levels : int
+        Drop levels of the head; a grey pixel prints when it rounds to at least level 1
+        (see :func:`~rotoprint.rotary.printdata.design_levels`).
+
+    Returns
+    -------
+    (H, W) bool ndarray
+    """
     kind = design_kind(design)
     return design_levels(design, grey_levels, kind=kind) > 0
 
@@ -381,7 +394,27 @@ COLOURS = {
 def render_overlay(sim: Simulation, *, scale: int = 2) -> np.ndarray:
     """``(H*scale, W*scale, 3) uint8`` picture: design printed (light blue), design left
     uncovered (orange), printed outside the design (pink), drops on ink (dark blue) and
-    stray drops (red), each drop drawn in the sub-pixel it lands in."""
+    stray drops (red), each drop drawn in the sub-pixel it lands in.
+
+    Parameters
+    ----------
+    sim : Simulation
+        Its ``inked`` and ``printed`` ``(H, W) bool`` masks give the background; its drops
+        (design pixel coordinates) are drawn on top, those landing outside the picture
+        left out.
+    scale : int
+        Output pixels per design pixel along each axis, 1 to 16.
+
+    Returns
+    -------
+    (H*scale, W*scale, 3) uint8 ndarray
+        RGB, colours from :data:`COLOURS`.
+
+    Raises
+    ------
+    ConfigError
+        ``scale`` is outside 1..16.
+    """
     if scale < 1 or scale > 16:
         raise ConfigError(f"overlay scale must be 1..16, got {scale}")
     h, w = sim.inked.shape

@@ -11,6 +11,19 @@ def test_design(size_px: int = 1200, *, seed: int = 7) -> np.ndarray:
     """``(size, size) uint8`` binary design (255 = ink) of squares, rectangles, rings, discs
     and text-sized features (1-4 px bars and gaps, small glyph-like blocks).
 
+    Parameters
+    ----------
+    size_px : int
+        Side of the square image, pixels; a 6 x 6 grid of cells of ``max(size // 6, 10)``
+        pixels is drawn from the top-left corner.
+    seed : int
+        Seed of the random rectangles and blocks; the same seed gives the same image.
+
+    Returns
+    -------
+    (size_px, size_px) uint8 ndarray
+        0 or 255.
+
     Examples
     --------
     >>> d = test_design(120)
