@@ -161,6 +161,13 @@ def test_reader_rejects_bad_archives(tmp_path):
         read_job(p)
     with pytest.raises(InputFileError, match="no such"):
         read_job(tmp_path / "missing.sl1")
+    # a layer folder whose manifest is not JSON, or not a mask list
+    d = tmp_path / "layers"
+    d.mkdir()
+    for text in ("{not json", '{"masks": [{"name": "x"}]}', '["a"]'):
+        (d / "manifest.json").write_text(text)
+        with pytest.raises(InputFileError, match="not a mask list"):
+            read_job(d)
 
 
 def test_format_from_path():

@@ -541,8 +541,11 @@ def read_job(path: str | Path) -> ArchiveContents:
         mpath = path / MANIFEST_NAME
         if not mpath.exists():
             raise InputFileError(f"folder holds no {MANIFEST_NAME}", path=path)
-        manifest = json.loads(mpath.read_text(encoding="utf-8"))
-        names = [m["file"] for m in manifest["masks"]]
+        try:
+            manifest = json.loads(mpath.read_text(encoding="utf-8"))
+            names = [str(m["file"]) for m in manifest["masks"]]
+        except (ValueError, KeyError, TypeError) as exc:  # JSONDecodeError is a ValueError
+            raise InputFileError(f"{MANIFEST_NAME} is not a mask list ({type(exc).__name__}: {exc})", path=path) from None
         for n in names:
             if not (path / n).is_file():
                 raise InputFileError(f"mask {n} listed in the manifest is missing", path=path)
