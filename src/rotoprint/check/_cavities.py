@@ -19,6 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._kernels import _find, _union
+
 
 @njit(cache=True, nogil=True)
 def empty_runs(rs, r0, r1, W):  # pragma: no cover - jit
@@ -56,25 +58,6 @@ def empty_runs(rs, r0, r1, W):  # pragma: no cover - jit
             n += 1
     es[H] = n
     return es, e0, e1
-
-
-@njit(cache=True, nogil=True)
-def _find(parent, i):  # pragma: no cover - jit
-    while parent[i] != i:
-        parent[i] = parent[parent[i]]
-        i = parent[i]
-    return i
-
-
-@njit(cache=True, nogil=True)
-def _union(parent, a, b):  # pragma: no cover - jit
-    a = _find(parent, a)
-    b = _find(parent, b)
-    if a != b:
-        if a < b:
-            parent[b] = a
-        else:
-            parent[a] = b
 
 
 #: Rows of a body record (:func:`cavity_step`).

@@ -939,6 +939,18 @@ def _find(parent, i):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
+def _union(parent, a, b):  # pragma: no cover - jit
+    """Join the sets of ``a`` and ``b``; the smaller root stays root."""
+    a = _find(parent, a)
+    b = _find(parent, b)
+    if a != b:
+        if a < b:
+            parent[b] = a
+        else:
+            parent[a] = b
+
+
+@njit(cache=True, nogil=True)
 def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: no cover - jit
     """Label the pieces joined end to start at ordinary joints (bit-identical points flagged
     joinable at both sides): ``(Q,) int64`` labels ``0..k-1`` and ``k``. Along such a chain
@@ -994,12 +1006,10 @@ def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
     return lab, k
 
 
-@njit(cache=True, nogil=True)
-def _ray(ox, oy, dx, dy, own, best, tmin, sx, sy, ex, ey, start, idx, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
-    """Distance along unit ``(dx, dy)`` from ``(ox, oy)`` to the first segment (not ``own``)
-    hit beyond ``tmin`` and at most ``best``; ``inf`` if none. The ray walks the cells it
-    crosses in order (a 2-D DDA; a segment listed in several is tested again, to the same
-    result) and stops as soon as its nearest hit lies before the cell it would enter next."""
+@njit(cache=True, nogil=True, inline="always")
+def _dda_start(ox, oy, dx, dy, xmin, ymin, h):  # pragma: no cover - jit
+    """A ray's start in a grid of cells of side ``h`` from ``(xmin, ymin)``: its cell, its
+    steps, the ray lengths to the next cell boundary in x and y and between boundaries."""
     cx = int(math.floor((ox - xmin) / h))
     cy = int(math.floor((oy - ymin) / h))
     if dx > 0.0:
@@ -1026,6 +1036,37 @@ def _ray(ox, oy, dx, dy, own, best, tmin, sx, sy, ex, ey, start, idx, xmin, ymin
         sty = 0
         tmy = np.inf
         tdy = np.inf
+    return cx, cy, stx, sty, tmx, tmy, tdx, tdy
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _hit(ox, oy, dx, dy, a0, b0, a1, b1, tmin, tmax):  # pragma: no cover - jit
+    """Distance along unit ``(dx, dy)`` from ``(ox, oy)`` to the segment ``(a0, b0)``-
+    ``(a1, b1)`` when it is in ``(tmin, tmax]``, else ``inf`` (parallel, missed or out of
+    range). The one hit test of every ray kernel."""
+    e0 = a1 - a0
+    e1 = b1 - b0
+    den = dx * e1 - dy * e0
+    if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
+        return np.inf
+    w0 = a0 - ox
+    w1 = b0 - oy
+    t = (w0 * e1 - w1 * e0) / den
+    if t <= tmin or t > tmax:
+        return np.inf
+    sp = (w0 * dy - w1 * dx) / den
+    if sp < 0.0 or sp > 1.0:
+        return np.inf
+    return t
+
+
+@njit(cache=True, nogil=True)
+def _ray(ox, oy, dx, dy, own, best, tmin, sx, sy, ex, ey, start, idx, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
+    """Distance along unit ``(dx, dy)`` from ``(ox, oy)`` to the first segment (not ``own``)
+    hit beyond ``tmin`` and at most ``best``; ``inf`` if none. The ray walks the cells it
+    crosses in order (a 2-D DDA; a segment listed in several is tested again, to the same
+    result) and stops as soon as its nearest hit lies before the cell it would enter next."""
+    cx, cy, stx, sty, tmx, tmy, tdx, tdy = _dda_start(ox, oy, dx, dy, xmin, ymin, h)
     hit = False
     while True:
         if 0 <= cx < ncx and 0 <= cy < ncy:
@@ -1034,21 +1075,10 @@ def _ray(ox, oy, dx, dy, own, best, tmin, sx, sy, ex, ey, start, idx, xmin, ymin
                 k = idx[j]
                 if k == own:
                     continue
-                e0 = ex[k] - sx[k]
-                e1 = ey[k] - sy[k]
-                den = dx * e1 - dy * e0
-                if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
-                    continue
-                w0 = sx[k] - ox
-                w1 = sy[k] - oy
-                t = (w0 * e1 - w1 * e0) / den
-                if t <= tmin or t > best:
-                    continue
-                s = (w0 * dy - w1 * dx) / den
-                if s < 0.0 or s > 1.0:
-                    continue
-                best = t
-                hit = True
+                t = _hit(ox, oy, dx, dy, sx[k], sy[k], ex[k], ey[k], tmin, best)
+                if t <= best:
+                    best = t
+                    hit = True
         else:
             break
         texit = min(tmx, tmy)
@@ -1382,32 +1412,7 @@ def _seg_cells(sx, sy, ex, ey, keep, run, x0, y0, h, ncx, ncy):  # pragma: no co
 def _walk(ox, oy, dx, dy, own, best, tmin, ent, par, run, start, xmin, ymin, h, ncx, ncy):  # pragma: no cover - jit
     """:func:`_ray` on the entries of :func:`_seg_cells` (``start``: each cell's first),
     skipping the segments whose ``run`` is ``own``."""
-    cx = int(math.floor((ox - xmin) / h))
-    cy = int(math.floor((oy - ymin) / h))
-    if dx > 0.0:
-        stx = 1
-        tmx = (xmin + (cx + 1) * h - ox) / dx
-        tdx = h / dx
-    elif dx < 0.0:
-        stx = -1
-        tmx = (xmin + cx * h - ox) / dx
-        tdx = -h / dx
-    else:
-        stx = 0
-        tmx = np.inf
-        tdx = np.inf
-    if dy > 0.0:
-        sty = 1
-        tmy = (ymin + (cy + 1) * h - oy) / dy
-        tdy = h / dy
-    elif dy < 0.0:
-        sty = -1
-        tmy = (ymin + cy * h - oy) / dy
-        tdy = -h / dy
-    else:
-        sty = 0
-        tmy = np.inf
-        tdy = np.inf
+    cx, cy, stx, sty, tmx, tmy, tdx, tdy = _dda_start(ox, oy, dx, dy, xmin, ymin, h)
     hit = False
     while True:
         if 0 <= cx < ncx and 0 <= cy < ncy:
@@ -1415,25 +1420,10 @@ def _walk(ox, oy, dx, dy, own, best, tmin, ent, par, run, start, xmin, ymin, h, 
             for pc in range(start[c], start[c + 1]):
                 if run[par[pc]] == own:  # its own segment, or its run (which it cannot see)
                     continue
-                a0 = ent[pc, 0]
-                b0 = ent[pc, 1]
-                a1 = ent[pc, 2]
-                b1 = ent[pc, 3]
-                e0 = a1 - a0
-                e1 = b1 - b0
-                den = dx * e1 - dy * e0
-                if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
-                    continue
-                w0 = a0 - ox
-                w1 = b0 - oy
-                t = (w0 * e1 - w1 * e0) / den
-                if t <= tmin or t > best:
-                    continue
-                sp = (w0 * dy - w1 * dx) / den
-                if sp < 0.0 or sp > 1.0:
-                    continue
-                best = t
-                hit = True
+                t = _hit(ox, oy, dx, dy, ent[pc, 0], ent[pc, 1], ent[pc, 2], ent[pc, 3], tmin, best)
+                if t <= best:
+                    best = t
+                    hit = True
         else:
             break
         texit = min(tmx, tmy)
@@ -1739,8 +1729,6 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
                 b0 = ent[pc, 1]
                 a1 = ent[pc, 2]
                 b1 = ent[pc, 3]
-                e0 = a1 - a0
-                e1 = b1 - b0
                 j0 = 0
                 j1 = m - 1
                 if m > 1:
@@ -1750,20 +1738,9 @@ def sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, max_mm, tmin, c
                     j1 = min(m - 1, int(math.floor((max(ua_, ub_) + mg) * scale - 0.5)))
                 for j in range(j0, j1 + 1):
                     i = p - m + j
-                    dx = sgn * ux[i]
-                    dy = sgn * uy[i]
-                    den = dx * e1 - dy * e0
-                    if abs(den) <= _PARALLEL_EPS * (abs(e0) + abs(e1)):
-                        continue
-                    w0 = a0 - bx[i]
-                    w1 = b0 - by[i]
-                    t = (w0 * e1 - w1 * e0) / den
-                    if t <= tmin or t > Lr or t >= tbest[j]:
-                        continue
-                    sp = (w0 * dy - w1 * dx) / den
-                    if sp < 0.0 or sp > 1.0:
-                        continue
-                    tbest[j] = t
+                    t = _hit(bx[i], by[i], sgn * ux[i], sgn * uy[i], a0, b0, a1, b1, tmin, min(Lr, tbest[j]))
+                    if t < tbest[j]:
+                        tbest[j] = t
             for j in range(m):
                 t = tbest[j]
                 if t <= max(need[side], low[side]):
@@ -2011,13 +1988,7 @@ def island_runs(rs, r0, r1, ps, p0, p1):  # pragma: no cover - jit
                 q += 1
             t = q
             while t < qe and r0[t] <= r1[k]:
-                a = _find(parent, k)
-                b = _find(parent, t)
-                if a != b:
-                    if a < b:
-                        parent[b] = a
-                    else:
-                        parent[a] = b
+                _union(parent, k, t)
                 t += 1
     root_sup = np.zeros(n, np.bool_)
     for k in range(n):

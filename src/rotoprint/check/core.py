@@ -335,10 +335,12 @@ def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarr
 
 
 class _LayerChecker:
-    """Everything fixed for a job: thresholds, affines, sampling."""
+    """Everything fixed for a job: thresholds (the settings ``st`` of :func:`_settings`),
+    affines, sampling."""
 
-    def __init__(self, job, *, min_wall_mm, min_gap_mm, grey_fn, cure_threshold, islands, measure_up_to_mm, resolution_mm=0.0, cavities=False) -> None:
+    def __init__(self, job, st: dict, grey_fn) -> None:
         g = job.grid
+        min_wall_mm, min_gap_mm = st["min_wall_mm"], st["min_gap_mm"]
         self.job = job
         self.grid = g
         self.m2p = np.ascontiguousarray(g.model_to_pixel)
@@ -347,11 +349,11 @@ class _LayerChecker:
         self.spacing = _SPACING_PX * min(g.pitch_x_mm, g.pitch_y_mm)
         self.min_wall = min_wall_mm
         self.min_gap = min_gap_mm
-        self.cap = measure_up_to_mm
+        self.cap = st["measured_up_to_mm"]
         self.grey_fn = grey_fn
-        self.thr = cure_threshold
-        self.islands = islands
-        self.cavities = CavityTracker(g.width, g.height) if cavities else None
+        self.thr = st["cure_threshold"]
+        self.islands = st["islands"]
+        self.cavities = CavityTracker(g.width, g.height) if st["cavities"] else None
         self.evenodd = job.fill == "evenodd"
         # widths the findings need exactly (the smallest one is measured up to the cap)
         lim = _RASTER_TEST_PX * self.pmax
@@ -364,7 +366,7 @@ class _LayerChecker:
         self.uv = np.ascontiguousarray(getattr(job, "_to_uv", g.model_to_pixel), dtype=np.float64)
         self._no_runs = (np.zeros(g.height + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
         self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self.resolution = float(resolution_mm)
+        self.resolution = float(st["resolution_mm"])
         self._pos = np.full(0, -1, np.int32)  # edge -> segment buffer of simplify_section
         # canvas of emit_groups (all zeros between calls): the grid with a margin for chords
         # that reach past it
@@ -646,17 +648,7 @@ def check_layers(
 
 def _iter(job, st, mask_fn) -> Iterator[LayerCheck]:
     grey_fn = None if mask_fn is None else (lambda i, img: mask_fn(img))
-    checker = _LayerChecker(
-        job,
-        min_wall_mm=st["min_wall_mm"],
-        min_gap_mm=st["min_gap_mm"],
-        grey_fn=grey_fn,
-        cure_threshold=st["cure_threshold"],
-        islands=st["islands"],
-        measure_up_to_mm=st["measured_up_to_mm"],
-        resolution_mm=st["resolution_mm"],
-        cavities=st["cavities"],
-    )
+    checker = _LayerChecker(job, st, grey_fn)
     for i in range(len(job)):
         yield checker.run(i)
 
