@@ -88,7 +88,7 @@ def write_dlp_job(
     partial = PartialOutput(out, task._key, len(job), resume=resume)
     copies = options.copies
     footprint = np.zeros((job.grid.height, job.grid.width), np.uint8)
-    try:
+    with partial:  # a run that fails before finishing a layer leaves nothing
         for i, rec in partial.done.items():  # resumed layers: footprints from their files
             for name in rec["files"]:
                 with Image.open(partial.dir / name) as im:
@@ -108,12 +108,6 @@ def write_dlp_job(
             if on_mask is not None:
                 for c in range(copies):
                     on_mask(res.index * copies + c)
-    except BaseException:  # clean up, then re-raise: a run that finished no layer leaves nothing
-        partial.close()
-        partial.discard_if_empty()
-        raise
-    finally:
-        partial.close()
 
     def items() -> Iterator[_Encoded]:
         for i in range(len(job)):

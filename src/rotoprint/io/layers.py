@@ -198,7 +198,7 @@ def write_layer_folder(
     check_target(out, is_dir=True)
     task = task_from_job(job)
     partial = PartialOutput(out, task._key, len(job), resume=resume)
-    try:
+    with partial:  # a run that fails before finishing a layer leaves nothing
         for i in partial.done:
             if on_layer is not None:
                 on_layer(i)
@@ -208,12 +208,6 @@ def write_layer_folder(
                 on_layer(res.index)
         manifest = _manifest(job, partial.done, device_name, device, options)
         (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-    except BaseException:  # clean up, then re-raise: a run that finished no layer leaves nothing
-        partial.close()
-        partial.discard_if_empty()
-        raise
-    finally:
-        partial.close()
     partial.finish_as_folder()
     return manifest
 

@@ -185,6 +185,16 @@ class PartialOutput:
         (self.dir / JOURNAL).unlink()
         replace_with(self.dir, self.out)
 
+    def __enter__(self) -> PartialOutput:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        """Close the journal; after a failure (any exception, interrupts too) also remove the
+        folder if no layer was finished (nothing to resume). The exception propagates."""
+        self.close()
+        if exc_type is not None:
+            self.discard_if_empty()
+
     def discard_if_empty(self) -> None:
         """After a failure: remove the folder if no layer was finished (nothing to resume)."""
         if not self.done:

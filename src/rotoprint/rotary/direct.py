@@ -626,7 +626,7 @@ def write_rotary_slices(
     task = dataclasses.replace(task, _key=task_fingerprint(task))
     partial = PartialOutput(out, task._key, len(job), resume=resume)
     px = sum(job.head.nozzles * t.firings for t in job.tracks)
-    try:
+    with partial:  # a run that fails before finishing a layer leaves nothing
         for i in partial.done:
             if on_layer is not None:
                 on_layer(i)
@@ -649,11 +649,5 @@ def write_rotary_slices(
             "layers": [partial.done[i]["entry"] for i in range(len(job))],
         }
         (partial.dir / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-    except BaseException:  # clean up, then re-raise: a run that finished no layer leaves nothing
-        partial.close()
-        partial.discard_if_empty()
-        raise
-    finally:
-        partial.close()
     partial.finish_as_folder()
     return manifest
