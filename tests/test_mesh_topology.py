@@ -60,9 +60,19 @@ def test_torus_topology():
 
 
 def test_open_edges_counted():
-    m = Mesh.from_triangles(box_triangles()[2:])  # bottom face removed
+    m = Mesh.from_triangles(box_triangles()[2:], fill_holes=False)  # bottom face removed
     assert m.report.open_edges == 4
     assert not m.watertight
+    assert not m.report.holes.enabled and m.info()["holes"]["filled"] == 0
+
+
+def test_missing_face_is_filled_by_default():
+    m = Mesh.from_triangles(box_triangles()[2:])  # bottom face removed: one 4-edge loop
+    assert m.report.open_edges == 0 and m.watertight and m.faces.shape[0] == 12
+    assert m.volume_mm3 == pytest.approx(1.0, abs=1e-12)
+    h = m.info()["holes"]
+    assert h["filled"] == 1 and h["filled_edges"] == 4 and h["filled_area_mm2"] == pytest.approx(1.0)
+    assert not m.info()["watertight_as_read"]
 
 
 def test_negative_zero_merges():

@@ -6,6 +6,9 @@ A :class:`Mesh` is built from raw triangles by :meth:`Mesh.from_triangles`, whic
 2. drops faces that repeat a vertex (they have no area and no orientation),
 3. counts zero-area triangles (kept: they carry no area but link their neighbours),
 4. makes the winding of every connected shell consistent across its manifold edges,
+4b. fills the holes (closed loops of boundary edges; see :mod:`rotoprint._holes` for the
+   triangulation and the policy) with triangles wound like the faces around them, and makes
+   the winding consistent again over the repaired shells (``fill_holes=False`` skips this),
 5. orients shells by the *nesting rule* (shells with at least 4 faces, and open on at most
    ``MAX_OPEN_SIDE_FRACTION`` of their sides; a volume sign means nothing for the rest): a shell that no other shell contains is a solid
    and must enclose positive volume, so a top-level shell with negative volume is turned
@@ -29,6 +32,7 @@ from scipy.sparse import csgraph
 
 from .constants import DEGENERATE_AREA_REL, MAX_OPEN_SIDE_FRACTION
 from .errors import MeshError
+from ._holes import HoleReport, find_and_fill
 
 __all__ = ["Mesh", "MeshReport", "winding_number"]
 
@@ -48,6 +52,7 @@ class MeshReport:
     open_edges: int
     nonmanifold_edges: int
     orientation_conflicts: int
+    holes: HoleReport = field(default_factory=HoleReport)
 
     @property
     def watertight(self) -> bool:
@@ -76,8 +81,10 @@ class Mesh:
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_triangles(cls, triangles: np.ndarray, *, source: str | None = None, orient: str = "auto",
-                       _owned: bool = False) -> Mesh:
+                       fill_holes: bool = True, _owned: bool = False) -> Mesh:
         """Build a mesh from ``(N, 3, 3)`` float triangles (see the module doc for the steps).
+
+        ``fill_holes``: fill the mesh's boundary loops (step 4b; only with ``orient="auto"``).
 
         ``_owned``: the caller hands the array over, so it may be modified in place."""
         tri = np.asarray(triangles, dtype=np.float64)
@@ -108,11 +115,23 @@ class Mesh:
         degenerate = int(collapsed.sum() + np.count_nonzero(area2 <= 2 * DEGENERATE_AREA_REL * diag2))
 
         n_reoriented = n_shells_flipped = 0
+        holes = HoleReport(enabled=fill_holes and orient == "auto")
         topo = _Topology(faces, vertices.shape[0])
         if orient == "auto":
             faces, n_reoriented = _make_winding_consistent(faces, topo)
             if n_reoriented:
                 topo = _Topology(faces, vertices.shape[0])
+            if fill_holes and topo.boundary_edge.any():
+                n_before = faces.shape[0]
+                vertices, faces, holes = find_and_fill(vertices, faces, topo.boundary_edge[topo.face_edges], topo.shell)
+                if faces.shape[0] != n_before:
+                    topo = _Topology(faces, vertices.shape[0])
+                    faces, n_again = _make_winding_consistent(faces, topo)
+                    n_reoriented += n_again
+                    if n_again:
+                        topo = _Topology(faces, vertices.shape[0])
+            elif not fill_holes:
+                holes = HoleReport(enabled=False)
             faces, n_shells_flipped = _orient_shells(vertices, faces, topo)
             if n_shells_flipped:
                 topo = _Topology(faces, vertices.shape[0])
@@ -126,6 +145,7 @@ class Mesh:
             open_edges=int(np.count_nonzero(topo.edge_face_count == 1)),
             nonmanifold_edges=int(np.count_nonzero(topo.edge_face_count > 2)),
             orientation_conflicts=topo.orientation_conflicts,
+            holes=holes,
         )
         mesh = cls(vertices=vertices, faces=faces, source=source, report=report)
         object.__setattr__(mesh, "_topology", topo)
@@ -181,6 +201,7 @@ class Mesh:
             "open_edges": r.open_edges,
             "nonmanifold_edges": r.nonmanifold_edges,
             "watertight": r.watertight,
+            "watertight_as_read": r.watertight and not r.holes.filled,
             "volume_mm3": self.volume_mm3,
             "volume_exact": r.watertight,
             "degenerate_triangles": r.degenerate,
@@ -188,6 +209,7 @@ class Mesh:
             "faces_reoriented": r.faces_reoriented,
             "shells_flipped": r.shells_flipped,
             "orientation_conflicts": r.orientation_conflicts,
+            "holes": r.holes.to_json(),
         }
 
 
