@@ -75,7 +75,8 @@ def setup_logging(verbose: bool) -> None:
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
 
 
-def load_mesh_from_options(path: Path, units: str, scale: float, rotate: str | None, translate: str | None):
+def load_mesh_from_options(path: Path, units: str, scale: float, rotate: str | None, translate: str | None,
+                           fill_holes: bool = True):
     from ..io.mesh import load_mesh, make_transform
 
     T = make_transform(
@@ -83,11 +84,12 @@ def load_mesh_from_options(path: Path, units: str, scale: float, rotate: str | N
         rotate_deg=parse_triple(rotate, "--rotate", (0.0, 0.0, 0.0)),
         scale=scale,
     )
-    return load_mesh(path, units=units, transform=T)
+    return load_mesh(path, units=units, transform=T, fill_holes=fill_holes)
 
 
 ScaleOpt = Annotated[float, typer.Option("--scale", help="Uniform scale applied after unit conversion.")]
 RotateOpt = Annotated[str | None, typer.Option("--rotate", help="Rotation 'X,Y,Z' in degrees (applied X, then Y, then Z).")]
+FillHolesOpt = Annotated[bool, typer.Option("--fill-holes/--no-fill-holes", help="Fill the mesh's holes (closed loops of open edges) before slicing; open sheets stay open.")]
 TranslateOpt = Annotated[str | None, typer.Option("--translate", help="Translation 'X,Y,Z' in mm, applied last.")]
 
 

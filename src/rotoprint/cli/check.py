@@ -23,6 +23,7 @@ from ._common import (
     JsonOpt,
     RotateOpt,
     ScaleOpt,
+    FillHolesOpt,
     TranslateOpt,
     UnitsOpt,
     load_mesh_from_options,
@@ -174,6 +175,7 @@ def check_command(
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
+    fill_holes: FillHolesOpt = True,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
 ) -> None:
     """Check MESH for walls and gaps below the device's minimum, features lost to the raster,
@@ -221,7 +223,7 @@ def check_command(
         return
     if layer_height is None:
         raise ConfigError("--layer-height is needed to check a mesh")
-    m = load_mesh_from_options(mesh, units, scale, rotate, translate)
+    m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     slice_options = {"fill": fill, "offset_mm": parse_pair(offset, "--offset"), "gap_radius_mm": gap_radius}
     options = dict(
         min_wall_mm=min_wall,

@@ -14,6 +14,7 @@ from ._common import (
     LayerHeightOpt,
     RotateOpt,
     ScaleOpt,
+    FillHolesOpt,
     TranslateOpt,
     UnitsOpt,
     console,
@@ -45,6 +46,7 @@ def dlp_command(
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
+    fill_holes: FillHolesOpt = True,
     workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified masks, make the rest.")] = False,
@@ -73,7 +75,7 @@ def dlp_command(
         first_layers=first_layers,
         first_layer_offset_um=first_layer_offset,
     )
-    m = load_mesh_from_options(mesh, units, scale, rotate, translate)
+    m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     lo, hi = m.bounds
     check_first_layer_offset(options, (float(hi[0] - lo[0]), float(hi[1] - lo[1])))
     job = slice_mesh(m, dev, layer_height_mm=layer_height, fibre_angle_deg=fibre_angle, offset_mm=parse_pair(offset, "--offset"))

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from ._common import JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, out_console, print_json
+from ._common import FillHolesOpt, JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, out_console, print_json
 
 
 def info(
@@ -18,9 +18,10 @@ def info(
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
     json_out: JsonOpt = False,
+    fill_holes: FillHolesOpt = True,
 ) -> None:
     """Triangles, bounds, shells, open edges, watertightness, volume, degenerate triangles."""
-    m = load_mesh_from_options(mesh, units, scale, rotate, translate)
+    m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     data = m.info()
     if json_out:
         print_json(data)
@@ -38,7 +39,8 @@ def info(
         ("shells", str(data["shells"])),
         ("open edges", str(data["open_edges"])),
         ("non-manifold edges", str(data["nonmanifold_edges"])),
-        ("watertight", "yes" if data["watertight"] else "no"),
+        ("watertight", ("yes" if data["watertight"] else "no") + ("" if data["watertight"] == data["watertight_as_read"] else "  (after filling holes)")),
+        ("holes filled", _holes_line(data["holes"])),
         ("volume (mm^3)", f"{data['volume_mm3']:.6g}" + ("" if data["volume_exact"] else "  (approximate: not watertight)")),
         ("degenerate triangles", f"{data['degenerate_triangles']} ({data['collapsed_triangles_dropped']} collapsed, dropped)"),
         ("faces re-wound", str(data["faces_reoriented"])),
@@ -47,3 +49,12 @@ def info(
     for k, v in rows:
         t.add_row(k, v)
     out_console.print(t)
+
+
+def _holes_line(h: dict) -> str:
+    if not h["enabled"]:
+        return "off (--no-fill-holes)"
+    line = f"{h['filled']} ({h['filled_edges']} edges, {h['filled_area_mm2']:.6g} mm^2)"
+    if h["left_open_loops"] or h["left_open_edges"]:
+        line += f"; {h['left_open_loops']} loop(s) left open, {h['left_open_edges']} open edge(s) left to the slicer's chords"
+    return line

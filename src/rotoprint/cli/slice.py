@@ -12,6 +12,7 @@ from ..errors import ConfigError
 from ._common import (
     styled,
     DeviceOpt,
+    FillHolesOpt,
     LayerHeightOpt,
     RotateOpt,
     ScaleOpt,
@@ -39,6 +40,7 @@ def slice_command(
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
+    fill_holes: FillHolesOpt = True,
     workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified layers, make the rest.")] = False,
@@ -71,12 +73,13 @@ def slice_command(
     elif any(v is not None for v in (tilt, radius, ref_radius, max_swathes)) or equalise or reference_images or angle != 0.0 or direction != 1:
         raise ConfigError("--tilt, --radius, --angle, --direction, --ref-radius, --max-swathes, --equalise and --reference-images need --rotary")
     dev = load_device(device, **overrides)
-    m = load_mesh_from_options(mesh, units, scale, rotate, translate)
+    m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     if rotary:
         _slice_rotary(m, mesh, dev, out, layer_height=layer_height, tilt=tilt, radius=radius, angle=angle, direction=direction,
                       ref_radius=ref_radius, max_swathes=max_swathes, equalise=equalise, reference_images=reference_images,
                       fill=fill, gap_radius=gap_radius, quiet=quiet, workers=workers, scheduler=scheduler, resume=resume,
-                      options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate})
+                      options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate,
+                               "fill_holes": fill_holes})
         return
     job = slice_mesh(
         m,
@@ -97,6 +100,7 @@ def slice_command(
         "scale": scale,
         "rotate_deg": rotate,
         "translate_mm": translate,
+        "fill_holes": fill_holes,
     }
     with progress(quiet) as bar:
         task = bar.add_task("slicing", total=len(job))
@@ -119,6 +123,10 @@ def slice_command(
             f"{len(job)} layers of {g.width} x {g.height} px at {g.pitch_x_mm * 1000:.2f} x {g.pitch_y_mm * 1000:.2f} um "
             f"-> {out}/ (manifest.json)"
         )
+        holes = m.report.holes
+        if holes.filled:
+            console.print(styled(("mesh repaired:", "yellow"), f" {len(holes.filled)} hole(s) filled ({holes.filled_edges} edges, "
+                                 f"{holes.filled_area_mm2:.4g} mm^2; see manifest 'mesh.holes')"))
         if closed or left_open:
             console.print(
                 styled(("open mesh:", "yellow"), f" {closed} gap(s) closed within {gap_radius} mm; "

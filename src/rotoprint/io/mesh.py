@@ -142,6 +142,7 @@ def load_mesh(
     *,
     units: str = "mm",
     transform: np.ndarray | None = None,
+    fill_holes: bool = True,
 ) -> Mesh:
     """Load a mesh file into a validated :class:`~rotoprint.mesh.Mesh` in millimetres.
 
@@ -153,6 +154,9 @@ def load_mesh(
         Units of the file's coordinates; the mesh is converted to millimetres.
     transform : (4, 4) float array, optional
         Applied after the unit conversion (see :func:`make_transform`).
+    fill_holes : bool
+        Fill the mesh's holes (closed loops of open edges) before anything else sees it
+        (see :mod:`rotoprint._holes`); reported in ``mesh.info()['holes']``.
 
     Raises
     ------
@@ -185,7 +189,7 @@ def load_mesh(
             tri = tri @ T[:3, :3].T + T[:3, 3]
             if np.linalg.det(T[:3, :3]) < 0:  # a mirroring transform reverses every face
                 tri = tri[:, ::-1, :]
-    mesh = Mesh.from_triangles(tri, source=str(path), _owned=True)
+    mesh = Mesh.from_triangles(tri, source=str(path), fill_holes=fill_holes, _owned=True)
     del tri
     release_free_memory()
     return mesh
