@@ -134,7 +134,23 @@ def _load_with_trimesh(path: Path) -> np.ndarray:
     vertices = getattr(loaded, "vertices", None)
     if faces is None or vertices is None or len(faces) == 0:
         raise MeshError("file holds no triangles", path=path)
-    return np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
+    try:
+        v = np.asarray(vertices, dtype=np.float64)
+        f = np.asarray(faces, dtype=np.int64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise MeshError(f"vertices or faces are not numbers: {exc}", path=path) from exc
+    if v.ndim != 2 or v.shape[1] != 3 or f.ndim != 2 or f.shape[1] != 3:
+        raise MeshError(f"expected (V, 3) vertices and (F, 3) faces, got {v.shape} and {f.shape}", path=path)
+    # trimesh does not check the indices (process=False); a negative one would wrap around
+    bad = (f < 0) | (f >= len(v))
+    if bad.any():
+        i = int(np.flatnonzero(bad.any(axis=1))[0])
+        raise MeshError(
+            f"{int(bad.any(axis=1).sum())} face(s) refer to vertices that do not exist (first: face {i} "
+            f"uses vertex {int(f[i][bad[i]][0])}, the file has {len(v)} vertices)",
+            path=path,
+        )
+    return v[f]
 
 
 def load_mesh(
