@@ -40,6 +40,9 @@ MAX_FILL_AREA_FRACTION: float = 0.5
 #: quadratic in the loop length).
 MAX_LOOP_EDGES: int = 20_000
 
+#: Ear clipping gives up after this many ear tests per vertex (typical loops need 1 to 3).
+EAR_TESTS_PER_VERTEX: int = 64
+
 FILL_POLICY = (
     "every closed loop of boundary edges is filled, unless its fill would exceed "
     f"{MAX_FILL_AREA_FRACTION:g} of its shell's area (an open sheet), it has more than "
@@ -209,7 +212,8 @@ def ear_clip(xy: np.ndarray) -> np.ndarray | None:
     """Ear clipping of a simple counter-clockwise ``(n, 2)`` polygon.
 
     Returns ``(n - 2, 3) int64`` corner indices, counter-clockwise, or ``None`` when no ear
-    can be found (a polygon that is not simple, or not counter-clockwise).
+    can be found (a polygon that is not simple, or not counter-clockwise), or when the search
+    takes more than ``EAR_TESTS_PER_VERTEX * n`` ear tests (a bound on crafted spirals).
     """
     n = len(xy)
     if n < 3:
@@ -232,7 +236,11 @@ def ear_clip(xy: np.ndarray) -> np.ndarray | None:
     i = 0
     remaining = n
     misses = 0
+    budget = EAR_TESTS_PER_VERTEX * n
     while remaining > 3:
+        budget -= 1
+        if budget < 0:
+            return None
         a, c = prv[i], nxt[i]
         is_ear = False
         if not reflex[i]:

@@ -23,6 +23,10 @@ MIN_LAST_LAYER_FRACTION: float = 1e-6
 #: Fraction of available memory a single raster may take before it is refused.
 MAX_RASTER_MEMORY_FRACTION: float = 0.5
 
+#: Largest coordinate magnitude (mm) a mesh may have: beyond it (1000 km) products of
+#: coordinates in areas, volumes and winding numbers would lose all precision or overflow.
+MAX_COORDINATE_MM: float = 1e9
+
 #: A shell open on more than this fraction of its face sides has no meaningful volume sign
 #: and is never turned outside-in by the orientation rule.
 MAX_OPEN_SIDE_FRACTION: float = 0.1

@@ -30,7 +30,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse import csgraph
 
-from .constants import DEGENERATE_AREA_REL, MAX_OPEN_SIDE_FRACTION
+from .constants import DEGENERATE_AREA_REL, MAX_COORDINATE_MM, MAX_OPEN_SIDE_FRACTION
 from .errors import MeshError
 from ._holes import HoleReport, find_and_fill
 
@@ -94,6 +94,10 @@ class Mesh:
             raise MeshError("mesh holds no triangles", path=source)
         if not np.isfinite(tri).all():
             raise MeshError("mesh has NaN or infinite coordinates", path=source)
+        biggest = float(np.abs(tri).max())
+        if biggest > MAX_COORDINATE_MM:
+            raise MeshError(f"a coordinate reaches {biggest:.3g} mm; the largest supported is {MAX_COORDINATE_MM:g} mm "
+                            "(check --units, --scale and --translate)", path=source)
         if orient not in ("auto", "keep"):
             raise MeshError(f"orient must be 'auto' or 'keep', got {orient!r}")
         n_in = tri.shape[0]

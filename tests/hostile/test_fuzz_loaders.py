@@ -181,3 +181,43 @@ def test_mutated_3mf(tmp_path, data):
     members = dict(_3MF_MEMBERS)
     members[model] = data.draw(_mutations(members[model]))
     _check_load(_write(tmp_path, "box.3mf", _rezip(members)))
+
+
+def _crafted() -> dict[str, tuple[bytes, str]]:
+    """What the fuzzer found (and a few hand-made neighbours): file name -> (bytes, the start
+    of the error, or '' when the file must load)."""
+    off = SEEDS["box.off"].decode()
+    ply = SEEDS["ascii.ply"].decode()
+    obj = SEEDS["box.obj"].decode()
+    stl = SEEDS["ascii.stl"].decode()
+    model = next(k for k in _3MF_MEMBERS if k.endswith(".model"))
+    xml = _3MF_MEMBERS[model].decode()
+    return {
+        # face indices past the last vertex (an IndexError before) or negative (wrapped around)
+        "ply_index.ply": (ply.replace("\n3 0 6 4\n", "\n3 0 6 13\n").encode(), "1 face(s) refer to vertices that do not exist"),
+        "ply_negative.ply": (ply.replace("\n3 0 6 4\n", "\n3 0 6 -1\n").encode(), "1 face(s) refer to vertices that do not exist"),
+        "off_index.off": (off.replace("\n3 0 6 4\n", "\n3 0 6 8\n").encode(), "face index outside the range"),  # trimesh checks OFF
+        "off_negative.off": (off.replace("\n3 0 6 4\n", "\n3 0 -6 4\n").encode(), "face index outside the range"),
+        "3mf_index.3mf": (_rezip({**_3MF_MEMBERS, model: xml.replace('v3="4"', 'v3="7000"', 1).encode()}), "face(s) refer to vertices"),
+        "obj_index.obj": (obj.replace("f 1 7 5", "f 1 7 99999999999999999999").encode(), "could not read as OBJ"),
+        # coordinates whose squares overflow (a RuntimeWarning, then garbage, before)
+        "obj_huge.obj": (obj.replace("v 0.00000000 0.00000000 0.00000000", "v 1e308 -1e308 1e308").encode(), "a coordinate reaches 1e+308 mm"),
+        "stl_huge.stl": (stl.replace("vertex 0.0 0.0 0.0", "vertex 1e200 0.0 0.0", 1).encode(), "a coordinate reaches 1e+200 mm"),
+        "obj_nan.obj": (obj.replace("v 0.00000000 0.00000000 0.00000000", "v nan 0 0").encode(), "5 triangle(s) have NaN"),
+        # declared counts larger than the content
+        "off_count.off": (off.replace("8 12 0", "999999999 12 0").encode(), "could not read as OFF"),
+        "ply_count.ply": (ply.replace("element vertex 8", "element vertex 999999999").encode(), "file holds no triangles"),
+    }
+
+
+CRAFTED = _crafted()
+
+
+@pytest.mark.parametrize("name", sorted(CRAFTED))
+def test_crafted_cases(tmp_path, name):
+    data, expected = CRAFTED[name]
+    p = _write(tmp_path, name, data)
+    with pytest.raises(RotoprintError) as info:
+        load_mesh(p)
+    assert expected in str(info.value) and str(info.value).startswith(str(p)), str(info.value)
+    _check_load(p)
