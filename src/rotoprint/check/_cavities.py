@@ -1,7 +1,7 @@
 """Enclosed cavities (resin traps): empty space shut in on every side by the part.
 
 The empty space of each layer is taken as runs per pixel row (the complement of the layer's
-material runs, see :func:`rotoprint.check._kernels.fill_runs`), joined within the layer by
+material runs, see :func:`rotoprint.check._kernels.runs.fill_runs`), joined within the layer by
 4-neighbours (the dual of the 8-neighbours material islands use, so that empty space never
 leaks through a diagonal between two material pixels) and to the layer below where the same
 pixel is empty in both. A connected body of empty space is **open** when it reaches the edge
@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernels import _find, _union
+from ._kernels.unionfind import _find, _union
 
 
 @njit(cache=True, nogil=True)

@@ -363,7 +363,11 @@ class _LayerChecker:
         self.need_gap = max(min_gap_mm, lim)
         self.cell = _CELL_PX * min(g.pitch_x_mm, g.pitch_y_mm)
         # the slicer's own model-to-pixel affine (its fill's crossings are recomputed as runs)
-        self.uv = np.ascontiguousarray(getattr(job, "_to_uv", g.model_to_pixel), dtype=np.float64)
+        uv = np.ascontiguousarray(job.fill_affine, dtype=np.float64)
+        self.params = K.LayerParams(
+            uv, g.height, g.width, self.evenodd, self.cell, _NEAR_MM, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
+            self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
+        )
         self._no_runs = (np.zeros(g.height + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
         self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
         self.resolution = float(st["resolution_mm"])
@@ -396,21 +400,20 @@ class _LayerChecker:
         # one call: the layer's runs of material (equal to the slicer's image, which the
         # check does not need), widths and selections, raster tests on the runs, islands
         ws, we = self._simplified(seg)
-        S, iw, ig, thin, narrow, vanished, closed, rs, r0, r1, ist, isl = K.check_layer(
-            seg.start, seg.end, ws, we, self.uv, g.height, g.width, self.evenodd, *prev, below,
-            self.cell, _NEAR_MM, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
-            self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
-        )
+        res = K.check_layer((seg.start, seg.end), (ws, we), prev, below, self.params)
+        rs, r0, r1 = res.rs, res.r0, res.r1
         if self.islands:
             self.prev_runs = (rs, r0, r1)
         image = lambda: job._fill(seg)  # noqa: E731 - the slicer's image, made when read
         thin_w = narrow_g = None
         if len(seg):
-            bx, by, ux, uy, ln, wall, gap = S
-            thin_w = self._extreme(iw, wall, bx, by, ux, uy, +1.0, index, z)
-            narrow_g = self._extreme(ig, gap, bx, by, ux, uy, -1.0, index, z)
+            bx, by, ux, uy, ln, wall, gap = res.samples
+            thin_w = self._extreme(res.thinnest, wall, bx, by, ux, uy, +1.0, index, z)
+            narrow_g = self._extreme(res.narrowest, gap, bx, by, ux, uy, -1.0, index, z)
             # widths against the thresholds, then against the raster
-            for kind, idx, width, sgn in (("thin_wall", thin, wall, 1.0), ("narrow_gap", narrow, gap, -1.0), ("vanished_wall", vanished, wall, 1.0), ("closed_gap", closed, gap, -1.0)):
+            for kind, idx, width, sgn in (
+                ("thin_wall", res.thin, wall, 1.0), ("narrow_gap", res.narrow, gap, -1.0), ("vanished_wall", res.vanished, wall, 1.0), ("closed_gap", res.closed, gap, -1.0)
+            ):
                 if idx.size:
                     self._emit(kind, idx, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords)
             # widths against the exposure
@@ -440,8 +443,8 @@ class _LayerChecker:
             if boxes:
                 chords["cavity"] = np.array(boxes, np.float64)
         island_mask = None
-        if self.islands and ist.shape[1]:
-            island_mask = self._islands(ist, isl, rs, r0, r1, index, z, findings)
+        if self.islands and res.islands.shape[1]:
+            island_mask = self._islands(res.islands, res.island_of_run, rs, r0, r1, index, z, findings)
         return LayerCheck(index, z, image, findings, chords, island_mask, thin_w, narrow_g)
 
     # -- helpers
