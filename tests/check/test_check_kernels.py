@@ -262,17 +262,17 @@ def test_chain_successors_and_runs_against_plain(piece_mesh):
         assert np.array_equal(succ, _successors_plain(sx, sy, ex, ey, js, je))
         comp, nc = K.chain_components(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
         keep, _, _ = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)
-        run, ptr, mem = K._chain_runs(sx, sy, ex, ey, keep, succ, K._RUN_MIN_LEN_MM)
+        run, ptr, mem = K._chain_runs(sx, sy, ex, ey, keep, succ, K.chains._RUN_MIN_LEN_MM)
         assert np.array_equal(np.sort(mem), np.flatnonzero(keep)) and np.all(run[~keep] == -1)
         L = np.hypot(ex - sx, ey - sy)
         for r in range(ptr.size - 1):
             m = mem[ptr[r] : ptr[r + 1]]
-            assert np.all(run[m] == r) and 1 <= m.size <= K._RUN_MAX
+            assert np.all(run[m] == r) and 1 <= m.size <= K.chains._RUN_MAX
             assert np.all(succ[m[:-1]] == m[1:])
             if m.size > 1:
-                assert np.all(L[m] >= K._RUN_MIN_LEN_MM)
+                assert np.all(L[m] >= K.chains._RUN_MIN_LEN_MM)
                 t = np.stack([(ex - sx)[m], (ey - sy)[m]], 1) / L[m, None]
-                assert np.all(t @ t[0] >= K._RUN_COS - 1e-12)
+                assert np.all(t @ t[0] >= K.chains._RUN_COS - 1e-12)
 
 
 def _circle(cx, cy, r, n=720, phase=0.0):

@@ -9,7 +9,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .unionfind import _find
+from .pointhash import _first, _key_table
+from .unionfind import _relabel, _union
 
 
 #: Runs of chained segments tested as a whole (:func:`_chain_runs`): at most this many
@@ -40,52 +41,16 @@ def chain_components(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
     ``key_s``, ``key_e`` are ``(Q,) int64`` hashes of the start and end points."""
     n = sx.shape[0]
     parent = np.arange(n)
-    # hash table of start keys (open addressing), each slot heading a list of the starts
-    # with that key
-    bits = 1
-    while (1 << bits) < 2 * n:
-        bits += 1
-    size = 1 << bits
-    slot_key = np.empty(size, np.int64)
-    slot_head = np.full(size, -1, np.int64)
-    nxt = np.full(n, -1, np.int64)
-    shift = np.uint64(64 - bits)
-    mul = np.uint64(0x9E3779B97F4A7C15)
-    mask = size - 1
-    for i in range(n):
-        k = key_s[i]
-        h = np.int64((np.uint64(k) * mul) >> shift)
-        while slot_head[h] >= 0 and slot_key[h] != k:
-            h = (h + 1) & mask
-        if slot_head[h] < 0:
-            slot_key[h] = k
-        nxt[i] = slot_head[h]
-        slot_head[h] = i
+    slot_key, slot_head, nxt, shift = _key_table(key_s)  # the starts with each key
     for i in range(n):
         if not join_e[i]:
             continue
-        k = key_e[i]
-        h = np.int64((np.uint64(k) * mul) >> shift)
-        while slot_head[h] >= 0 and slot_key[h] != k:
-            h = (h + 1) & mask
-        o = slot_head[h]
+        o = _first(slot_key, slot_head, shift, key_e[i])
         while o >= 0:
             if join_s[o] and sx[o] == ex[i] and sy[o] == ey[i]:
-                a = _find(parent, i)
-                b = _find(parent, o)
-                if a != b:
-                    parent[a] = b
+                _union(parent, i, o)
             o = nxt[o]
-    lab = np.empty(n, np.int64)
-    root_lab = np.full(n, -1, np.int64)
-    k = 0
-    for i in range(n):
-        r = _find(parent, i)
-        if root_lab[r] < 0:
-            root_lab[r] = k
-            k += 1
-        lab[i] = root_lab[r]
-    return lab, k
+    return _relabel(parent, np.zeros(0, np.bool_))
 
 
 @njit(cache=True, nogil=True)
@@ -97,34 +62,12 @@ def chain_successors(sx, sy, ex, ey, join_s, join_e, key_s, key_e):  # pragma: n
     succ = np.full(n, -1, np.int64)
     if n == 0:
         return succ
-    bits = 1
-    while (1 << bits) < 2 * n:
-        bits += 1
-    size = 1 << bits
-    slot_key = np.empty(size, np.int64)
-    slot_head = np.full(size, -1, np.int64)
-    nxt = np.full(n, -1, np.int64)
-    shift = np.uint64(64 - bits)
-    mul = np.uint64(0x9E3779B97F4A7C15)
-    mask = size - 1
-    for i in range(n):
-        k = key_s[i]
-        h = np.int64((np.uint64(k) * mul) >> shift)
-        while slot_head[h] >= 0 and slot_key[h] != k:
-            h = (h + 1) & mask
-        if slot_head[h] < 0:
-            slot_key[h] = k
-        nxt[i] = slot_head[h]
-        slot_head[h] = i
+    slot_key, slot_head, nxt, shift = _key_table(key_s)  # the starts with each key
     npred = np.zeros(n, np.int64)
     for i in range(n):
         if not join_e[i]:
             continue
-        k = key_e[i]
-        h = np.int64((np.uint64(k) * mul) >> shift)
-        while slot_head[h] >= 0 and slot_key[h] != k:
-            h = (h + 1) & mask
-        o = slot_head[h]
+        o = _first(slot_key, slot_head, shift, key_e[i])
         found = -1
         cnt = 0
         while o >= 0:

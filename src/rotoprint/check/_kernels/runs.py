@@ -9,7 +9,7 @@ import numpy as np
 from numba import njit
 
 from ...slicing._kernels import bucket_crossings
-from .unionfind import _find, _union
+from .unionfind import _find, _relabel, _union
 
 
 @njit(cache=True, nogil=True)
@@ -91,18 +91,8 @@ def island_runs(rs, r0, r1, ps, p0, p1):  # pragma: no cover - jit
     for k in range(n):
         if sup[k]:
             root_sup[_find(parent, k)] = True
-    isl = np.full(n, -1, np.int64)
-    root_isl = np.full(n, -1, np.int64)
-    ni = 0
     # raster order of the first pixel: the first run of each component, runs in raster order
-    for k in range(n):
-        r = _find(parent, k)
-        if root_sup[r]:
-            continue
-        if root_isl[r] < 0:
-            root_isl[r] = ni
-            ni += 1
-        isl[k] = root_isl[r]
+    isl, ni = _relabel(parent, root_sup)
     cnt = np.zeros(ni, np.int64)
     srow = np.zeros(ni)
     scol = np.zeros(ni)
