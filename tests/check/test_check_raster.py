@@ -143,7 +143,7 @@ def test_raster_test_limit_covers_every_wall_that_can_vanish(device_name):
     and offset, as soon as it is one (larger) pitch wide; narrower, it can miss them all. On
     an all-material image every chord of 1.0 pitch finds material, and some of 0.95 do not."""
     import _reference_kernels as R
-    from rotoprint.check.core import _RASTER_TEST_PX
+    from rotoprint.check.options import RASTER_TEST_PX as _RASTER_TEST_PX
 
     dev = load_device(device_name)
     job = slice_mesh(box_mesh((2.0, 2.0, 0.2)), dev, layer_height_mm=0.1)

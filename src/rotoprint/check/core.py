@@ -56,7 +56,7 @@ _NEAR_MM = 1e-5
 #: Rays ignore hits nearer than this (mm): the segment a sample lies on, and touching ends.
 _RAY_TMIN_MM = 1e-9
 #: Smallest side of the cells (in pixels) in which rays look for the other side of a wall or gap
-#: (cells grow where segments are sparse, see ``_kernels._cell_size``).
+#: (cells grow where segments are sparse, see ``_kernels.grid._cell_size``).
 _CELL_PX = 0.5
 #: Samples along the boundary at most this many pixels apart.
 _SPACING_PX = 0.5

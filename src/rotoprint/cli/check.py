@@ -180,7 +180,7 @@ def check_command(
     islands and (--mask) features that do not cure. Exit 0: nothing falls short; 3: something
     does (after writing the report); 2: bad input."""
     from ..check import CheckOptions, check_printability, compare_orientations, device_limits, mask_model, overlay_image
-    from ..check.core import resolution_for
+    from ..check.options import resolution_for
     from ..devices import load_device
     from ..io.atomic import atomic_dir, atomic_file
 

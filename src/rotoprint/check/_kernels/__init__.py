@@ -34,16 +34,15 @@ image instead of runs, labelling a painted canvas, ...) are in the tests
 (``tests/check/_reference_kernels.py``).
 """
 
-from .chains import chain_components, chain_successors, _chain_runs
+from .chains import _chain_runs, chain_components, chain_successors  # noqa: F401 - _chain_runs: tests
 from .classify import classify_segments
-from .crossings import _split_cell_size, split_at_crossings
+from .crossings import _split_cell_size, split_at_crossings  # noqa: F401 - _split_cell_size: tests
 from .groups import emit_groups, group_chords_in, group_stats
 from .layer import LayerParams, LayerResult, check_layer
-from .pointhash import _keys
+from .pointhash import _keys  # noqa: F401 - tests
 from .raster import chord_extreme, chord_presence_runs, paint_chords
 from .runs import fill_runs, island_runs, section_runs
 from .simplify import simplify_section
-from .unionfind import _find, _union
 from .widths import measure_widths, sample_widths, sample_widths_chained
 
 __all__ = [
