@@ -310,7 +310,7 @@ class CheckReport:
         }
 
 
-# ----------------------------------------------------------------------------- validation
+# ----------------------------------------------------------------------------- helpers
 
 
 def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
