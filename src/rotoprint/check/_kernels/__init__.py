@@ -29,6 +29,11 @@ The overlays paint chords with :func:`~.raster.paint_chords`; the cavities
 modules: :mod:`.grid` (cell grids, ray set-up and hit test), :mod:`.pointhash` (points keyed by
 their bits and the hash table of chain starts), :mod:`.unionfind` (find, union, relabelling).
 
+Every kernel is compiled with ``cache=True``. Numba keys a cached function on its own file
+only: a kernel calling one of another module keeps the callee it was compiled with. After
+editing a module here, remove the package's cache (``find src/rotoprint/check -name
+'*.nb[ic]' -delete``) before measuring or testing.
+
 The plain references the tests compare these with (every width by casting every ray, the
 image instead of runs, labelling a painted canvas, ...) are in the tests
 (``tests/check/_reference_kernels.py``).
