@@ -181,8 +181,8 @@ def check_command(
     """Check MESH for walls and gaps below the device's minimum, features lost to the raster,
     islands and (--mask) features that do not cure. Exit 0: nothing falls short; 3: something
     does (after writing the report); 2: bad input."""
-    from ..check import check_printability, compare_orientations, device_limits, mask_model, overlay_image
-    from ..check.core import resolution_for
+    from ..check import CheckOptions, check_printability, compare_orientations, device_limits, mask_model, overlay_image
+    from ..check.options import resolution_for
     from ..devices import load_device
     from ..io.atomic import atomic_dir, atomic_file
 
@@ -225,7 +225,7 @@ def check_command(
         raise ConfigError("--layer-height is needed to check a mesh")
     m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     slice_options = {"fill": fill, "offset_mm": parse_pair(offset, "--offset"), "gap_radius_mm": gap_radius}
-    options = dict(
+    options = CheckOptions(
         min_wall_mm=min_wall,
         min_gap_mm=min_gap,
         mask_fn=mask_fn,
@@ -234,7 +234,7 @@ def check_command(
         islands=islands,
         resolution_mm=resolution,
         cavities=cavities,
-        slice_options=slice_options,
+        **rot_kw,
     )
 
     def run(folder: Path | None):
@@ -256,13 +256,12 @@ def check_command(
             task = bar.add_task("checking", total=len(job))
             if folder is not None:
                 (folder / "overlays").mkdir()
-            opts = {k: v for k, v in options.items() if k != "slice_options"}
-            rep = check_printability(job, dev, on_layer=on_layer, **opts, **rot_kw)
+            rep = check_printability(job, dev, options, on_layer=on_layer)
             rep.settings["fibre_angle_deg"] = fibre_angle
             orient = None
             if angles is not None:
                 task2 = bar.add_task("orientations", total=len(angles))
-                orient = compare_orientations(m, dev, angles_deg=angles, layer_height_mm=layer_height, **options)
+                orient = compare_orientations(m, dev, options, angles_deg=angles, layer_height_mm=layer_height, slice_options=slice_options)
                 bar.advance(task2, len(angles))
         data = rep.to_json()
         data["mesh"] = str(mesh)

@@ -120,7 +120,7 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
     -------
     BuildResult
     """
-    from ..check import check_printability
+    from ..check import CheckOptions, check_printability
     from ..check.overlay import overlay_image
     from ..io.atomic import atomic_dir
     from ..rotary.files import write_print
@@ -153,8 +153,8 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
         if do_check:
             for j, part in enumerate(sp.parts):
                 step("check", j, len(sp.parts))
-                rep = check_printability(plan.meshes[part.name], plan.device, layer_height_mm=sp.job.layer_height_mm,
-                                         tilt_deg=plan.heads[0].tilt_deg, radius_mm=sp.placement.inner_radius_mm)
+                opts = CheckOptions(tilt_deg=plan.heads[0].tilt_deg, radius_mm=sp.placement.inner_radius_mm)
+                rep = check_printability(plan.meshes[part.name], plan.device, opts, layer_height_mm=sp.job.layer_height_mm)
                 worst_layer = None
                 if rep.findings:
                     worst_layer = rep.findings[0].layer
