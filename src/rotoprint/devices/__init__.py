@@ -14,7 +14,7 @@ import math
 from ..errors import ConfigError, DeviceError, InputFileError
 from .models import Device, InkjetDevice, InkjetHead, Projector, ProjectorDevice
 
-__all__ = ["load_device", "preset_names", "Device", "InkjetDevice", "InkjetHead", "Projector", "ProjectorDevice"]
+__all__ = ["load_device", "as_device", "preset_names", "Device", "InkjetDevice", "InkjetHead", "Projector", "ProjectorDevice"]
 
 _ADAPTER: TypeAdapter = TypeAdapter(Device)
 
@@ -99,3 +99,18 @@ def load_device(spec: str | Path, **overrides: Any) -> InkjetDevice | ProjectorD
             raise DeviceError(f"invalid device field '{table}': expected a table", path=origin)
         data[table] = {**data.get(table, {}), **overrides}
     return _validate(data, origin, tuple(overrides))
+
+
+def as_device(device: Any) -> Any:
+    """:func:`load_device` of ``device`` when it is a preset name (such as
+    ``"perfactory-sxga"``) or the path of a TOML device file, else ``device`` itself (a device
+    model). Every public function that takes a device takes either.
+
+    Raises
+    ------
+    DeviceError, InputFileError
+        As :func:`load_device`.
+    """
+    if isinstance(device, (str, Path)):
+        return load_device(device)
+    return device

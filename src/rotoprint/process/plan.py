@@ -467,8 +467,8 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
             if "tilt" not in exc.problem:
                 fld = f"printer.heads[{j}] ({hs.name})"
             raise ConfigError(f"{fld}: {exc.problem}", path=job.source) from None
-        inside = DirectSliceJob(lat.slice_job, lat.head, lat.part, lat.design, lat.plan, lat.tracks, dpi_y=lat.dpi_y,
-                                fill=lat.fill, equalise=False, kernel=lat.kernel)
+        inside = DirectSliceJob(lat.slice_job, lat.head, lat.part, lat.design, lat.plan, lat.tracks,
+                                options=dataclasses.replace(lat.options, equalise=False), dpi_y=lat.dpi_y)
         r, dens = track_density_per_mm2(lat.tracks, equalised=sp.printer.equalise)
         f = device.head.max_frequency_hz if clk.frequency_hz is None else clk.frequency_hz
         if f > device.head.max_frequency_hz:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from .exact import ExactMaps, exact_maps, transform_exact
 from .head import HeadFigures, Mount, NozzleLayout, head_figures, max_tilt_deg, nozzle_layout, nozzle_offsets, paper_figures
+from .options import RotarySetup, RotarySliceOptions
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage, clock_dphi
 from .simulate import Simulation, SimulationReport, place_drops, render_overlay, simulate
@@ -25,6 +26,8 @@ __all__ = [
     "nozzle_offsets",
     "paper_figures",
     "Placement",
+    "RotarySetup",
+    "RotarySliceOptions",
     "RotaryPrint",
     "SwatheImage",
     "clock_dphi",

@@ -39,14 +39,14 @@ import numpy as np
 
 from .. import __version__
 from .._resources import check_raster_fits
-from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError, GeometryError
 from ..mesh import Mesh
-from ..slicing import FILL_RULES, slice_mesh
+from ..slicing import slice_mesh
 from ..slicing._sections import Segments
 from . import _direct_kernels as _k
 from .exact import firing_range, swathe_clock
-from .head import DIRECTIONS, check_tilt, nozzle_layout
+from .head import check_tilt, nozzle_layout
+from .options import RotarySliceOptions, options_from
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage
 from .swathes import SwathePlan, plan_swathes
@@ -272,17 +272,19 @@ class DirectSliceJob:
     :class:`RotaryPrint` per layer. Build one with :func:`slice_rotary`."""
 
     def __init__(self, job, head, part: PartPlacement, design: Placement, plan: SwathePlan, tracks: tuple[TrackSet, ...], *,
-                 dpi_y: float, fill: str, equalise: bool, kernel: str) -> None:
+                 options: RotarySliceOptions, dpi_y: float) -> None:
         self.slice_job = job
         self.head = head
         self.part = part
         self.design = design
         self.plan = plan
         self.tracks = tracks
+        self.options = options
         self.dpi_y = dpi_y
-        self.fill = fill
-        self.equalise = equalise
-        self.kernel = kernel
+        self.fill = options.fill
+        self.equalise = bool(options.equalise)
+        self.kernel = options.kernel
+        equalise = self.equalise
         # density equalisation: keep the fraction area_per_drop / largest area_per_drop
         apd = [t.area_per_drop_mm2 for t in tracks]
         top = max((float(a.max()) for a in apd if a.size), default=1.0)
@@ -291,6 +293,11 @@ class DirectSliceJob:
     @property
     def layers(self):
         return self.slice_job.plan
+
+    @property
+    def rotary_options(self) -> dict:
+        """The options as :func:`slice_rotary` keywords (JSON-ready), ``dpi_y`` resolved."""
+        return {**self.options.as_dict(), "dpi_y": self.dpi_y}
 
     def __len__(self) -> int:
         return len(self.slice_job)
@@ -384,51 +391,21 @@ class DirectSliceJob:
         }
 
 
-def slice_rotary(
-    mesh: Mesh,
-    device,
-    *,
-    layer_height_mm: float,
-    tilt_deg: float,
-    inner_radius_mm: float,
-    angle_deg: float = 0.0,
-    dpi_y: float | None = None,
-    ref_radius_mm: float | None = None,
-    direction: int = 1,
-    max_swathes: int | None = None,
-    equalise: bool = False,
-    fill: str = "nonzero",
-    gap_radius_mm: float = DEFAULT_GAP_RADIUS_MM,
-    kernel: str = "numba",
-) -> DirectSliceJob:
+def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, **keywords) -> DirectSliceJob:
     """Plan direct rotary slicing of ``mesh`` for an inkjet ``device``.
 
     Parameters
     ----------
     mesh : Mesh
-    device : InkjetDevice
-    layer_height_mm : float
-    tilt_deg : float
-        Head tilt, |tilt| below the head's maximum.
-    inner_radius_mm : float
-        Radius of the part's inner edge (see :class:`PartPlacement`).
-    angle_deg : float
-        Angle of the part's centre line on the platform.
-    dpi_y : float, optional
-        Circumferential density at each swathe's reference radius (default: the head's).
-    ref_radius_mm : float, optional
-        One reference radius for every swathe (default: each swathe's outermost track).
-    direction : {1, -1}
-    max_swathes : int, optional
-    equalise : bool
-        Thin inner tracks (ordered pattern along each track) so that drops per unit area are
-        the same on every track: the fraction kept is the track's area per drop over the
-        largest one (area per drop = ``r_k * dphi * local radial pitch``).
-    fill : {'nonzero', 'evenodd'}
-    gap_radius_mm : float
-        Open meshes: see :func:`rotoprint.slice_mesh`.
-    kernel : {'numba', 'numpy'}
-        The jit kernel or the pure-numpy reference; their output is identical.
+    device : InkjetDevice or str
+        An inkjet device, or a preset name or device .toml file to load.
+    options : RotarySliceOptions, optional
+        Layer height, tilt, the part's inner radius and angle, the clock (``dpi_y``,
+        ``ref_radius_mm``), direction, swathe limit, density equalisation, fill, gap radius,
+        kernel (see :class:`~rotoprint.rotary.options.RotarySliceOptions`).
+    **keywords
+        Its fields by name (``layer_height_mm=0.1, tilt_deg=20.0, inner_radius_mm=60.0``),
+        replacing those of ``options``.
 
     Returns
     -------
@@ -444,16 +421,15 @@ def slice_rotary(
     >>> len(job), len(pr.swathes), pr.swathes[0].levels.shape[1], pr.swathes[0].levels.dtype
     (2, 1, 764, dtype('uint8'))
     """
-    from ..devices import InkjetDevice
+    from ..devices import InkjetDevice, as_device
 
+    device = as_device(device)
     if not isinstance(device, InkjetDevice):
         raise ConfigError(f"device {getattr(device, 'name', device)!r} is not an inkjet device; direct rotary slicing needs a print head")
-    if kernel not in _k.KERNELS:
-        raise ConfigError(f"kernel must be one of {', '.join(_k.KERNELS)}; got {kernel!r}")
-    if fill not in FILL_RULES:
-        raise ConfigError(f"fill must be one of {', '.join(FILL_RULES)}, got {fill!r}")
-    if direction not in DIRECTIONS:
-        raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
+    opts = options_from(RotarySliceOptions, options, keywords, what="slice_rotary")
+    tilt_deg, inner_radius_mm, angle_deg = opts.tilt_deg, opts.inner_radius_mm, opts.angle_deg
+    dpi_y, ref_radius_mm, direction, max_swathes = opts.dpi_y, opts.ref_radius_mm, opts.direction, opts.max_swathes
+    kernel = opts.kernel
     head = device.head
     check_tilt(head, float(tilt_deg))
     dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
@@ -461,7 +437,7 @@ def slice_rotary(
         raise ConfigError(f"dpi_y must be a positive number, got {dpi_y}")
     part = PartPlacement.for_mesh(mesh, inner_radius_mm=inner_radius_mm, angle_deg=angle_deg)
     design = part.design_placement(head.pitch_mm, 25.4 / dpi_y)
-    job = slice_mesh(mesh, device, layer_height_mm=layer_height_mm, fill=fill, gap_radius_mm=gap_radius_mm,
+    job = slice_mesh(mesh, device, layer_height_mm=opts.layer_height_mm, fill=opts.fill, gap_radius_mm=opts.gap_radius_mm,
                      backend="numpy" if kernel == "numpy" else "jit")
     r_in, r_out = design.radial_range_mm()
     plan = plan_swathes(head, tilt_deg=float(tilt_deg), inner_radius_mm=r_in, outer_radius_mm=r_out,
@@ -490,14 +466,7 @@ def slice_rotary(
             )
         )
     log.debug("direct rotary slicing: %d layers, %d swathe(s)", len(job), len(tracks))
-    djob = DirectSliceJob(job, head, part, design, plan, tuple(tracks), dpi_y=dpi_y, fill=fill, equalise=bool(equalise), kernel=kernel)
-    djob.rotary_options = {
-        "layer_height_mm": float(layer_height_mm), "tilt_deg": float(tilt_deg), "inner_radius_mm": float(inner_radius_mm),
-        "angle_deg": float(angle_deg), "dpi_y": dpi_y, "ref_radius_mm": ref_radius_mm, "direction": int(direction),
-        "max_swathes": max_swathes, "equalise": bool(equalise), "fill": fill, "gap_radius_mm": float(gap_radius_mm),
-        "kernel": kernel,
-    }
-    return djob
+    return DirectSliceJob(job, head, part, design, plan, tuple(tracks), options=opts, dpi_y=dpi_y)
 
 
 def rotary_layer_files(job: DirectSliceJob, index: int, *, device_name: str,

@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 import logging
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -22,6 +22,7 @@ from ..devices.models import InkjetHead
 from ..errors import ConfigError, ImageError
 from . import _exact_kernels as _k
 from .head import Mount, NozzleLayout, nozzle_layout
+from .options import RotarySetup, options_from
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_levels
 from .swathes import SwathePlan, plan_swathes
@@ -260,19 +261,7 @@ def swathe_clock(plan: SwathePlan, j: int, *, dpi_y: float, ref_radius_mm: float
     return clock_dphi(dpi_y, r_ref), r_ref
 
 
-@functools.lru_cache(maxsize=8)
-def exact_maps(
-    head: InkjetHead,
-    placement: Placement,
-    *,
-    tilt_deg: float,
-    dpi_y: float | None = None,
-    ref_radius_mm: float | None = None,
-    mount_angle_deg: float = 0.0,
-    direction: int = 1,
-    max_swathes: int | None = None,
-    kernel: str = "numba",
-) -> ExactMaps:
+def exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup | None = None, **keywords) -> ExactMaps:
     """Build (or fetch from the cache) the sampling maps of the exact transform.
 
     Parameters
@@ -280,16 +269,12 @@ def exact_maps(
     head : InkjetHead
     placement : Placement
         Where the design lies; its radial range decides the swathes (:func:`plan_swathes`).
-    tilt_deg : float
-        Head tilt, |tilt| below the head's maximum.
-    dpi_y : float, optional
-        Circumferential density at the reference radius; default the head's ``dpi_y``.
-    ref_radius_mm : float, optional
-        One reference radius for every swathe; default each swathe's outermost track.
-    mount_angle_deg, direction : see :class:`Mount`.
-    max_swathes : int, optional
-        Refuse designs that need more radial swathes.
-    kernel : {"numba", "numpy"}
+    setup : RotarySetup, optional
+        Tilt, clock (``dpi_y``, ``ref_radius_mm``), mount angle, direction, swathe limit,
+        kernel.
+    **keywords
+        Fields of :class:`~rotoprint.rotary.options.RotarySetup` by name (``tilt_deg=20.0``,
+        ...), replacing those of ``setup``.
 
     Examples
     --------
@@ -299,8 +284,19 @@ def exact_maps(
     >>> len(m.swathes), m.swathes[0].index.shape[1]
     (1, 764)
     """
-    if kernel not in _k.KERNELS:
-        raise ConfigError(f"kernel must be one of {', '.join(_k.KERNELS)}; got {kernel!r}")
+    st = options_from(RotarySetup, setup, keywords, what="exact_maps")
+    st = replace(st, tilt_deg=float(st.tilt_deg), mount_angle_deg=float(st.mount_angle_deg), direction=int(st.direction))
+    return _exact_maps(head, placement, st)
+
+
+exact_maps.cache_clear = lambda: _exact_maps.cache_clear()  # type: ignore[attr-defined]
+exact_maps.cache_info = lambda: _exact_maps.cache_info()  # type: ignore[attr-defined]
+
+
+@functools.lru_cache(maxsize=8)
+def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> ExactMaps:
+    tilt_deg, dpi_y, ref_radius_mm = setup.tilt_deg, setup.dpi_y, setup.ref_radius_mm
+    mount_angle_deg, direction, max_swathes, kernel = setup.mount_angle_deg, setup.direction, setup.max_swathes, setup.kernel
     dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
     r_in, r_out = placement.radial_range_mm()
     plan = plan_swathes(
@@ -391,27 +387,15 @@ def exact_maps(
     )
 
 
-def transform_exact(
-    design: np.ndarray,
-    head: InkjetHead,
-    placement: Placement,
-    *,
-    tilt_deg: float,
-    dpi_y: float | None = None,
-    ref_radius_mm: float | None = None,
-    mount_angle_deg: float = 0.0,
-    direction: int = 1,
-    max_swathes: int | None = None,
-    kind: str | None = None,
-    kernel: str = "numba",
-) -> RotaryPrint:
+def transform_exact(design: np.ndarray, head: InkjetHead, placement: Placement, setup: RotarySetup | None = None, *,
+                    kind: str | None = None, **keywords) -> RotaryPrint:
     """Make ``design`` print-ready for a (tilted) head over a rotating platform.
 
     Parameters
     ----------
     design : (H, W) uint8
         Non-zero = ink. Binary designs are sampled nearest, grey ones bilinear.
-    head, placement, tilt_deg, ... : see :func:`exact_maps` (the maps are cached).
+    head, placement, setup, **keywords : see :func:`exact_maps` (the maps are cached).
     kind : {"binary", "grey"}, optional
         Default: ``"binary"`` when the design holds one non-zero value.
 
@@ -430,8 +414,5 @@ def transform_exact(
     (dtype('uint8'), 764, 1)
     """
     design = _check_design(design, placement)
-    maps = exact_maps(
-        head, placement, tilt_deg=float(tilt_deg), dpi_y=dpi_y, ref_radius_mm=ref_radius_mm,
-        mount_angle_deg=float(mount_angle_deg), direction=int(direction), max_swathes=max_swathes, kernel=kernel,
-    )
+    maps = exact_maps(head, placement, options_from(RotarySetup, setup, keywords, what="transform_exact"))
     return maps.apply(design, kind=kind)

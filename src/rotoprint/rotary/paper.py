@@ -24,6 +24,7 @@ from ..devices.models import InkjetHead
 from ..errors import ConfigError
 from .exact import _check_design
 from .head import nozzle_layout, nozzle_offsets
+from .options import RotarySetup, options_from
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_kind, design_levels
 from .swathes import plan_swathes
@@ -79,19 +80,8 @@ def paper_shifts(head: InkjetHead, *, tilt_deg: float, cx_T_mm: float, pitch_y_m
     return out
 
 
-def transform_paper(
-    design: np.ndarray,
-    head: InkjetHead,
-    placement: Placement,
-    *,
-    tilt_deg: float,
-    dpi_y: float | None = None,
-    ref_radius_mm: float | None = None,
-    mount_angle_deg: float = 0.0,
-    direction: int = 1,
-    max_swathes: int | None = None,
-    kind: str | None = None,
-) -> RotaryPrint:
+def transform_paper(design: np.ndarray, head: InkjetHead, placement: Placement, setup: RotarySetup | None = None, *,
+                    kind: str | None = None, **keywords) -> RotaryPrint:
     """The paper's polar + linear transform; same inputs and output as :func:`transform_exact`.
 
     Only tilts >= 0 (the paper's sign convention).
@@ -103,18 +93,14 @@ def transform_paper(
     head : InkjetHead
     placement : Placement
         Where the design lies on the platform (pitches in mm, inner radius, angle).
-    tilt_deg : float
-        Head tilt, degrees, ``0 <= tilt_deg`` below the head's maximum.
-    dpi_y : float, optional
-        Drops per inch along the track at the reference radius (default: the head's).
-    ref_radius_mm : float, optional
-        Reference radius of the clock, mm (default: each swathe's first column, as the paper).
-    mount_angle_deg : float
-        Angle of the head's radial line, degrees.
-    direction : {1, -1}
-        +1 counter-clockwise platform, -1 clockwise.
-    max_swathes : int, optional
-        Refuse a design needing more swathes.
+    setup : RotarySetup, optional
+        Tilt (``0 <= tilt_deg`` below the head's maximum), ``dpi_y`` (drops per inch along the
+        track at the reference radius, default the head's), ``ref_radius_mm`` (default: each
+        swathe's first column, as the paper), mount angle, direction, swathe limit. Its
+        ``kernel`` is not used (the method has one implementation).
+    **keywords
+        Fields of :class:`~rotoprint.rotary.options.RotarySetup` by name, replacing those of
+        ``setup``.
     kind : {"binary", "grey"}, optional
         Default: ``"binary"`` when the design holds one non-zero value.
 
@@ -131,6 +117,9 @@ def transform_paper(
     GeometryError
         A tilt at or beyond the head's maximum, nozzles over the axis, too many swathes.
     """
+    st = options_from(RotarySetup, setup, keywords, what="transform_paper")
+    tilt_deg, dpi_y, ref_radius_mm = st.tilt_deg, st.dpi_y, st.ref_radius_mm
+    mount_angle_deg, direction, max_swathes = st.mount_angle_deg, st.direction, st.max_swathes
     if tilt_deg < 0:
         raise ConfigError(f"the paper method takes tilts >= 0 (its sign convention), got {tilt_deg}; use --method exact")
     design = _check_design(design, placement)

@@ -13,20 +13,18 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._resources import check_raster_fits
-from ..constants import DEFAULT_GAP_RADIUS_MM
-from ..errors import ConfigError
 from ..mesh import Mesh
 from ._fill import FILL_RULES, fill_numpy
 from ._gaps import GapReport, close_gaps
 from ._sections import FaceSweep, Segments, section
 from .grid import Grid, make_grid
 from .layers import LayerPlan, plan_layers
+from .options import BACKENDS, SliceOptions, slice_options_from
 
-__all__ = ["Layer", "SliceJob", "slice_mesh", "FILL_RULES", "BACKENDS"]
+__all__ = ["Layer", "SliceJob", "SliceOptions", "slice_mesh", "FILL_RULES", "BACKENDS"]
 
 log = logging.getLogger(__name__)
 
-BACKENDS = ("jit", "numpy")
 _NO_GAPS = GapReport()
 
 
@@ -59,25 +57,18 @@ class SliceJob:
     """A planned slicing run. Iterating yields :class:`Layer` objects one at a time.
 
     Memory does not grow with the layer count: each image is made when it is asked for.
-    Build one with :func:`slice_mesh`.
+    Build one with :func:`slice_mesh`; ``device`` and ``options`` are what it was made for.
     """
 
-    def __init__(
-        self,
-        mesh: Mesh,
-        grid: Grid,
-        plan: LayerPlan,
-        *,
-        fill: str,
-        gap_radius_mm: float,
-        backend: str,
-    ) -> None:
+    def __init__(self, mesh: Mesh, grid: Grid, plan: LayerPlan, *, device, options: SliceOptions) -> None:
         self.mesh = mesh
         self.grid = grid
         self.plan = plan
-        self.fill = fill
-        self.gap_radius_mm = gap_radius_mm
-        self.backend = backend
+        self.device = device
+        self.options = options
+        self.fill = options.fill
+        self.gap_radius_mm = options.gap_radius_mm
+        self.backend = options.backend
         self._sweep = FaceSweep(mesh)
         suspect = mesh.topology.suspect_edges
         self._suspect = suspect
@@ -90,6 +81,11 @@ class SliceJob:
 
     def __len__(self) -> int:
         return len(self.plan)
+
+    @property
+    def slice_options(self) -> dict:
+        """The options as :func:`slice_mesh` keywords (what the layer manifest records)."""
+        return self.options.as_dict()
 
     @property
     def fill_affine(self) -> np.ndarray:
@@ -171,37 +167,20 @@ def _affine(m: np.ndarray, xy: np.ndarray) -> np.ndarray:
     return out
 
 
-def slice_mesh(
-    mesh: Mesh,
-    device,
-    *,
-    layer_height_mm: float,
-    fibre_angle_deg: float | None = None,
-    fill: str = "nonzero",
-    offset_mm: tuple[float, float] = (0.0, 0.0),
-    centre: bool = True,
-    gap_radius_mm: float = DEFAULT_GAP_RADIUS_MM,
-    backend: str = "jit",
-) -> SliceJob:
+def slice_mesh(mesh: Mesh, device, options: SliceOptions | None = None, **keywords) -> SliceJob:
     """Plan the slicing of ``mesh`` for ``device``; iterate the result for the layers.
 
     Parameters
     ----------
     mesh : Mesh
-    device : InkjetDevice or ProjectorDevice
-        Gives the pitch, the field and the fibre direction (see :mod:`rotoprint.devices`).
-    layer_height_mm : float
-    fibre_angle_deg : float, optional
-        Direction of the fibres in the model's XY plane, degrees counter-clockwise from +X.
-        Default: the device's own fibre direction with the model unrotated.
-    fill : {'nonzero', 'evenodd'}
-    offset_mm : (2,) float
-        Where the part's footprint centre goes, relative to the field centre (``centre=True``),
-        or the translation of the model's origin (``centre=False``).
-    gap_radius_mm : float
-        Open ends of a cross-section closer than this are joined (open meshes).
-    backend : {'jit', 'numpy'}
-        The compiled kernel or the pure-numpy reference; their output is identical.
+    device : InkjetDevice or ProjectorDevice or str
+        Gives the pitch, the field and the fibre direction (see :mod:`rotoprint.devices`); a
+        preset name or a device .toml file is loaded.
+    options : SliceOptions, optional
+        Layer height, fibre angle, fill rule, offset, gap radius, backend.
+    **keywords
+        Fields of :class:`~rotoprint.slicing.options.SliceOptions` by name
+        (``layer_height_mm=0.1``, ``fill="evenodd"``, ...), replacing those of ``options``.
 
     Examples
     --------
@@ -213,36 +192,20 @@ def slice_mesh(
     >>> int((next(iter(job)).image > 0).sum())  # 2 mm / 19.836 um -> 100 columns, 1 mm / 19.838 um -> 50 rows
     5000
     """
-    if fill not in FILL_RULES:
-        raise ConfigError(f"fill must be one of {', '.join(FILL_RULES)}, got {fill!r}")
-    if backend not in BACKENDS:
-        raise ConfigError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if not gap_radius_mm >= 0:
-        raise ConfigError(f"gap radius must be >= 0 mm, got {gap_radius_mm}")
-    if fibre_angle_deg is not None and not np.isfinite(fibre_angle_deg):
-        raise ConfigError(f"fibre angle must be finite, got {fibre_angle_deg}")
+    from ..devices import as_device
+
+    opts = slice_options_from(options, keywords)
+    device = as_device(device)
     lo, hi = mesh.bounds
-    plan = plan_layers(float(lo[2]), float(hi[2]), float(layer_height_mm))
+    plan = plan_layers(float(lo[2]), float(hi[2]), opts.layer_height_mm)
     grid = make_grid(
         mesh.vertices[:, :2],
-        pitch_x_mm=device.pitch_x_mm,
-        pitch_y_mm=device.pitch_y_mm,
+        pitch_mm=(device.pitch_x_mm, device.pitch_y_mm),
         fibre_axis=device.fibre_axis,
         field_px=device.field_px,
-        fibre_angle_deg=fibre_angle_deg,
-        offset_mm=offset_mm,
-        centre=centre,
+        fibre_angle_deg=opts.fibre_angle_deg,
+        offset_mm=opts.offset_mm,
+        centre=opts.centre,
     )
     check_raster_fits(grid.width, grid.height, 5, what="layer image")
-    job = SliceJob(mesh, grid, plan, fill=fill, gap_radius_mm=float(gap_radius_mm), backend=backend)
-    job.device = device
-    job.slice_options = {
-        "layer_height_mm": float(layer_height_mm),
-        "fibre_angle_deg": fibre_angle_deg,
-        "fill": fill,
-        "offset_mm": tuple(float(v) for v in offset_mm),
-        "centre": centre,
-        "gap_radius_mm": float(gap_radius_mm),
-        "backend": backend,
-    }
-    return job
+    return SliceJob(mesh, grid, plan, device=device, options=opts)

@@ -103,8 +103,7 @@ def _compose(outer: np.ndarray, inner: np.ndarray) -> np.ndarray:
 def make_grid(
     vertices_xy: np.ndarray,
     *,
-    pitch_x_mm: float,
-    pitch_y_mm: float,
+    pitch_mm: tuple[float, float],
     fibre_axis: str,
     field_px: tuple[int, int] | None,
     fibre_angle_deg: float | None = None,
@@ -118,8 +117,8 @@ def make_grid(
     ----------
     vertices_xy : (V, 2) float array
         Model XY of the part's vertices, mm.
-    pitch_x_mm, pitch_y_mm : float
-        Column and row spacing of the device's pixels, mm.
+    pitch_mm : (2,) float
+        ``(x, y)``: column and row spacing of the device's pixels, mm.
     fibre_axis : {'x', 'y'}
         Device direction the fibres run along (``'x'``: image rows).
     field_px : (2,) int, optional
@@ -147,6 +146,7 @@ def make_grid(
     """
     if fibre_axis not in ("x", "y"):
         raise GeometryError(f"fibre_axis must be 'x' or 'y', got {fibre_axis!r}")
+    pitch_x_mm, pitch_y_mm = pitch_mm
     axis_deg = 0.0 if fibre_axis == "x" else 90.0
     rot = 0.0 if fibre_angle_deg is None else (axis_deg - float(fibre_angle_deg))
     rot = (rot + 180.0) % 360.0 - 180.0
