@@ -568,6 +568,9 @@ def check_layers(
 ) -> Iterator[LayerCheck]:
     """Check layer after layer; yields one :class:`LayerCheck` each (see
     :func:`check_printability` for the parameters). Memory does not grow with the layers."""
+    from ..devices import as_device
+
+    device = as_device(device)
     opts = CheckOptions.of(options, settings)
     job = _as_job(job_or_mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=fibre_angle_deg, slice_options=slice_options or {})
     yield from _iter(job, opts.resolve(device), opts.mask_fn)
@@ -624,6 +627,9 @@ def check_printability(
     >>> rep.counts()["thin_wall"], round(rep.thinnest_wall["width_mm"], 3)
     (2, 0.05)
     """
+    from ..devices import as_device
+
+    device = as_device(device)
     if on_layer is not None and not callable(on_layer):
         raise ConfigError("on_layer must be callable")
     opts = CheckOptions.of(options, settings)
@@ -679,6 +685,9 @@ def compare_orientations(
         ``rows`` (one per angle: ``angle_deg``, ``loss_mm``, ``counts``, ``island_area_mm2``)
         and ``best_angle_deg`` (least loss, then least island area, then the first given).
     """
+    from ..devices import as_device
+
+    device = as_device(device)
     angles = [float(a) for a in angles_deg]
     if not angles or not all(math.isfinite(a) for a in angles):
         raise ConfigError(f"angles must be finite numbers of degrees, got {list(angles_deg)!r}")

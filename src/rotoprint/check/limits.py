@@ -38,6 +38,9 @@ def default_minimum_mm(device) -> tuple[float, str]:
     >>> round(default_minimum_mm(load_device("omnidot760"))[0] * 1000, 2)
     70.56
     """
+    from ..devices import as_device
+
+    device = as_device(device)
     pitch = max(device.pitch_x_mm, device.pitch_y_mm)
     if getattr(device, "kind", None) == "inkjet":
         drop = device.head.drop_diameter_um / 1000.0
@@ -96,6 +99,9 @@ def rotary_tracks(device, *, tilt_deg: float, radius_mm: float) -> dict:
     >>> round(r["largest_track_gap_mm"] * 1000, 1)
     70.4
     """
+    from ..devices import as_device
+
+    device = as_device(device)
     if getattr(device, "kind", None) != "inkjet":
         raise ConfigError(f"rotary figures need an inkjet head, got a {getattr(device, 'kind', '?')} device")
     if not (math.isfinite(tilt_deg) and -90.0 < tilt_deg < 90.0):
@@ -175,6 +181,9 @@ def device_limits(
     >>> round(lim["min_wall_mm"] * 1000, 1), round(lim["min_gap_mm"] * 1000, 1)
     (70.6, 70.6)
     """
+    from ..devices import as_device
+
+    device = as_device(device)
     px, py = device.pitch_x_mm, device.pitch_y_mm
     out: dict = {"device": device.name, "kind": device.kind, "pitch_x_mm": px, "pitch_y_mm": py}
     if device.kind == "projector":

@@ -43,6 +43,9 @@ def resolution_for(device, resolution_mm: float | None) -> float:
     """The resolution (mm) widths are measured at on ``device``: ``resolution_mm`` checked
     (a finite number from 0 to a quarter of the smaller pixel pitch), or by default 1/100 of
     that pitch. Raises :class:`~rotoprint.errors.ConfigError` naming the option."""
+    from ..devices import as_device
+
+    device = as_device(device)
     pmin = min(device.pitch_x_mm, device.pitch_y_mm)
     if resolution_mm is None:
         return RESOLUTION_PX * pmin
@@ -142,6 +145,9 @@ class CheckOptions:
 
     def resolve(self, device) -> CheckSettings:
         """The settings on ``device``: the defaults filled in, the resolution checked."""
+        from ..devices import as_device
+
+        device = as_device(device)
         default, source = default_minimum_mm(device)
         wall = _positive("min_wall_mm", self.min_wall_mm)
         gap = _positive("min_gap_mm", self.min_gap_mm)

@@ -15,6 +15,7 @@ from rich.text import Text
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from ..errors import ConfigError
+from .options import is_quiet
 
 # No markup and no emoji codes: paths and option values are printed as they are (a "[" or
 # ":b:" in a file name must not be read as rich markup). Styles go through rich.text.Text.
@@ -66,7 +67,7 @@ def progress(quiet: bool = False) -> Progress:
         TimeElapsedColumn(),
         TimeRemainingColumn(),
         console=console,
-        disable=quiet or not console.is_terminal,
+        disable=is_quiet(quiet) or not console.is_terminal,
         transient=True,
     )
 
@@ -96,3 +97,27 @@ TranslateOpt = Annotated[str | None, typer.Option("--translate", help="Translati
 def styled(*parts: str | tuple[str, str]) -> Text:
     """A line of plain pieces and ``(text, style)`` pieces; nothing in it is read as markup."""
     return Text.assemble(*parts)
+
+
+def print_table(table, con: Console | None = None) -> None:
+    """Print a rich ``Table`` whole: as a table when its natural width fits the console (a
+    pipe is 80 columns), else as one block per row, ``column: value`` a line, so that no
+    figure is cut to an ellipsis."""
+    from rich.measure import Measurement
+
+    con = out_console if con is None else con
+    need = Measurement.get(con, con.options.update_width(1_000_000), table).maximum
+    if need <= con.width:
+        con.print(table)
+        return
+    if table.title:
+        con.print(table.title)  # wrapped at words, never cut
+    heads = [" ".join(str(c.header).split()) or f"column {i + 1}" for i, c in enumerate(table.columns)]
+    cols = [[str(v) for v in c.cells] for c in table.columns]
+    show = table.show_header
+    for r in range(table.row_count):
+        lines = []
+        for h, cells in zip(heads, cols):
+            v = " ".join(cells[r].split()) if r < len(cells) else ""
+            lines.append(f"  {h}: {v}" if show else f"  {v}")
+        con.print(("" if r == 0 else "\n") + "\n".join(lines))

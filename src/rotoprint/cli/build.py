@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from ._common import JsonOpt, console, out_console, print_json, progress, styled
+from ._common import JsonOpt, console, out_console, print_json, print_table, progress, styled
 
 EXIT_SHORT = 3
 
@@ -45,7 +45,7 @@ def report_summary(res, *, label: str = "") -> None:
             hc = r.get("hand_check")
             t.add_row(r["part"], " - ".join(r["between"]), ohm(r["design"]["resistance_ohm"]), ohm(r["printed"]["resistance_ohm"]),
                       ohm(hc["resistance_ohm"]) if hc else "-")
-        console.print(t)
+        print_table(t, console)
     if s["printability_ok"] is False:
         console.print(styled(("printability: some features fall short", "red"), " (see the report)"))
     out_console.print(f"report: {res.report_path}")

@@ -17,7 +17,9 @@ from rich.text import Text
 
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
+from .options import is_quiet, DpiYOpt, FibreAngleOpt, FillOpt, GapRadiusOpt, OffsetOpt, QuietOpt
 from ._common import (
+    print_table,
     styled,
     DeviceOpt,
     JsonOpt,
@@ -88,7 +90,7 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
 
     j = rep.to_json()
     st = rep.settings
-    out_console.print(_limits_table(rep.limits))
+    print_table(_limits_table(rep.limits))
     out_console.print(f"basis: {rep.limits['basis']}")
     if "rotary" in rep.limits:
         for line in _rotary_lines(rep.limits["rotary"]):
@@ -127,7 +129,7 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
             worst = f"{w.width_mm * 1000:.1f} um"
         t.add_row(k.replace("_", " "), Text(str(len(fs)), style="red"), str(n_regions[k]), str(len({f.layer for f in fs})), worst,
                   f"{w.layer}, {w.x_mm:.3f}, {w.y_mm:.3f}")
-    out_console.print(t)
+    print_table(t)
     for name, key in (("thinnest wall", "thinnest_wall"), ("narrowest gap", "narrowest_gap")):
         v = j[key]
         if v is None:
@@ -141,7 +143,7 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
         for r in orient["rows"]:
             best = " *" if r["angle_deg"] == orient["best_angle_deg"] else ""
             ot.add_row(f"{r['angle_deg']:g}{best}", f"{r['loss_mm']:.3f}", f"{r['island_area_mm2']:.4g}", str(sum(r["counts"].values())))
-        out_console.print(ot)
+        print_table(ot)
         out_console.print(f"least loss at fibre angle {orient['best_angle_deg']:g} deg")
     verdict = ("nothing falls short", "green") if rep.ok else (f"{len(rep.findings)} problem(s)", "red")
     where = f" -> {out}/ ({REPORT_NAME}, {n_overlays} overlay(s))" if out is not None else ""
@@ -156,7 +158,7 @@ def check_command(
     min_gap: Annotated[float | None, typer.Option("--min-gap", help="Narrowest gap that stays open, mm. Default as --min-wall.")] = None,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Output folder: report.json and overlays/layer_NNNNN.png (created; replaced only if it holds an earlier report.json).")] = None,
     json_out: JsonOpt = False,
-    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X.")] = None,
+    fibre_angle: FibreAngleOpt = None,
     orientations: Annotated[str | None, typer.Option("--orientations", help="'A:B:STEP' degrees: check every fibre angle and say which loses least.")] = None,
     rotary: Annotated[bool, typer.Option("--rotary", help="Inkjet on the rotary platform: add the track figures (needs --tilt and --radius).")] = False,
     tilt: Annotated[float | None, typer.Option("--tilt", help="Head tilt, degrees (with --rotary).")] = None,
@@ -167,20 +169,21 @@ def check_command(
     cavities: Annotated[bool, typer.Option("--cavities/--no-cavities", help="Look for empty space the part shuts in (resin traps).")] = True,
     resolution: Annotated[float | None, typer.Option("--resolution", help="Measure widths on the section simplified to this deviation, mm (widths within twice it). Default: 1/100 pixel; 0: the section as sliced.")] = None,
     max_overlays: Annotated[int, typer.Option("--max-overlays", help="Write at most this many overlay images (layers with problems, first first).")] = 200,
-    fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero or evenodd.")] = "nonzero",
-    offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
-    gap_radius: Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends closer than this, mm.")] = DEFAULT_GAP_RADIUS_MM,
-    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: print-direction density, dpi.")] = None,
+    fill: FillOpt = "nonzero",
+    offset: OffsetOpt = None,
+    gap_radius: GapRadiusOpt = DEFAULT_GAP_RADIUS_MM,
+    dpi_y: DpiYOpt = None,
     units: UnitsOpt = "mm",
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
     fill_holes: FillHolesOpt = True,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
+    quiet: QuietOpt = False,
 ) -> None:
     """Check MESH for walls and gaps below the device's minimum, features lost to the raster,
     islands and (--mask) features that do not cure. Exit 0: nothing falls short; 3: something
     does (after writing the report); 2: bad input."""
+    quiet = is_quiet(quiet)
     from ..check import CheckOptions, check_printability, compare_orientations, device_limits, mask_model, overlay_image
     from ..check.options import resolution_for
     from ..devices import load_device
@@ -215,7 +218,7 @@ def check_command(
         if json_out:
             print_json({"limits": lim})
         elif not quiet:
-            out_console.print(_limits_table(lim))
+            print_table(_limits_table(lim))
             out_console.print(f"basis: {lim['basis']}")
             if "rotary" in lim:
                 for line in _rotary_lines(lim["rotary"]):

@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from ..errors import ConfigError
+from .options import is_quiet, is_verbose, FibreAngleOpt, OffsetOpt, QuietOpt, ResumeOpt, SchedulerOpt, VerboseOpt, WorkersOpt
 from ._common import (
     DeviceOpt,
     LayerHeightOpt,
@@ -40,18 +41,18 @@ def dlp_command(
     fmt: Annotated[str, typer.Option("--format", help="auto (from --out), sl1, sl1s, png, perfactory.")] = "auto",
     exposure: Annotated[float | None, typer.Option("--exposure", help="Exposure per layer, s (default: the device's).")] = None,
     first_exposure: Annotated[float | None, typer.Option("--first-exposure", help="Exposure of the first layers, s (default: the device's).")] = None,
-    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Rotate the part so this model direction (deg from +X) runs along image rows.")] = None,
-    offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
+    fibre_angle: FibreAngleOpt = None,
+    offset: OffsetOpt = None,
     units: UnitsOpt = "mm",
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
     fill_holes: FillHolesOpt = True,
-    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified masks, make the rest.")] = False,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
-    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log what happens (resume, estimates) on stderr.")] = False,
+    workers: WorkersOpt = 1,
+    scheduler: SchedulerOpt = None,
+    resume: ResumeOpt = False,
+    quiet: QuietOpt = False,
+    verbose: VerboseOpt = False,
 ) -> None:
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
@@ -60,7 +61,8 @@ def dlp_command(
     from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
 
-    setup_logging(verbose)
+    setup_logging(is_verbose(verbose))
+    quiet = is_quiet(quiet)
     kind = format_from_path(out, fmt)
     overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
     dev = load_device(device, **overrides)

@@ -9,7 +9,7 @@ import typer
 from rich.table import Table
 
 from ..errors import ConfigError
-from ._common import DeviceOpt, JsonOpt, console, out_console, print_json
+from ._common import DeviceOpt, JsonOpt, console, out_console, print_json, print_table
 
 
 def parse_tilt_range(text: str) -> list[float]:
@@ -71,7 +71,7 @@ def head_command(
             f"{f.inner_single_row_band_mm[0]:.2f}-{f.inner_single_row_band_mm[1]:.2f}, "
             f"{f.outer_single_row_band_mm[0]:.2f}-{f.outer_single_row_band_mm[1]:.2f}",
         )
-    out_console.print(t)
+    print_table(t)
     if dev.nominal:
         console.print(f"nominal (not from the source) values of {dev.name}: {', '.join(dev.nominal)}")
     if plot is not None:

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from ._common import FillHolesOpt, JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, out_console, print_json
+from ._common import FillHolesOpt, JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, out_console, print_json, print_table
 
 
 def info(
@@ -48,7 +48,7 @@ def info(
     ]
     for k, v in rows:
         t.add_row(k, v)
-    out_console.print(t)
+    print_table(t)
 
 
 def _holes_line(h: dict) -> str:

@@ -10,6 +10,7 @@ import typer
 
 from ..errors import RotoprintError
 from ._common import EXIT_BAD_INPUT, console, styled
+from .options import app_options
 
 app = typer.Typer(
     name="rotoprint",
@@ -17,7 +18,9 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # plain help: no markup, no emoji codes (an 'A:B:STEP' is not ':b:')
 )
+app.callback()(app_options)
 
 
 def _register() -> None:

@@ -9,6 +9,7 @@ import typer
 
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
+from .options import is_quiet, is_verbose, DpiYOpt, FibreAngleOpt, FillOpt, GapRadiusOpt, OffsetOpt, QuietOpt, ResumeOpt, SchedulerOpt, VerboseOpt, WorkersOpt
 from ._common import (
     styled,
     DeviceOpt,
@@ -31,21 +32,21 @@ def slice_command(
     device: DeviceOpt,
     layer_height: LayerHeightOpt,
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created; replaced only if it holds an earlier manifest).")],
-    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X. Default: the device's own direction.")] = None,
-    fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero (overlapping shells union) or evenodd.")] = "nonzero",
-    offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
-    gap_radius: Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends of a section closer than this, mm.")] = DEFAULT_GAP_RADIUS_MM,
-    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: circumferential / print-direction density, dpi.")] = None,
+    fibre_angle: FibreAngleOpt = None,
+    fill: FillOpt = "nonzero",
+    offset: OffsetOpt = None,
+    gap_radius: GapRadiusOpt = DEFAULT_GAP_RADIUS_MM,
+    dpi_y: DpiYOpt = None,
     units: UnitsOpt = "mm",
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
     fill_holes: FillHolesOpt = True,
-    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
-    scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified layers, make the rest.")] = False,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
-    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log what happens (resume, workers) on stderr.")] = False,
+    workers: WorkersOpt = 1,
+    scheduler: SchedulerOpt = None,
+    resume: ResumeOpt = False,
+    quiet: QuietOpt = False,
+    verbose: VerboseOpt = False,
     rotary: Annotated[bool, typer.Option("--rotary", help="Direct rotary slicing: per-nozzle firing images straight from the mesh (inkjet heads).")] = False,
     tilt: Annotated[float | None, typer.Option("--tilt", help="--rotary: head tilt, degrees (counter-clockwise positive).")] = None,
     radius: Annotated[float | None, typer.Option("--radius", help="--rotary: radius of the part's inner edge (smallest model X), mm.")] = None,
@@ -65,7 +66,8 @@ def slice_command(
     from ..io.layers import write_layer_folder
     from ..slicing import slice_mesh
 
-    setup_logging(verbose)
+    setup_logging(is_verbose(verbose))
+    quiet = is_quiet(quiet)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,

@@ -9,6 +9,7 @@ from typing import Annotated
 import typer
 
 from ..errors import ConfigError
+from .options import is_quiet, DpiYOpt, QuietOpt
 from ._common import DeviceOpt, JsonOpt, console, print_json
 
 METHODS = ("exact", "paper")
@@ -21,7 +22,7 @@ def transform_command(
     radius: Annotated[float, typer.Option("--radius", help="Radius of the design's first column (inner edge), mm.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="PRINT.png (several swathes: PRINT-s1.png, ...) and sidecar PRINT.json.")],
     method: Annotated[str, typer.Option("--method", help="exact (sample where every drop lands) or paper (polar + linear, eqs 1-6).")] = "exact",
-    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Circumferential density at the reference radius (default: the head's).")] = None,
+    dpi_y: DpiYOpt = None,
     ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="Reference radius of the clock, mm (default: each swathe's outermost track).")] = None,
     design_dpi: Annotated[float | None, typer.Option("--design-dpi", help="The design's resolution, dpi (default: the head's native dpi).")] = None,
     max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="Refuse designs that need more radial swathes.")] = None,
@@ -29,9 +30,10 @@ def transform_command(
     direction: Annotated[int, typer.Option("--direction", help="+1: platform turns counter-clockwise seen from above; -1 clockwise.")] = 1,
     invert: Annotated[bool, typer.Option("--invert", help="Dark pixels are ink (e.g. black shapes on white).")] = False,
     json_out: JsonOpt = False,
-    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No summary.")] = False,
+    quiet: QuietOpt = False,
 ) -> None:
     """Make IMAGE print-ready: rows = firing index, columns = nozzles, plus a sidecar JSON."""
+    quiet = is_quiet(quiet)
     from ..devices import InkjetDevice, load_device
     from ..io.images import read_grey_image
     from ..rotary.files import write_print

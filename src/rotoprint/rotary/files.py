@@ -166,7 +166,8 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
     Parameters
     ----------
     path : str or Path
-        A swathe PNG (``X.png``, ``X-s2.png``) or the sidecar ``X.json``.
+        A swathe PNG (``X.png``, ``X-s2.png``), the sidecar ``X.json``, or ``X.png`` (the name
+        given to ``rotoprint transform -o``) when the swathes were written as ``X-s1.png`` ...
 
     Returns
     -------
@@ -186,9 +187,11 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
         A swathe image that is not 8-bit greyscale or not the size the sidecar says.
     """
     p = Path(path)
-    if not p.exists():
-        raise InputFileError("no such file", path=p)
     sp = sidecar_path(p)
+    if not p.exists() and not (p.suffix.lower() == ".png" and sp.is_file()):
+        # PRINT.png is the name given to 'transform -o' even when the swathes were written
+        # as PRINT-s1.png ...: its sidecar PRINT.json names them
+        raise InputFileError("no such file", path=p)
     if not sp.exists():
         raise InputFileError(f"no sidecar {sp.name} beside it (written by 'rotoprint transform')", path=p)
     try:
