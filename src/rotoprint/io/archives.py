@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
-from .. import __version__
+from .._version import __version__
 from ..errors import ConfigError, ImageError, InputFileError
 from .atomic import MANIFEST_NAME, atomic_dir, atomic_file
 from .images import png_bytes

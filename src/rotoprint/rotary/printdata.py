@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from ..devices.models import InkjetHead
 from ..errors import ConfigError
 from .placement import Placement
