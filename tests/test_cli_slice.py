@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from rotoprint.examples import write_binary_stl
+from rotoprint.io.stl import write_binary_stl
 from rotoprint.testing import box_triangles, torus_mesh
 
 

@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from rotoprint import InputFileError, MeshError, load_mesh, make_transform
-from rotoprint.examples import write_binary_stl
+from rotoprint.io.stl import write_binary_stl
 from rotoprint.testing import box_triangles, torus_mesh
 
 

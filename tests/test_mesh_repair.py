@@ -12,7 +12,7 @@ from shapely.geometry import Polygon
 
 from rotoprint import load_device, load_mesh, slice_mesh
 from rotoprint._holes import boundary_loops, ear_clip
-from rotoprint.examples import write_binary_stl
+from rotoprint.io.stl import write_binary_stl
 from rotoprint.io.mesh import load_triangles
 from rotoprint.mesh import Mesh
 from rotoprint.testing import box_triangles, cylinder_mesh, uv_sphere_mesh

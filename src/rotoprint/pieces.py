@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .testing import box_triangles
+from .primitives import box_triangles
 
 __all__ = ["Feature", "feature_test_piece", "DEFAULT_WIDTHS_MM", "annulus_prism"]
 

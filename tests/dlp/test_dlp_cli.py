@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotoprint.examples import write_binary_stl
+from rotoprint.io.stl import write_binary_stl
 from rotoprint.io.archives import read_job
 from rotoprint.testing import box_triangles
 

@@ -90,3 +90,22 @@ def _read_ascii(data: bytes, path: str) -> np.ndarray:
         raise MeshError(f"ASCII STL is cut short: {n_solid} 'solid' blocks but {n_end} 'endsolid'", path=path)
     tokens = b" ".join(b" ".join(m.groups()) for m in matches).split()
     return np.array(tokens, dtype=np.float64).reshape(-1, 3, 3)
+
+
+def binary_stl_bytes(triangles: np.ndarray) -> bytes:
+    """``(N, 3, 3)`` triangles (any float dtype, mm) as the bytes of a binary STL (normals from the winding)."""
+    tri = np.asarray(triangles, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        ln = np.linalg.norm(n, axis=1, keepdims=True)
+    rec = np.zeros(len(tri), dtype=BINARY_RECORD)
+    rec["normal"] = np.divide(n, ln, out=np.zeros_like(n), where=np.isfinite(ln) & (ln > 0))
+    rec["vertices"] = tri
+    header = b"rotoprint binary STL".ljust(80, b" ")
+    return header + np.uint32(len(tri)).tobytes() + rec.tobytes()
+
+
+def write_binary_stl(path, triangles: np.ndarray) -> None:
+    """Write ``(N, 3, 3)`` triangles as a binary STL (normals from the winding)."""
+    with open(path, "wb") as fh:
+        fh.write(binary_stl_bytes(triangles))

@@ -16,9 +16,9 @@ from pathlib import Path
 import contextlib
 
 from ..errors import ConfigError, InputFileError
-from ..examples import binary_stl_bytes
+from ..io.stl import binary_stl_bytes
 from ..io.atomic import atomic_file
-from ..testing import box_triangles
+from ..primitives import box_triangles
 
 __all__ = ["EXAMPLES", "write_example"]
 

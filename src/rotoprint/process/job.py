@@ -238,12 +238,6 @@ class ResolvedJob:
                 return p
         raise ConfigError(f"no part named {name!r}", path=self.source)
 
-    def head_for_ink(self, ink: str) -> int:
-        for j, h in enumerate(self.spec.printer.heads):
-            if h.ink == ink:
-                return j
-        raise ConfigError(f"no head carries the ink {ink!r}", path=self.source)
-
 
 def _check_refs(spec: JobSpec, lib: MaterialLibrary, src: str | None) -> None:
     def err(msg: str):
@@ -371,7 +365,3 @@ def load_job(path: str | Path) -> ResolvedJob:
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"not valid TOML: {exc}", path=p) from None
     return parse_job(data, base_dir=p.resolve().parent, source=str(p))
-
-
-def material_of(job: ResolvedJob, name: str) -> Material:
-    return job.materials[name]

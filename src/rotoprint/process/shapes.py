@@ -15,7 +15,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ..testing import box_triangles, extrude_polygon
+from ..primitives import box_triangles, extrude_polygon
 
 __all__ = ["BoxShape", "CylinderShape", "SquareCoilShape", "InterdigitatedShape", "Shape", "coil_centreline"]
 
