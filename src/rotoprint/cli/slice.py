@@ -31,7 +31,7 @@ def slice_command(
     mesh: Annotated[Path, typer.Argument(help="Mesh file: STL, OBJ, PLY, 3MF, OFF, GLB.")],
     device: DeviceOpt,
     layer_height: LayerHeightOpt,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created; replaced only if it holds an earlier manifest).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created; replaced only if provably an earlier rotoprint output, or with --force).")],
     fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X. Default: the device's own direction.")] = None,
     fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero (overlapping shells union) or evenodd.")] = "nonzero",
     offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,

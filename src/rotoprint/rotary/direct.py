@@ -579,7 +579,7 @@ def write_rotary_slices(
     job : DirectSliceJob
         From :func:`slice_rotary`; each layer prints as ``(F_j, N) uint8`` swathe images.
     out_dir : str or Path
-        The output folder; replaced only if it holds an earlier rotoprint output.
+        The output folder; replaced only if it is provably an earlier rotoprint output.
     device_name : str
         Recorded in the sidecars and the manifest.
     options : dict
