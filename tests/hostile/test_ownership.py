@@ -298,3 +298,18 @@ def test_full_disk_is_one_line_naming_the_file_and_nothing_is_left(run_cli, tmp_
     line = one_line_error(code, err, "no space left")
     assert str(tmp_path) in line  # names the file it was writing
     assert tree(tmp_path) == before
+
+
+@pytest.mark.parametrize("suffix", [".png", ".svg"])
+def test_head_plot_replaces_its_own_figure_only(run_cli, tmp_path, suffix):
+    fig = tmp_path / f"f5{suffix}"
+    args = ("head", "--device", "omnidot760", "--tilt", "20", "--plot", fig)
+    assert run_cli(*args)[0] == 0
+    assert file_not_ours(fig) is None
+    assert run_cli(*args)[0] == 0  # ours: replaced
+    mine = tmp_path / f"mine{suffix}"
+    mine.write_bytes(b"<svg>my drawing</svg>" if suffix == ".svg" else fig.read_bytes()[:-40] + b"x" * 40)
+    before = tree(tmp_path)
+    code, _, err = run_cli("head", "--device", "omnidot760", "--tilt", "20", "--plot", mine)
+    one_line_error(code, err, mine.name, "--force")
+    assert tree(tmp_path) == before

@@ -36,7 +36,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from ..errors import InputFileError, ResourceError
-from .ownership import MARKER_NAME, folder_not_ours, mark_json, mark_png, path_not_ours, remove_ours, write_folder_marker
+from .ownership import MARKER_NAME, folder_not_ours, mark_json, mark_png, mark_svg, path_not_ours, remove_ours, write_folder_marker
 
 try:  # POSIX
     import fcntl
@@ -359,7 +359,8 @@ def atomic_dir(path: str | Path, *, kind: str = "output", inputs: Iterable[str |
 
 def write_owned_file(path: str | Path, data: bytes, *, kind: str, inputs: Iterable[str | Path | None] = (),
                      force: bool = False, marked: bool = False) -> bytes:
-    """Write ``data`` to ``path`` marked as ours (PNG: a ``tEXt`` chunk; JSON: a marker field),
+    """Write ``data`` to ``path`` marked as ours (PNG: a ``tEXt`` chunk; JSON: a marker field;
+    SVG: a trailing comment; other kinds unmarked, so they are replaced only with ``force``),
     through ``<path>.part`` and a rename; returns the bytes written.
 
     An existing ``path`` is replaced only when it is empty or provably ours (or ``force``).
@@ -372,6 +373,8 @@ def write_owned_file(path: str | Path, data: bytes, *, kind: str, inputs: Iterab
         data = mark_png(data, kind)
     elif path.suffix.lower() == ".json":
         data = (json.dumps(mark_json(json.loads(data)), indent=2) + "\n").encode("utf-8")
+    elif path.suffix.lower() == ".svg":
+        data = mark_svg(data, kind)
     with OutputClaim(path, is_dir=False, kind=kind, inputs=inputs, force=force) as c:
         try:
             c.part.write_bytes(data)

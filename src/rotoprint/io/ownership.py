@@ -10,6 +10,8 @@ rotoprint replaces or deletes a path only when it can prove it wrote everything 
 * a **PNG** carries a ``tEXt`` chunk ``rotoprint-output`` with the SHA-256 of its image data;
 * an **SL1 / SL1S archive** (a zip) carries the marker in its archive comment, with the
   SHA-256 of its member list (names, CRC-32s and sizes from the central directory);
+* an **SVG** ends in a comment ``<!-- rotoprint-output {...} -->`` with the SHA-256 of the
+  bytes before it;
 * a **JSON** file we wrote holds a ``rotoprint_output`` object with the SHA-256 of the rest
   of its content.
 
@@ -37,6 +39,7 @@ __all__ = [
     "mark_png",
     "zip_marker",
     "mark_json",
+    "mark_svg",
     "remove_ours",
 ]
 
@@ -261,6 +264,31 @@ def _json_not_ours(path: Path) -> str | None:
     return "it carries no rotoprint marker (or was changed)"
 
 
+_SVG_TAG = b"<!-- rotoprint-output "
+
+
+def mark_svg(data: bytes, kind: str) -> bytes:
+    """``data`` (an SVG document) followed by a comment marker of ours."""
+    text = _canonical({"format": FORMAT, "kind": kind, "sha256": hashlib.sha256(data).hexdigest()})
+    return data + _SVG_TAG + text + b" -->\n"
+
+
+def _svg_not_ours(path: Path) -> str | None:
+    if path.stat().st_size > 2**31:
+        return "it is too large to check"
+    data = path.read_bytes()
+    i = data.rfind(_SVG_TAG)
+    if i < 0 or not data.endswith(b" -->\n"):
+        return "it carries no rotoprint marker"
+    try:
+        m = json.loads(data[i + len(_SVG_TAG) : -len(b" -->\n")])
+    except ValueError:
+        return "it carries no rotoprint marker"
+    if isinstance(m, dict) and m.get("format") == FORMAT and m.get("sha256") == hashlib.sha256(data[:i]).hexdigest():
+        return None
+    return "its rotoprint marker does not match its content (the file was changed)"
+
+
 def file_not_ours(path: str | Path) -> str | None:
     """Why the file ``path`` is not provably ours (PNG, SL1/SL1S, JSON), or None when it is."""
     path = Path(path)
@@ -273,6 +301,8 @@ def file_not_ours(path: str | Path) -> str | None:
         return _zip_not_ours(path)
     if suffix == ".json":
         return _json_not_ours(path)
+    if suffix == ".svg":
+        return _svg_not_ours(path)
     return "rotoprint marks no file of this kind"
 
 
