@@ -260,8 +260,11 @@ def test_a_foreign_lock_file_is_not_overwritten(run_cli, tmp_path, box):
     assert tree(tmp_path) == before
 
 
-@pytest.mark.parametrize("cmd, out", [("slice", "out"), ("dlp", "job.sl1"), ("dlp", "job")])
-def test_full_disk_is_one_line_naming_the_file_and_nothing_is_left(run_cli, tmp_path, box, monkeypatch, cmd, out):
+@pytest.mark.parametrize("cmd, out, where", [("slice", "out", ".partial"), ("dlp", "job.sl1", ".partial"), ("dlp", "job", ".partial"),
+                                             ("dlp", "job.sl1", ".part"), ("dlp", "job", ".part")])
+def test_full_disk_is_one_line_naming_the_file_and_nothing_is_left(run_cli, tmp_path, box, monkeypatch, cmd, out, where):
+    """The disk fills while the layers are made (in .partial) or while the archive or folder
+    is assembled (in .part)."""
     (tmp_path / "mine.txt").write_text("mine")
     before = tree(tmp_path)
     import builtins
@@ -287,7 +290,7 @@ def test_full_disk_is_one_line_naming_the_file_and_nothing_is_left(run_cli, tmp_
 
     def full_open(file, mode="r", *a, **k):
         fh = real_open(file, mode, *a, **k)
-        if "w" in mode and "b" in mode and str(tmp_path) in str(file) and not str(file).endswith(".lock"):
+        if "w" in mode and "b" in mode and str(tmp_path) in str(file) and f"{where}/" in f"{file}/":
             return Full(fh)
         return fh
 
@@ -296,7 +299,7 @@ def test_full_disk_is_one_line_naming_the_file_and_nothing_is_left(run_cli, tmp_
     code, _, err = run_cli(cmd, box, *SLICE, "-o", tmp_path / out)
     monkeypatch.undo()
     line = one_line_error(code, err, "no space left")
-    assert str(tmp_path) in line  # names the file it was writing
+    assert f"{tmp_path / out}" in line  # names the file it was writing
     assert tree(tmp_path) == before
 
 

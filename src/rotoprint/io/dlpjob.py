@@ -13,7 +13,7 @@ from ..runner import MaskLayerResult
 from ..slicing.fibres import SliceJob
 from .archives import JobInfo, _Encoded, format_from_path, write_encoded
 from .layers import run_layers, task_from_job
-from .atomic import OutputClaim
+from .atomic import OutputClaim, disk_full
 from .resumable import PartialOutput
 
 __all__ = ["write_dlp_job"]
@@ -125,6 +125,11 @@ def write_dlp_job(
                     fp = (0, 0, footprint) if (i == 0 and c == 0) else None
                     yield _Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp)
 
-        summary = write_encoded(out, items(), info, fmt=fmt, claim=claim)
+        try:
+            summary = write_encoded(out, items(), info, fmt=fmt, claim=claim)
+        except OSError as exc:
+            if disk_full(exc, out) is not None:
+                partial.discard()  # a full disk: free what the run took (the claim names the file)
+            raise
         partial.discard()
     return summary
