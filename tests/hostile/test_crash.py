@@ -149,3 +149,22 @@ def test_check_report_killed_between_renames(run_cli, work):
     assert run_cli(*args)[0] == 0
     assert tree(out) == first
     assert strays(work) == []
+
+
+ROTARY = ("-d", "omnidot760", "--layer-height", "0.5", "--rotary", "--tilt", "20", "--radius", "60")
+
+
+@pytest.mark.parametrize("stage, rerun", [("layer-1", "resume"), ("install-old-moved", "plain")])
+def test_rotary_slices_killed_then_rerun(run_cli, work, stage, rerun):
+    (work / "c").mkdir()
+    assert run_cli("slice", "box.stl", *ROTARY, "-o", "c/rot", "-q")[0] == 0  # the clean run
+    old = ("-d", "omnidot760", "--layer-height", "1", *ROTARY[4:])
+    assert run_cli("slice", "box.stl", *old, "-o", "rot", "-q")[0] == 0  # an earlier output of ours
+    before = tree(work / "rot")
+    _killed_run(work, stage, "slice", "box.stl", *ROTARY, "-o", "rot", "-q")
+    if stage == "layer-1":
+        assert tree(work / "rot") == before
+    code, _, err = run_cli("slice", "box.stl", *ROTARY, "-o", "rot", "-q", *(["--resume"] if rerun == "resume" else []))
+    assert code == 0, err
+    assert tree(work / "rot") == tree(work / "c" / "rot")
+    assert strays(work) == []
