@@ -80,11 +80,10 @@ def slice_command(
     dev = load_device(device, **overrides)
     m = load_mesh_from_options(mesh, units, scale, rotate, translate)
     if rotary:
-        _slice_rotary(m, mesh, dev, out, layer_height=layer_height, tilt=tilt, radius=radius, angle=angle, direction=direction,
+        _slice_rotary(m, mesh, dev, out, force=force, inputs=inputs, layer_height=layer_height, tilt=tilt, radius=radius, angle=angle, direction=direction,
                       ref_radius=ref_radius, max_swathes=max_swathes, equalise=equalise, reference_images=reference_images,
                       fill=fill, gap_radius=gap_radius, quiet=quiet, workers=workers, scheduler=scheduler, resume=resume,
-                      options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate},
-                      force=force, inputs=inputs)
+                      options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate})
         return
     job = slice_mesh(
         m,
