@@ -12,19 +12,18 @@ from ..errors import ConfigError
 from ._common import (
     styled,
     DeviceOpt,
-    ForceOpt,
     LayerHeightOpt,
     RotateOpt,
     ScaleOpt,
     TranslateOpt,
     UnitsOpt,
     console,
-    device_input,
     load_mesh_from_options,
     parse_pair,
     progress,
     setup_logging,
 )
+from ._common import ForceOpt, device_input
 
 
 def slice_command(
