@@ -22,12 +22,14 @@ from ._common import (
     print_table,
     styled,
     DeviceOpt,
+    ForceOpt,
     JsonOpt,
     RotateOpt,
     ScaleOpt,
     FillHolesOpt,
     TranslateOpt,
     UnitsOpt,
+    device_input,
     load_mesh_from_options,
     out_console,
     parse_pair,
@@ -156,7 +158,7 @@ def check_command(
     layer_height: Annotated[float | None, typer.Option("--layer-height", help="Layer height, mm (needed with MESH).")] = None,
     min_wall: Annotated[float | None, typer.Option("--min-wall", help="Thinnest wall that prints, mm. Default: the device pitch, or an inkjet's drop diameter if larger.")] = None,
     min_gap: Annotated[float | None, typer.Option("--min-gap", help="Narrowest gap that stays open, mm. Default as --min-wall.")] = None,
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Output folder: report.json and overlays/layer_NNNNN.png (created; replaced only if it holds an earlier report.json).")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Output folder: report.json and overlays/layer_NNNNN.png (created; replaced only if provably an earlier rotoprint output, or with --force).")] = None,
     json_out: JsonOpt = False,
     fibre_angle: FibreAngleOpt = None,
     orientations: Annotated[str | None, typer.Option("--orientations", help="'A:B:STEP' degrees: check every fibre angle and say which loses least.")] = None,
@@ -179,6 +181,7 @@ def check_command(
     translate: TranslateOpt = None,
     fill_holes: FillHolesOpt = True,
     quiet: QuietOpt = False,
+    force: ForceOpt = False,
 ) -> None:
     """Check MESH for walls and gaps below the device's minimum, features lost to the raster,
     islands and (--mask) features that do not cure. Exit 0: nothing falls short; 3: something
@@ -187,7 +190,11 @@ def check_command(
     from ..check import CheckOptions, check_printability, compare_orientations, device_limits, mask_model, overlay_image
     from ..check.options import resolution_for
     from ..devices import load_device
-    from ..io.atomic import atomic_dir, atomic_file
+    from ..io.atomic import atomic_dir, atomic_file, check_output_path
+
+    inputs = [mesh, device_input(device)]
+    if out is not None:
+        check_output_path(out, is_dir=True, inputs=inputs, force=force)  # before anything is read
 
     # -------- every option is validated before anything is read or written
     dev = load_device(device, **({"dpi_y": dpi_y} if dpi_y is not None else {}))
@@ -278,7 +285,7 @@ def check_command(
         return rep, data, orient, written
 
     if out is not None:
-        with atomic_dir(out, owned_marker=REPORT_NAME) as tmp:
+        with atomic_dir(out, kind="check-report", inputs=inputs, force=force) as tmp:
             rep, data, orient, written = run(tmp)
     else:
         rep, data, orient, written = run(None)

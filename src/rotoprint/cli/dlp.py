@@ -12,6 +12,7 @@ from ..errors import ConfigError
 from .options import is_quiet, is_verbose, FibreAngleOpt, OffsetOpt, QuietOpt, ResumeOpt, SchedulerOpt, VerboseOpt, WorkersOpt
 from ._common import (
     DeviceOpt,
+    ForceOpt,
     LayerHeightOpt,
     RotateOpt,
     ScaleOpt,
@@ -19,6 +20,7 @@ from ._common import (
     TranslateOpt,
     UnitsOpt,
     console,
+    device_input,
     load_mesh_from_options,
     parse_pair,
     progress,
@@ -53,6 +55,7 @@ def dlp_command(
     resume: ResumeOpt = False,
     quiet: QuietOpt = False,
     verbose: VerboseOpt = False,
+    force: ForceOpt = False,
 ) -> None:
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
@@ -61,9 +64,13 @@ def dlp_command(
     from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
 
+    from ..io.atomic import check_output_path
+
     setup_logging(is_verbose(verbose))
     quiet = is_quiet(quiet)
     kind = format_from_path(out, fmt)
+    inputs = [mesh, device_input(device)]
+    check_output_path(out, is_dir=kind not in ("sl1", "sl1s"), inputs=inputs, force=force)  # before any work
     overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
     dev = load_device(device, **overrides)
     if not isinstance(dev, ProjectorDevice):
@@ -108,7 +115,7 @@ def dlp_command(
     with progress(quiet) as bar:
         task = bar.add_task(f"{mode} masks", total=info.mask_count)
         summary = write_dlp_job(job, out, info, options, fmt=kind, workers=workers, scheduler=scheduler, resume=resume,
-                                on_mask=lambda i: bar.advance(task))
+                                on_mask=lambda i: bar.advance(task), force=force, inputs=inputs)
     if not quiet:
         vol = summary.get("volume_mm3", 0.0)
         console.print(

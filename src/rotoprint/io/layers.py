@@ -11,15 +11,15 @@ from __future__ import annotations
 import dataclasses
 import json
 import logging
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
 from .. import __version__
 from ..errors import ConfigError
 from ..runner import LayerTask, check_scheduler_address, produce_layers, render_layer, task_fingerprint
 from ..slicing.fibres import SliceJob
-from .atomic import MANIFEST_NAME
-from .resumable import PartialOutput, check_resources, check_target, partial_path
+from .atomic import MANIFEST_NAME, OutputClaim
+from .resumable import PartialOutput, check_resources, partial_path
 
 __all__ = ["write_layer_folder", "layer_filename", "task_from_job", "partial_path", "run_layers"]
 
@@ -149,6 +149,8 @@ def write_layer_folder(
     scheduler: str | None = None,
     resume: bool = False,
     on_layer: Callable[[int], None] | None = None,
+    force: bool = False,
+    inputs: Iterable[str | Path | None] = (),
 ) -> dict:
     """Slice every layer of ``job`` into ``out_dir``; returns the manifest.
 
@@ -176,6 +178,10 @@ def write_layer_folder(
         Keep the verified layers of an earlier run of the same job.
     on_layer : callable, optional
         Called with the index of every layer once it is made (resumed ones included).
+    force : bool
+        Replace an existing ``out_dir`` even if it is not provably ours.
+    inputs : iterable of path
+        Files the run read (the mesh, a device file): ``out_dir`` must not be or hold one.
 
     Returns
     -------
@@ -187,28 +193,28 @@ def write_layer_folder(
     ConfigError
         ``workers < 1`` or a malformed ``scheduler`` address.
     InputFileError
-        ``out_dir`` must not be written or replaced (missing parent folder, a file, or a
-        non-empty folder without ``manifest.json``), or ``<out_dir>.partial`` exists without
-        a journal.
+        ``out_dir`` must not be written or replaced (missing parent folder, a file, an input,
+        or a folder not provably ours, see :mod:`rotoprint.io.ownership`), another run is
+        writing it, or ``<out_dir>.partial`` exists without a journal.
     ResourceError
         The run would need more disk or memory than is available (checked before any layer is
         written).
     """
     out = Path(out_dir)
-    check_target(out, is_dir=True)
-    task = task_from_job(job)
-    partial = PartialOutput(out, task._key, len(job), resume=resume)
-    with partial:  # a run that fails before finishing a layer leaves nothing
-        for i in partial.done:
-            if on_layer is not None:
-                on_layer(i)
-        for res in run_layers(len(job), job.grid.width * job.grid.height, task, partial, workers=workers, scheduler=scheduler):
-            partial.record(res.index, {layer_filename(res.index): res.png}, pixels_on=res.pixels_on, gaps=res.gaps)
-            if on_layer is not None:
-                on_layer(res.index)
-        manifest = _manifest(job, partial.done, device_name, device, options)
-        (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-    partial.finish_as_folder()
+    with OutputClaim(out, is_dir=True, kind="cartesian-layers", inputs=inputs, force=force) as claim:
+        task = task_from_job(job)
+        partial = PartialOutput(out, task._key, len(job), resume=resume)
+        with partial:  # a run that fails before finishing a layer leaves nothing
+            for i in partial.done:
+                if on_layer is not None:
+                    on_layer(i)
+            for res in run_layers(len(job), job.grid.width * job.grid.height, task, partial, workers=workers, scheduler=scheduler):
+                partial.record(res.index, {layer_filename(res.index): res.png}, pixels_on=res.pixels_on, gaps=res.gaps)
+                if on_layer is not None:
+                    on_layer(res.index)
+            manifest = _manifest(job, partial.done, device_name, device, options)
+            (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+        partial.finish_as_folder(claim)
     return manifest
 
 

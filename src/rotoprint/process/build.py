@@ -2,7 +2,10 @@
 printability, estimates, simulator overlays, ``plan.json`` and ``report.html``.
 
 Output folder (written under a temporary name and renamed when complete; nothing partial is
-left on error; an existing folder is replaced only when it holds an earlier ``plan.json``)::
+left on error; an existing folder is replaced only when it is provably an earlier rotoprint
+output, see :mod:`rotoprint.io.ownership`, or with ``force``)::
+
+    rotoprint-output.json          the ownership marker: every file written, with its SHA-256
 
     plan.json                      format "rotoprint-build-plan": heads, materials, estimates,
                                    warnings, printability, resistance, and per layer the
@@ -19,7 +22,7 @@ import json
 import logging
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -101,8 +104,26 @@ def _simulate_layers(n_layers: int, present: dict[str, list[int]], k: int) -> di
     return out
 
 
+def job_inputs(job: ResolvedJob) -> list[Path]:
+    """The files a job reads (mesh files, its materials file, a device file), absolute.
+
+    Parameters
+    ----------
+    job : ResolvedJob
+
+    Returns
+    -------
+    list of Path
+    """
+    base = job.base_dir
+    names = [p.mesh for p in job.spec.parts if p.mesh is not None]
+    names += [n for n in (job.spec.job.materials_file, getattr(getattr(job.spec, "printer", None), "device", None)) if n]
+    return [Path(n) if Path(n).is_absolute() else base / n for n in names]
+
+
 def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, int, int], None] | None = None,
-              check: bool | None = None, report: bool = True) -> BuildResult:
+              check: bool | None = None, report: bool = True, force: bool = False,
+              inputs: Iterable[str | Path] = ()) -> BuildResult:
     """Run the whole pipeline for ``job`` and write ``out_dir``.
 
     Parameters
@@ -115,6 +136,11 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
         Run the printability check on every part (default: the job's ``process.check``).
     report : bool
         Write ``report.html``.
+    force : bool
+        Replace an existing ``out_dir`` even if it is not provably ours.
+    inputs : iterable of path
+        Files the run read besides the job's own (:func:`job_inputs`): ``out_dir`` must not be
+        or hold one.
 
     Returns
     -------
@@ -144,7 +170,7 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
     timings = {}
     out = Path(out_dir)
     final = out.resolve()
-    with atomic_dir(out, owned_marker="plan.json") as tmp:
+    with atomic_dir(out, kind="build", inputs=[*inputs, *job_inputs(job)], force=force) as tmp:
         (tmp / "layers").mkdir()
         (tmp / "overlays").mkdir()
         # printability of every part (exact cross-sections, Cartesian grid at the head's pitch)

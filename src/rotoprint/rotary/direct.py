@@ -528,6 +528,8 @@ def write_rotary_slices(
     workers: int = 1,
     scheduler: str | None = None,
     resume: bool = False,
+    force: bool = False,
+    inputs=(),
 ) -> dict:
     """Write every layer of ``job`` into ``out_dir``; returns the manifest.
 
@@ -546,7 +548,7 @@ def write_rotary_slices(
     job : DirectSliceJob
         From :func:`slice_rotary`; each layer prints as ``(F_j, N) uint8`` swathe images.
     out_dir : str or Path
-        The output folder; replaced only if it holds an earlier rotoprint output.
+        The output folder; replaced only if it is provably an earlier rotoprint output.
     device_name : str
         Recorded in the sidecars and the manifest.
     options : dict
@@ -563,6 +565,10 @@ def write_rotary_slices(
         Address of a Dask distributed scheduler to run the layers on instead.
     resume : bool
         Continue an interrupted run from its ``<out>.partial`` journal.
+    force : bool
+        Replace an existing ``out_dir`` even if it is not provably ours.
+    inputs : iterable of path
+        Files the run read (the mesh, a device file): ``out_dir`` must not be or hold one.
 
     Returns
     -------
@@ -572,51 +578,53 @@ def write_rotary_slices(
     Raises
     ------
     InputFileError
-        The output folder holds something that is not an earlier rotoprint output, or cannot
-        be written.
+        The output folder holds something that is not provably an earlier rotoprint output
+        (see :mod:`rotoprint.io.ownership`), is or holds an input, is in use by another run,
+        or cannot be written.
     ResourceError
         Not enough disk space for the run (checked before anything is written).
     """
     import dataclasses
 
     from ..io.layers import run_layers
-    from ..io.resumable import PartialOutput, check_target
+    from ..io.atomic import OutputClaim
+    from ..io.resumable import PartialOutput
     from ..runner import LayerTask, task_fingerprint
 
     out = Path(out_dir)
-    check_target(out, is_dir=True)
-    mesh = job.slice_job.mesh
-    task = LayerTask(
-        vertices=mesh.vertices, faces=mesh.faces, source=mesh.source,
-        device=job.slice_job.device.model_dump(mode="json"), slice_options={},
-        face_edges=mesh.topology.face_edges, suspect_edges=mesh.topology.suspect_edges,
-        rotary={"options": job.rotary_options, "device_name": device_name, "reference_images": bool(reference_images)},
-    )
-    task = dataclasses.replace(task, _key=task_fingerprint(task))
-    partial = PartialOutput(out, task._key, len(job), resume=resume)
-    px = sum(job.head.nozzles * t.firings for t in job.tracks)
-    with partial:  # a run that fails before finishing a layer leaves nothing
-        for i in partial.done:
-            if on_layer is not None:
-                on_layer(i)
-        for res in run_layers(len(job), px, task, partial, workers=workers, scheduler=scheduler):
-            partial.record(res.index, res.files, entry=res.record)
-            if on_layer is not None:
-                on_layer(res.index)
-        manifest = {
-            "format": MANIFEST_FORMAT,
-            "version": 1,
-            "rotoprint": __version__,
-            "device": device_name,
-            "head": job.head.model_dump(mode="json"),
-            "heads": [{"index": 0, "mount_angle_deg": job.plan.mount_angle_deg}],
-            **job.to_json(),
-            "mesh": mesh_info or {},
-            "options": options,
-            "landing": "nozzle k at firing i lands at (r_k, phi_k - direction * i * dphi_rad) in the platform frame; "
-            "row b of a swathe image is firing first_firing_index + b (rotary-geometry.md s. 3)",
-            "layers": [partial.done[i]["entry"] for i in range(len(job))],
-        }
-        (partial.dir / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-    partial.finish_as_folder()
+    with OutputClaim(out, is_dir=True, kind="rotary-slices", inputs=inputs, force=force) as claim:
+        mesh = job.slice_job.mesh
+        task = LayerTask(
+            vertices=mesh.vertices, faces=mesh.faces, source=mesh.source,
+            device=job.slice_job.device.model_dump(mode="json"), slice_options={},
+            face_edges=mesh.topology.face_edges, suspect_edges=mesh.topology.suspect_edges,
+            rotary={"options": job.rotary_options, "device_name": device_name, "reference_images": bool(reference_images)},
+        )
+        task = dataclasses.replace(task, _key=task_fingerprint(task))
+        partial = PartialOutput(out, task._key, len(job), resume=resume)
+        px = sum(job.head.nozzles * t.firings for t in job.tracks)
+        with partial:  # a run that fails before finishing a layer leaves nothing
+            for i in partial.done:
+                if on_layer is not None:
+                    on_layer(i)
+            for res in run_layers(len(job), px, task, partial, workers=workers, scheduler=scheduler):
+                partial.record(res.index, res.files, entry=res.record)
+                if on_layer is not None:
+                    on_layer(res.index)
+            manifest = {
+                "format": MANIFEST_FORMAT,
+                "version": 1,
+                "rotoprint": __version__,
+                "device": device_name,
+                "head": job.head.model_dump(mode="json"),
+                "heads": [{"index": 0, "mount_angle_deg": job.plan.mount_angle_deg}],
+                **job.to_json(),
+                "mesh": mesh_info or {},
+                "options": options,
+                "landing": "nozzle k at firing i lands at (r_k, phi_k - direction * i * dphi_rad) in the platform frame; "
+                "row b of a swathe image is firing first_firing_index + b (rotary-geometry.md s. 3)",
+                "layers": [partial.done[i]["entry"] for i in range(len(job))],
+            }
+            (partial.dir / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+        partial.finish_as_folder(claim)
     return manifest
