@@ -285,12 +285,10 @@ def exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup | None
     (1, 764)
     """
     st = options_from(RotarySetup, setup, keywords, what="exact_maps")
-    st = replace(st, tilt_deg=float(st.tilt_deg), mount_angle_deg=float(st.mount_angle_deg), direction=int(st.direction))
+    if not (type(st.tilt_deg) is float and type(st.mount_angle_deg) is float and type(st.direction) is int):
+        st = replace(st, tilt_deg=float(st.tilt_deg), mount_angle_deg=float(st.mount_angle_deg), direction=int(st.direction))
     return _exact_maps(head, placement, st)
 
-
-exact_maps.cache_clear = lambda: _exact_maps.cache_clear()  # type: ignore[attr-defined]
-exact_maps.cache_info = lambda: _exact_maps.cache_info()  # type: ignore[attr-defined]
 
 
 @functools.lru_cache(maxsize=8)
@@ -385,6 +383,10 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
         swathes=tuple(maps),
         kernel=kernel,
     )
+
+# the cache (8 maps, keyed by head, placement and setup) is emptied and inspected as before
+exact_maps.cache_clear = _exact_maps.cache_clear  # type: ignore[attr-defined]
+exact_maps.cache_info = _exact_maps.cache_info  # type: ignore[attr-defined]
 
 
 def transform_exact(design: np.ndarray, head: InkjetHead, placement: Placement, setup: RotarySetup | None = None, *,

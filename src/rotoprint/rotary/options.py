@@ -5,6 +5,7 @@ height, the fill, plus the setup). Frozen: nothing is set on them after they are
 
 from __future__ import annotations
 
+import functools
 from dataclasses import asdict, dataclass, fields, replace
 from typing import Any
 
@@ -123,12 +124,19 @@ class RotarySliceOptions:
         return d
 
 
+@functools.cache
+def _field_names(cls) -> frozenset[str]:
+    return frozenset(f.name for f in fields(cls))
+
+
 def options_from(cls, options, keywords: dict[str, Any], *, what: str):
     """``options`` (a ``cls`` or None) with the fields named in ``keywords`` replaced.
     Raises :class:`~rotoprint.errors.ConfigError` on an unknown keyword, a missing required
     field or an ``options`` of another type."""
-    names = {f.name for f in fields(cls)}
-    unknown = sorted(set(keywords) - names)
+    names = _field_names(cls)
+    if options is not None and not keywords and isinstance(options, cls):
+        return options
+    unknown = sorted(keywords.keys() - names)
     if unknown:
         raise ConfigError(f"{what}: unknown option {unknown[0]!r}; options: {', '.join(sorted(names))}")
     if options is None:
