@@ -177,3 +177,27 @@ def test_format_from_path():
         format_from_path("a.zip")
     with pytest.raises(ConfigError, match="format must be one of"):
         format_from_path("a", "ctb")
+
+
+def test_format_registry_one_module_per_format(tmp_path):
+    """Every format is a registry entry from its own module; writing and reopening goes through it."""
+    import importlib
+
+    from rotoprint.io import archives
+    from rotoprint.io.formats import FORMATS as REGISTRY, by_kind, by_suffix
+
+    assert archives.FORMATS == tuple(REGISTRY) == ("sl1", "sl1s", "png", "perfactory")
+    modules = {name: importlib.import_module(f.write.func.__module__ if hasattr(f.write, "func") else f.write.__module__)
+               for name, f in REGISTRY.items()}
+    assert {m.__name__.rsplit(".", 1)[1] for m in modules.values()} == {"sl1", "png", "perfactory"}
+    assert by_suffix(".sl1s").name == "sl1s" and by_suffix(".zip") is None
+    assert by_kind("perfactory-job").name == "perfactory" and by_kind(None).name == "png"
+    assert archives.mask_filename(3, "perfactory") == "00003.png" and archives.mask_filename(3, "png") == "mask_00003.png"
+    dev, job = _job()
+    opts = MaskOptions(mode="binary")
+    for name, form in REGISTRY.items():
+        out = tmp_path / (f"j.{name}" if not form.is_dir else name)
+        write_job(out, iter_masks(job, opts), _info(job, dev, opts), fmt=name)
+        back = read_job(out)
+        assert back.format == name and len(back) == len(job)
+        assert out.is_dir() == form.is_dir

@@ -1,0 +1,232 @@
+"""What the DLP output formats share: the job description (:class:`JobInfo`), the running
+statistics, ini tables, thumbnails, reproducible zip entries and dates, the reopened job
+(:class:`ArchiveContents`), and :class:`ArchiveFormat`, the entry every format module gives
+the registry in :mod:`rotoprint.io.formats`."""
+
+from __future__ import annotations
+
+import datetime
+import io
+import re
+import zipfile
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from PIL import Image
+
+from ...errors import ConfigError, ImageError, InputFileError
+
+#: Keys of ``config.ini`` written in every SL1 / SL1S archive.
+CONFIG_KEYS = (
+    "action", "jobDir", "layerHeight", "expTime", "expTimeFirst", "expUserProfile",
+    "fileCreationTimestamp", "hollow", "materialName", "numFade", "numFast", "numSlow",
+    "printProfile", "printTime", "printerModel", "printerProfile", "printerVariant",
+    "prusaSlicerVersion", "usedMaterial",
+)
+#: Keys of ``prusaslicer.ini`` (the seven ``display_*`` keys are required by PrusaSlicer).
+PRUSASLICER_KEYS = (
+    "display_width", "display_height", "display_pixels_x", "display_pixels_y",
+    "display_mirror_x", "display_mirror_y", "display_orientation", "layer_height",
+    "exposure_time", "initial_exposure_time", "gamma_correction", "printer_model",
+    "printer_technology", "faded_layers",
+)
+THUMBNAIL_SIZES = ((400, 400), (800, 480))
+#: Seconds per layer added to the exposure for the print-time estimate (tilt, settle).
+SL1_TILT_TIME_S = 5.0
+PERFACTORY_CFG = "build.cfg"
+PERFACTORY_TXT = "job.txt"
+
+
+@dataclass(frozen=True)
+class JobInfo:
+    """What an output says about the job besides the masks.
+
+    ``mesh`` and ``device`` are JSON-ready dicts (``Mesh.info()``, ``device.model_dump()``).
+    """
+
+    job_name: str
+    layer_height_mm: float
+    layer_count: int
+    copies: int
+    width_px: int
+    height_px: int
+    pixel_x_mm: float
+    pixel_y_mm: float
+    mirror_x: bool
+    mirror_y: bool
+    orientation: str
+    exposure_s: float
+    first_exposure_s: float
+    first_exposure_layers: int
+    printer_model: str
+    material_name: str = "rotoprint resin"
+    device_name: str = ""
+    device: dict = field(default_factory=dict)
+    mesh: dict = field(default_factory=dict)
+    source: str = ""
+    options: dict = field(default_factory=dict)
+    grid: dict = field(default_factory=dict)
+
+    @property
+    def mask_count(self) -> int:
+        return self.layer_count * self.copies
+
+
+_JOB_NAME = re.compile(r"[^A-Za-z0-9_-]+")
+
+
+def job_dir_name(path: str | Path) -> str:
+    """``jobDir`` of an archive: the file stem with anything but ``[A-Za-z0-9_-]`` as '_'."""
+    name = _JOB_NAME.sub("_", Path(path).stem) or "job"
+    return name
+
+
+def _ini(d: dict) -> bytes:
+    return "".join(f"{k} = {v}\n" for k, v in d.items()).encode("utf-8")
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.6g}"
+
+
+class _Stats:
+    """Running statistics over the masks: material volume and the footprint for thumbnails."""
+
+    def __init__(self, info: JobInfo, thickness_mm: float) -> None:
+        self.px_area = info.pixel_x_mm * info.pixel_y_mm
+        self.thickness = thickness_mm
+        self.volume_mm3 = 0.0
+        self.footprint = np.zeros((info.height_px, info.width_px), np.uint8)
+
+    def add_sum(self, plain_sum: int) -> float:
+        """Count one mask whose plain grey levels add up to ``plain_sum``; returns its area."""
+        area = float(plain_sum) / 255.0 * self.px_area
+        self.volume_mm3 += area * self.thickness
+        return area
+
+    def add_footprint(self, crop: tuple[int, int, np.ndarray] | None) -> None:
+        if crop is not None:
+            r0, c0, a = crop
+            view = self.footprint[r0 : r0 + a.shape[0], c0 : c0 + a.shape[1]]
+            np.maximum(view, a, out=view)
+
+
+def thumbnail_png(footprint: np.ndarray | None, size: tuple[int, int]) -> bytes:
+    """An RGB PNG of ``size`` (w, h) showing the part's footprint (max over the masks)."""
+    w, h = size
+    canvas = Image.new("RGB", (w, h), (24, 24, 24))
+    if footprint is not None and footprint.any():
+        rows = np.flatnonzero(footprint.any(axis=1))
+        cols = np.flatnonzero(footprint.any(axis=0))
+        crop = footprint[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]
+        ch, cw = crop.shape
+        scale = min((w - 8) / cw, (h - 8) / ch)
+        nw, nh = max(1, round(cw * scale)), max(1, round(ch * scale))
+        img = Image.fromarray(crop).resize((nw, nh), Image.Resampling.BOX if scale < 1 else Image.Resampling.NEAREST)
+        g = np.asarray(img, dtype=np.float64) / 255.0
+        rgb = np.empty((nh, nw, 3), np.uint8)
+        for k, (c0, c1) in enumerate(((24, 250), (24, 140), (24, 30))):
+            rgb[..., k] = np.round(c0 + (c1 - c0) * g).astype(np.uint8)
+        canvas.paste(Image.fromarray(rgb), ((w - nw) // 2, (h - nh) // 2))
+    buf = io.BytesIO()
+    canvas.save(buf, format="PNG")
+    return buf.getvalue()
+
+
+def _print_time_s(info: JobInfo, n_layers: int) -> float:
+    nf = min(info.first_exposure_layers, n_layers)
+    return nf * info.first_exposure_s + (n_layers - nf) * info.exposure_s + n_layers * SL1_TILT_TIME_S
+
+
+def _zinfo(name: str) -> zipfile.ZipInfo:
+    """A zip entry with a fixed date, so that archives of the same job are the same bytes."""
+    return zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
+
+
+def creation_time() -> datetime.datetime:
+    """Now, or ``SOURCE_DATE_EPOCH`` when set (reproducible outputs)."""
+    import os
+
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    if epoch is not None:
+        try:
+            return datetime.datetime.fromtimestamp(int(epoch), datetime.timezone.utc)
+        except ValueError:
+            raise ConfigError(f"SOURCE_DATE_EPOCH must be whole seconds, got {epoch!r}") from None
+    return datetime.datetime.now(datetime.timezone.utc)
+
+
+@dataclass
+class ArchiveContents:
+    """A DLP job reopened: format, its ini tables (SL1) or manifest (folders), mask names.
+
+    ``mask(i)`` decodes mask ``i`` as ``(H, W) uint8``; ``thumbnails`` maps names to
+    ``(width, height)``.
+    """
+
+    path: Path
+    format: str
+    config: dict[str, str]
+    prusaslicer: dict[str, str]
+    manifest: dict
+    mask_names: list[str]
+    thumbnails: dict[str, tuple[int, int]]
+    _reader: Callable[[str], bytes]
+
+    def __len__(self) -> int:
+        return len(self.mask_names)
+
+    def mask(self, i: int) -> np.ndarray:
+        data = self._reader(self.mask_names[i])
+        with Image.open(io.BytesIO(data)) as im:
+            if im.mode != "L":
+                raise ImageError(f"mask {self.mask_names[i]} is mode {im.mode!r}, expected 'L' (8-bit grey)", path=self.path)
+            return np.asarray(im).copy()
+
+
+def _parse_ini(text: str, where: str, path: Path) -> dict[str, str]:
+    out: dict[str, str] = {}
+    for n, line in enumerate(text.splitlines(), 1):
+        s = line.strip()
+        if not s or s.startswith(("#", ";", "[")):
+            continue
+        if "=" not in s:
+            raise InputFileError(f"{where} line {n} is not 'key = value': {s[:60]!r}", path=path)
+        k, v = s.split("=", 1)
+        out[k.strip()] = v.strip()
+    return out
+
+
+@dataclass(frozen=True)
+class ArchiveFormat:
+    """One output format in the registry.
+
+    Attributes
+    ----------
+    name : str
+        As given to ``--format`` and recorded in the output.
+    is_dir : bool
+        A folder (else one file).
+    suffixes : tuple of str
+        Output suffixes that select it when no format is given (``.sl1``).
+    kind : str
+        Folders: the manifest's ``kind`` (how a folder is told apart when reopened); files: "".
+    write : callable
+        ``(path, items, info, on_mask, claim) -> dict``: write the encoded masks into the
+        claimed temporary path and install it; returns the summary.
+    open : callable
+        ``(path, manifest, names) -> ArchiveContents``: reopen an output (folders: with their
+        checked manifest and mask names; files: both None).
+    mask_name : callable
+        ``number -> str``: the file name of mask ``number`` (folders).
+    """
+
+    name: str
+    is_dir: bool
+    suffixes: tuple[str, ...]
+    kind: str
+    write: Callable
+    open: Callable
+    mask_name: Callable[[int], str] = field(default=lambda n: f"{n:05d}.png")
