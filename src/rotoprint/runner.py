@@ -25,7 +25,7 @@ from .errors import ConfigError
 
 __all__ = ["LayerTask", "LayerResult", "MaskLayerResult", "RotaryLayerResult", "produce_layers", "task_fingerprint"]
 
-#: Seconds to wait for a Dask scheduler before giving up.
+#: Seconds to wait for a Dask scheduler (connection and handshake) before giving up.
 DASK_CONNECT_TIMEOUT_S = 10.0
 
 
@@ -259,8 +259,36 @@ def check_scheduler_address(address: str) -> None:
     """Refuse, before any work, a scheduler address that is not ``[tcp://]host:port``."""
     import re
 
-    if not re.fullmatch(r"(tcp|tls|inproc|ws|wss)://[^\s:/]+:\d{1,5}|[^\s:/]+:\d{1,5}", address or ""):
+    m = re.fullmatch(r"(?:(?:tcp|tls|inproc|ws|wss)://)?[^\s:/]+:(\d{1,5})", address or "")
+    if not m:
         raise ConfigError(f"scheduler address must look like tcp://HOST:PORT, got {address!r}")
+    if not 1 <= int(m.group(1)) <= 65535:
+        raise ConfigError(f"scheduler address {address!r}: port {m.group(1)} is not a TCP port (1 to 65535)")
+
+
+def _probe_scheduler(address: str, timeout_s: float) -> None:
+    """Connect to the scheduler and complete Dask's handshake within ``timeout_s``.
+
+    ``distributed.Client`` bounds the TCP connect but not the handshake read after it, so a
+    server that accepts and never answers would block it forever; this refuses such an
+    address first, in bounded time.
+    """
+    import asyncio
+
+    from distributed.comm import connect
+    from distributed.security import Security
+
+    async def handshake() -> None:
+        comm = await connect(address, timeout=timeout_s, **Security().get_connection_args("client"))
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(handshake(), timeout_s))
+    except (asyncio.TimeoutError, TimeoutError):
+        raise ConfigError(f"the Dask scheduler at {address} did not answer within {timeout_s:g} s "
+                          "(is it a Dask scheduler?)") from None
+    except (OSError, ValueError, TypeError) as exc:
+        raise ConfigError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
 
 
 def _produce_dask(task: LayerTask, indices: list[int], address: str, window: int | None) -> Iterator[LayerResult]:
@@ -268,6 +296,8 @@ def _produce_dask(task: LayerTask, indices: list[int], address: str, window: int
         from distributed import Client
     except ImportError:
         raise ConfigError("--scheduler needs Dask distributed: pip install 'rotoprint[dask]'") from None
+    check_scheduler_address(address)
+    _probe_scheduler(address, DASK_CONNECT_TIMEOUT_S)
     try:
         client = Client(address, timeout=f"{DASK_CONNECT_TIMEOUT_S}s", set_as_default=False)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:

@@ -34,6 +34,7 @@ def transform_command(
     """Make IMAGE print-ready: rows = firing index, columns = nozzles, plus a sidecar JSON."""
     from ..devices import InkjetDevice, load_device
     from ..io.images import read_grey_image
+    from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes
     from ..rotary.files import write_print
     from ..rotary.placement import Placement
 
@@ -64,7 +65,7 @@ def transform_command(
         pr = transform_paper(design, head, pl, **kw)
     info = {
         "path": str(image.resolve()),
-        "sha256": hashlib.sha256(image.read_bytes()).hexdigest(),
+        "sha256": hashlib.sha256(read_input_bytes(image, what="image file", limit_bytes=MAX_IMAGE_BYTES)).hexdigest(),
         "invert": invert,
         "design_dpi": dpi,
     }

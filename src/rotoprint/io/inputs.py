@@ -16,6 +16,7 @@ can lie).
 from __future__ import annotations
 
 import io
+import json
 import os
 import stat
 import zipfile
@@ -38,6 +39,9 @@ __all__ = [
     "read_input_bytes",
     "read_input_text",
     "read_zip_members",
+    "read_json_file",
+    "parse_json",
+    "parse_toml",
 ]
 
 #: A mesh file (binary STL: 40 million triangles).
@@ -158,9 +162,18 @@ def read_input_bytes(path: str | Path, *, what: str, limit_bytes: int) -> bytes:
         _refuse_special(p, st.st_mode, what)
         _refuse_size(p, st.st_size, what, limit_bytes)
         try:
-            data = fh.read(limit_bytes + 1)
+            # read what fstat said (+1 to see growth), never a buffer of the limit's size
+            parts = [fh.read(st.st_size + 1)]
+            got = len(parts[0])
+            while got > st.st_size and got <= limit_bytes:  # the file grew: read on, up to the limit
+                more = fh.read(min(1 << 20, limit_bytes + 1 - got))
+                if not more:
+                    break
+                parts.append(more)
+                got += len(more)
         except OSError as exc:
             raise InputFileError(f"cannot read: {exc.strerror or exc}", path=p) from None
+        data = parts[0] if len(parts) == 1 else b"".join(parts)
     if len(data) > limit_bytes:
         raise InputFileError(f"grew past the {format_bytes(limit_bytes)} limit for a {what} while it was read", path=p)
     return data
@@ -192,6 +205,52 @@ def read_input_text(path: str | Path, *, what: str, limit_bytes: int,
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise error(f"{what} is not UTF-8 text (byte {exc.start})", path=Path(path)) from None
+
+
+def parse_json(text: str | bytes, path: str | Path, *, what: str,
+               error: Callable[..., Exception] = InputFileError) -> object:
+    """``json.loads`` with its failures (syntax, nesting too deep for the parser) as one
+    ``error(message, path=...)``."""
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise error(f"{what} is nested too deeply to be read", path=Path(path)) from None
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise error(f"{what} is not valid JSON: {exc}", path=Path(path)) from None
+
+
+def parse_toml(text: str, path: str | Path, *, what: str, error: Callable[..., Exception]) -> dict:
+    """``tomllib.loads`` with its failures (syntax, nesting too deep) as one ``error(message, path=...)``."""
+    import tomllib
+
+    try:
+        return tomllib.loads(text)
+    except RecursionError:
+        raise error(f"{what} is nested too deeply to be read", path=Path(path)) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise error(f"not valid TOML: {exc}", path=Path(path)) from None
+
+
+def read_json_file(path: str | Path, *, what: str, limit_bytes: int = MAX_JSON_BYTES,
+                   error: Callable[..., Exception] = InputFileError) -> object:
+    """A regular UTF-8 JSON file of at most ``limit_bytes``, parsed (see :func:`parse_json`).
+
+    Parameters
+    ----------
+    path : str or Path
+    what : str
+        ``"sidecar"``, ``"manifest.json"``, ...
+    limit_bytes : int
+    error : exception class
+        For content that is not UTF-8 JSON; size and file-type refusals are InputFileError.
+
+    Returns
+    -------
+    object
+        The parsed JSON value (the caller checks its shape).
+    """
+    text = read_input_text(path, what=what, limit_bytes=limit_bytes, error=error)
+    return parse_json(text, path, what=what, error=error)
 
 
 def read_zip_members(data: bytes, path: str | Path, *, what: str = "archive",
