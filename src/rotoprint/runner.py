@@ -216,8 +216,14 @@ def produce_layers(
         raise ConfigError(f"workers must be at least 1, got {workers}")
     task = _keyed(task)
     if scheduler is not None:
-        yield from _produce_dask(task, indices, scheduler, window)
-        return
+        if indices:  # connect now, not at the first next(): a dead scheduler fails before any layer is kept
+            check_scheduler_address(scheduler)
+            _probe_scheduler(scheduler, DASK_CONNECT_TIMEOUT_S)
+        return _produce_dask(task, indices, scheduler, window)
+    return _produce_local(task, indices, workers, window)
+
+
+def _produce_local(task: LayerTask, indices: list[int], workers: int, window: int | None) -> Iterator[LayerResult]:
     if workers == 1 or len(indices) <= 1:
         threads = min(2, cpu_count())
         if threads == 1 or len(indices) <= 1:
@@ -296,8 +302,6 @@ def _produce_dask(task: LayerTask, indices: list[int], address: str, window: int
         from distributed import Client
     except ImportError:
         raise ConfigError("--scheduler needs Dask distributed: pip install 'rotoprint[dask]'") from None
-    check_scheduler_address(address)
-    _probe_scheduler(address, DASK_CONNECT_TIMEOUT_S)
     try:
         client = Client(address, timeout=f"{DASK_CONNECT_TIMEOUT_S}s", set_as_default=False)
     except (OSError, TimeoutError, ValueError, TypeError) as exc:

@@ -59,6 +59,10 @@ def dlp_command(
     from ..slicing import slice_mesh
 
     setup_logging(verbose)
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..runner import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     kind = format_from_path(out, fmt)
     overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
     dev = load_device(device, **overrides)

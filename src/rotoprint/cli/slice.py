@@ -64,6 +64,10 @@ def slice_command(
     from ..slicing import slice_mesh
 
     setup_logging(verbose)
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..runner import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,
