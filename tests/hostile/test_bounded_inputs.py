@@ -316,3 +316,44 @@ def test_latin1_comment_in_an_obj_still_loads(tmp_path):
     run = run_cli_bounded("info", "t.obj", "--json", cwd=tmp_path, timeout_s=60)
     assert run.code == 0, run.err
     assert '"triangles": 4' in run.out or '"faces": 4' in run.out, run.out
+
+
+@pytest.fixture
+def gltf(tmp_path):
+    """A glTF box whose two buffers are separate .bin files beside it."""
+    import trimesh
+
+    from trimesh.exchange.gltf import export_gltf
+
+    for name, data in export_gltf(trimesh.creation.box().scene()).items():  # {"model.gltf": ..., "gltf_buffer_0.bin": ...}
+        (tmp_path / ("b.gltf" if name.endswith(".gltf") else name)).write_bytes(data)
+    bins = sorted(p.name for p in tmp_path.glob("*.bin"))
+    assert bins, "trimesh wrote no external buffer: the test would test nothing"
+    return tmp_path / "b.gltf", bins
+
+
+@pytest.mark.parametrize("kind", ["fifo", "zero"])
+def test_gltf_buffer_that_never_ends_is_refused(gltf, kind):
+    path, bins = gltf
+    (path.parent / bins[0]).unlink()
+    _special(path.parent, bins[0], kind)
+    run = run_cli_bounded("info", path.name, cwd=path.parent)
+    # a FIFO in the folder is refused as such; a symlink to /dev/zero leads out of the folder
+    assert_refused(run, bins[0], "FIFO" if kind == "fifo" else "leads outside the mesh's folder")
+
+
+def test_gltf_buffer_outside_the_folder_is_refused(gltf, tmp_path):
+    path, bins = gltf
+    (tmp_path / "sub").mkdir()
+    moved = tmp_path / "sub" / "b.gltf"
+    moved.write_text(path.read_text().replace(bins[0], f"../{bins[0]}"))
+    run = run_cli_bounded("info", moved, cwd=tmp_path)
+    assert_refused(run, "b.gltf", f"'../{bins[0]}'", "leads outside the mesh's folder")
+
+
+def test_obj_material_library_on_a_device_is_not_read(tmp_path):
+    """An .mtl that never ends is skipped (trimesh loads the geometry without materials), in bounded time."""
+    os.symlink("/dev/zero", tmp_path / "z.mtl")
+    (tmp_path / "t.obj").write_text("mtllib z.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n")
+    run = run_cli_bounded("info", "t.obj", "--json", cwd=tmp_path, timeout_s=60)
+    assert run.code == 0, run.err

@@ -154,7 +154,7 @@ def _load_with_trimesh(path: Path, data: bytes) -> np.ndarray:
         # From memory, with a resolver that reads referenced files (textures, .bin buffers,
         # .mtl) through the same bounded reader and only from the mesh's own folder.
         loaded = trimesh.load(file_obj=io.BytesIO(data), file_type=suffix[1:], force="mesh", process=False,
-                              resolver=_BoundedResolver(path.parent))
+                              resolver=_BoundedResolver(path))
     except RotoprintError:
         raise
     except Exception as exc:  # trimesh raises many kinds for bad files
@@ -170,23 +170,26 @@ def _load_with_trimesh(path: Path, data: bytes) -> np.ndarray:
 class _BoundedResolver:
     """A trimesh resolver: files a mesh refers to, read bounded, from its folder only."""
 
-    def __init__(self, folder: Path) -> None:
-        self.parent = folder.resolve()
+    def __init__(self, mesh: Path, folder: Path | None = None) -> None:
+        self.mesh = mesh
+        self.parent = (folder or mesh.parent).resolve()
 
     def get(self, name: str) -> bytes:
         p = (self.parent / name).resolve()
-        if not p.is_relative_to(self.parent):
-            raise MeshError(f"refers to {name!r}, outside its own folder", path=self.parent)
+        if not p.is_relative_to(self.mesh.parent.resolve()):
+            raise MeshError(f"refers to {name!r}, which leads outside the mesh's folder (to {p})", path=self.mesh)
         return read_input_bytes(p, what="file a mesh refers to", limit_bytes=MAX_MESH_BYTES)
 
+    __getitem__ = get
+
     def namespaced(self, namespace: str) -> _BoundedResolver:
-        return _BoundedResolver(self.parent / namespace)
+        return _BoundedResolver(self.mesh, self.parent / namespace)
 
     def keys(self):
         return iter(())
 
     def write(self, name, data):  # pragma: no cover - trimesh only writes when exporting
-        raise MeshError("refusing to write beside a mesh while reading it", path=self.parent)
+        raise MeshError("refusing to write beside a mesh while reading it", path=self.mesh)
 
 
 def load_mesh(
