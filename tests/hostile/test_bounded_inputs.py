@@ -357,3 +357,23 @@ def test_obj_material_library_on_a_device_is_not_read(tmp_path):
     (tmp_path / "t.obj").write_text("mtllib z.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 2 3 4\nf 3 1 4\n")
     run = run_cli_bounded("info", "t.obj", "--json", cwd=tmp_path, timeout_s=60)
     assert run.code == 0, run.err
+
+
+@pytest.mark.parametrize("target", ["../p.png", "/etc/hostname", "link.png"])
+def test_sidecar_swathe_image_outside_its_folder_is_refused(rotary_print, tmp_path, target):
+    import json
+    import shutil
+
+    d = tmp_path / "print"
+    d.mkdir()
+    for f in rotary_print.iterdir():
+        shutil.copy(f, d / f.name)
+    shutil.copy(rotary_print / "p.png", tmp_path / "p.png")
+    if target == "link.png":
+        os.symlink(tmp_path / "p.png", d / "link.png")
+    side = json.loads((d / "p.json").read_text())
+    side["swathes"][0]["file"] = target
+    (d / "p.json").write_text(json.dumps(side))
+    run = run_cli_bounded("simulate", "p.json", "-o", "o.png", cwd=d)
+    assert_refused(run, "p.json", "outside its folder")
+    assert not (d / "o.png").exists()
