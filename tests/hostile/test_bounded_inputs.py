@@ -305,7 +305,7 @@ def test_sidecar_that_never_ends_is_refused(rotary_print, tmp_path, kind):
 def test_garbage_obj_is_not_a_valid_obj(tmp_path):
     (tmp_path / "g.obj").write_bytes(bytes(range(256)) * 40)
     run = run_cli_bounded("info", "g.obj", cwd=tmp_path)
-    line = assert_refused(run, "g.obj", "not a valid OBJ file")
+    line = assert_refused(run, "g.obj", "could not read as OBJ: binary data, not text")
     assert "charset_normalizer" not in line and "No module" not in line
 
 

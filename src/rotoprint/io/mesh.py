@@ -135,7 +135,7 @@ def _text_for_trimesh(data: bytes, path: Path) -> bytes:
     sample = data[: 1 << 20]
     printable = len(sample) - len(sample.translate(None, _PRINTABLE))
     if b"\0" in sample or printable < 0.95 * len(sample):
-        raise MeshError(f"not a valid {kind} file: binary data, not text "
+        raise MeshError(f"could not read as {kind}: binary data, not text "
                         f"({100 * printable / len(sample):.0f} % printable characters)", path=path)
     return data.decode("latin-1").encode("utf-8")
 
@@ -159,7 +159,7 @@ def _load_with_trimesh(path: Path, data: bytes) -> np.ndarray:
         raise
     except Exception as exc:  # trimesh raises many kinds for bad files
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise MeshError(f"not a valid {kind} file: {first}", path=path) from exc
+        raise MeshError(f"could not read as {kind}: {first}", path=path) from exc
     faces = getattr(loaded, "faces", None)
     vertices = getattr(loaded, "vertices", None)
     if faces is None or vertices is None or len(faces) == 0:
