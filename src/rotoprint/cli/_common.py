@@ -6,6 +6,7 @@ import json
 import math
 import logging
 import sys
+import unicodedata
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -16,10 +17,41 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from ..errors import ConfigError
 
+def escape_controls(text: str, *, keep_newlines: bool = False) -> str:
+    """``text`` with control characters shown, not sent: ESC as ``\\x1b``, DEL, C1 controls,
+    bidirectional and other format characters (U+202E ...) and lone surrogates (bytes of a
+    file name that are not UTF-8) as ``\\xNN`` / ``\\uNNNN``; a backslash stays as it is.
+
+    File names and other user strings reach the terminal through this, so a name holding
+    ``\\e[2J`` cannot clear the screen. ``keep_newlines`` keeps ``\\n`` and ``\\t`` (multi-line
+    reports); errors are one line, so there they are escaped too.
+    """
+    if text.isprintable():
+        return text
+    out = []
+    for ch in text:
+        if ch.isprintable() or (keep_newlines and ch in "\n\t"):
+            out.append(ch)
+        elif unicodedata.category(ch) == "Zs":  # a non-breaking or other space: harmless
+            out.append(ch)
+        else:
+            o = ord(ch)
+            out.append(f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}" if o < 0x10000 else f"\\U{o:08x}")
+    return "".join(out)
+
+
+class _SafeConsole(Console):
+    """A Console whose strings have their control characters escaped (see :func:`escape_controls`);
+    rich's own styling codes are added after, so colours still work."""
+
+    def render_str(self, text: str, **kwargs: Any) -> Text:
+        return super().render_str(escape_controls(text, keep_newlines=True), **kwargs)
+
+
 # No markup and no emoji codes: paths and option values are printed as they are (a "[" or
 # ":b:" in a file name must not be read as rich markup). Styles go through rich.text.Text.
-console = Console(stderr=True, highlight=False, markup=False, emoji=False)
-out_console = Console(highlight=False, markup=False, emoji=False)
+console = _SafeConsole(stderr=True, highlight=False, markup=False, emoji=False)
+out_console = _SafeConsole(highlight=False, markup=False, emoji=False)
 
 EXIT_BAD_INPUT = 2
 
@@ -78,8 +110,18 @@ def progress(quiet: bool = False) -> Progress:
     )
 
 
+class _SafeFormatter(logging.Formatter):
+    """Log lines with control characters escaped (they hold file names)."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return escape_controls(super().format(record), keep_newlines=True)
+
+
 def setup_logging(verbose: bool) -> None:
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    for h in logging.getLogger().handlers:
+        if isinstance(h, logging.StreamHandler) and type(h.formatter) is logging.Formatter:
+            h.setFormatter(_SafeFormatter(h.formatter._fmt))
 
 
 def load_mesh_from_options(path: Path, units: str, scale: float, rotate: str | None, translate: str | None,
@@ -101,5 +143,6 @@ TranslateOpt = Annotated[str | None, typer.Option("--translate", help="Translati
 
 
 def styled(*parts: str | tuple[str, str]) -> Text:
-    """A line of plain pieces and ``(text, style)`` pieces; nothing in it is read as markup."""
-    return Text.assemble(*parts)
+    """One line of plain pieces and ``(text, style)`` pieces; nothing in it is read as markup,
+    and control characters (newlines too) are escaped (:func:`escape_controls`)."""
+    return Text.assemble(*(escape_controls(p) if isinstance(p, str) else (escape_controls(p[0]), p[1]) for p in parts))

@@ -66,6 +66,10 @@ def dlp_command(
     from ..io.atomic import check_output_path
 
     setup_logging(verbose)
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..runner import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     kind = format_from_path(out, fmt)
     inputs = [mesh, device_input(device)]
     check_output_path(out, is_dir=kind not in ("sl1", "sl1s"), inputs=inputs, force=force)  # before any work

@@ -36,6 +36,7 @@ def simulate_command(
     """IoU, area ratio, mean/max placement error, uncovered design area, drops outside the design."""
     from ..io.atomic import check_output_path, write_owned_file
     from ..io.images import read_grey_image
+    from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes
     from ..rotary.files import read_print
     from ..rotary.simulate import render_overlay, simulate
 
@@ -52,7 +53,8 @@ def simulate_command(
             cand = sp.parent / cand  # a path relative to the sidecar's folder
         if not dinfo.get("path") or not cand.exists():
             raise InputFileError("the design named in the sidecar is not available; give --design IMAGE", path=sp)
-        if hashlib.sha256(cand.read_bytes()).hexdigest() != dinfo.get("sha256"):
+        data = read_input_bytes(cand, what="design image", limit_bytes=MAX_IMAGE_BYTES)
+        if hashlib.sha256(data).hexdigest() != dinfo.get("sha256"):
             raise InputFileError(f"the design {cand} changed since the transform; give --design IMAGE", path=sp)
         design = cand
         inputs.append(design)

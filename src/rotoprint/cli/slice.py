@@ -72,6 +72,10 @@ def slice_command(
     setup_logging(verbose)
     inputs = [mesh, device_input(device)]
     check_output_path(out, is_dir=True, inputs=inputs, force=force)  # before any work
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..runner import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,

@@ -37,6 +37,7 @@ def transform_command(
     from ..io.images import read_grey_image
     from ..io.atomic import check_output_path
     from ..rotary.files import print_paths, write_print
+    from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes
     from ..rotary.placement import Placement
 
     if method not in METHODS:
@@ -68,7 +69,7 @@ def transform_command(
         pr = transform_paper(design, head, pl, **kw)
     info = {
         "path": str(image.resolve()),
-        "sha256": hashlib.sha256(image.read_bytes()).hexdigest(),
+        "sha256": hashlib.sha256(read_input_bytes(image, what="image file", limit_bytes=MAX_IMAGE_BYTES)).hexdigest(),
         "invert": invert,
         "design_dpi": dpi,
     }

@@ -7,7 +7,7 @@
     layer_height_mm = 0.02
 
     [printer]
-    device = "omnidot760"      # preset or device .toml
+    device = "omnidot760"      # preset or device .toml (relative: from the job file's folder)
     tilt_deg = 20.0
     equalise = true            # thin inner tracks: the same drops per mm2 at every radius
     [printer.clock]
@@ -38,7 +38,6 @@ file, and are :class:`~rotoprint.errors.ConfigError` (exit code 2 on the command
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
@@ -238,6 +237,21 @@ class ResolvedJob:
                 return p
         raise ConfigError(f"no part named {name!r}", path=self.source)
 
+    def resolve(self, path: str | Path) -> Path:
+        """A path named in the job: relative paths are taken from the job file's folder."""
+        p = Path(path)
+        return p if p.is_absolute() else self.base_dir / p
+
+    def device_spec(self) -> str:
+        """``printer.device`` for :func:`~rotoprint.devices.load_device`: a preset name as it
+        is, a device file resolved against the job file's folder (like meshes)."""
+        from ..devices import preset_names
+
+        dev = self.spec.printer.device
+        if dev in preset_names() or (Path(dev).suffix.lower() != ".toml" and "/" not in dev):
+            return dev  # a preset, or an unknown name load_device explains
+        return str(self.resolve(dev))
+
     def head_for_ink(self, ink: str) -> int:
         for j, h in enumerate(self.spec.printer.heads):
             if h.ink == ink:
@@ -364,12 +378,10 @@ def load_job(path: str | Path) -> ResolvedJob:
         raise InputFileError("no such job file", path=p)
     if p.is_dir():
         raise InputFileError("is a directory, expected a job .toml file", path=p)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise ConfigError("job file is not UTF-8 text", path=p) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"not valid TOML: {exc}", path=p) from None
+    from ..io.inputs import MAX_TOML_BYTES, parse_toml, read_input_text
+
+    text = read_input_text(p, what="job file", limit_bytes=MAX_TOML_BYTES, error=ConfigError)
+    data = parse_toml(text, p, what="job file", error=ConfigError)
     return parse_job(data, base_dir=p.resolve().parent, source=str(p))
 
 

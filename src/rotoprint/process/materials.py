@@ -19,7 +19,6 @@ of the system); measure your own and override them.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 from typing import Literal
 
@@ -321,12 +320,12 @@ def load_materials(source: str | Path | dict, *, base: MaterialLibrary | None = 
     if isinstance(source, dict):
         return base.with_materials(_materials_from_dict(source, None))
     path = Path(source)
-    if not path.is_file():
-        raise InputFileError("no such materials file" if not path.exists() else "is not a file", path=path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"not valid TOML: {exc}", path=path) from None
+    if not path.exists():
+        raise InputFileError("no such materials file", path=path)
+    from ..io.inputs import MAX_TOML_BYTES, parse_toml, read_input_text
+
+    text = read_input_text(path, what="materials file", limit_bytes=MAX_TOML_BYTES, error=ConfigError)
+    data = parse_toml(text, path, what="materials file", error=ConfigError)
     if set(data) - {"materials"}:
         raise ConfigError(f"unexpected table(s) {sorted(set(data) - {'materials'})}; expected [materials.NAME]", path=path)
     return base.with_materials(_materials_from_dict(data.get("materials", {}), str(path)))

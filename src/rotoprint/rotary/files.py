@@ -15,7 +15,6 @@ import re
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
 
 from ..devices.models import InkjetHead
 from pydantic import ValidationError
@@ -24,6 +23,8 @@ from ..errors import ImageError, InputFileError, RotoprintError
 from ..io.atomic import check_output_path, write_owned_file
 from ..io.ownership import mark_json, mark_png
 from ..io.images import png_bytes
+from ..io.images import open_image
+from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes, read_json_file
 from .head import check_tilt
 from .placement import Placement
 from .printdata import SIDECAR_FORMAT, RotaryPrint, SwatheImage, levels_to_png, png_to_levels, runs_to_mask
@@ -219,10 +220,7 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
     sp = sidecar_path(p)
     if not sp.exists():
         raise InputFileError(f"no sidecar {sp.name} beside it (written by 'rotoprint transform')", path=p)
-    try:
-        side = json.loads(sp.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputFileError(f"sidecar is not valid JSON: {exc}", path=sp) from None
+    side = read_json_file(sp, what="sidecar")
     if not isinstance(side, dict) or side.get("format") != SIDECAR_FORMAT:
         raise InputFileError(f"not a rotoprint rotary-print sidecar (format {SIDECAR_FORMAT!r} expected)", path=sp)
     try:
@@ -239,8 +237,11 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
             f = sp.parent / d["file"]
             if not f.exists():
                 raise InputFileError(f"swathe image {d['file']} listed in the sidecar is missing", path=sp)
+            if not (sp.parent / d["file"]).resolve().is_relative_to(sp.parent.resolve()):
+                raise InputFileError(f"swathe image {d['file']!r} listed in the sidecar is outside its folder", path=sp)
+            data = read_input_bytes(f, what="print image", limit_bytes=MAX_IMAGE_BYTES)
             try:
-                with Image.open(f) as im:
+                with open_image(data, f, "print image") as im:
                     im.load()
                     if im.mode != "L":
                         raise ImageError(f"print image must be 8-bit greyscale, got mode {im.mode!r}", path=f)
