@@ -32,6 +32,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..ranges import WIDTH_MM, Range, check_range
 from ..errors import ConfigError
 from ..mesh import Mesh
 from . import _kernels as K
@@ -315,16 +316,15 @@ class CheckReport:
 # ----------------------------------------------------------------------------- validation
 
 
-def _positive(name: str, value, *, allow_none: bool = True) -> float | None:
+_CAP_MM = Range(0.0, 1000.0, "mm", lo_open=True)
+
+
+def _positive(name: str, value, *, allow_none: bool = True, rng: Range = WIDTH_MM) -> float | None:
+    """A width in ``rng`` (:mod:`rotoprint.ranges`): widths past it would overflow the pixel
+    counts of the ray kernels."""
     if value is None and allow_none:
         return None
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} must be a positive number of mm, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ConfigError(f"{name} must be a positive number of mm, got {value!r}")
-    return v
+    return check_range(value, rng, name)
 
 
 def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -603,7 +603,7 @@ def _settings(device, *, min_wall_mm, min_gap_mm, mask_fn, mask_name, cure_thres
     w = default if wall is None else wall
     g = default if gap is None else gap
     pmax = max(device.pitch_x_mm, device.pitch_y_mm)
-    cap = _positive("measure_up_to_mm", measure_up_to_mm)
+    cap = _positive("measure_up_to_mm", measure_up_to_mm, rng=_CAP_MM)
     cap = max(4.0 * max(w, g), 8.0 * pmax) if cap is None else max(cap, w, g, _RASTER_TEST_PX * pmax, _EXPOSURE_TEST_PX * pmax)
     res = resolution_for(device, resolution_mm)
     return {

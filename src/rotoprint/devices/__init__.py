@@ -92,6 +92,8 @@ def load_device(spec: str | Path, **overrides: Any) -> InkjetDevice | ProjectorD
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise DeviceError(f"not valid TOML: {exc}", path=origin) from None
+    except RecursionError:
+        raise DeviceError("not a device file: nested too deeply", path=origin) from None
     overrides = {k: v for k, v in overrides.items() if v is not None}
     if overrides and isinstance(data, dict):
         table = _check_overrides(data, overrides, origin)

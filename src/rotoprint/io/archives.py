@@ -544,7 +544,7 @@ def read_job(path: str | Path) -> ArchiveContents:
         try:
             manifest = json.loads(mpath.read_text(encoding="utf-8"))
             names = [str(m["file"]) for m in manifest["masks"]]
-        except (ValueError, KeyError, TypeError) as exc:  # JSONDecodeError is a ValueError
+        except (ValueError, KeyError, TypeError, RecursionError) as exc:  # JSONDecodeError is a ValueError
             raise InputFileError(f"{MANIFEST_NAME} is not a mask list ({type(exc).__name__}: {exc})", path=path) from None
         for n in names:
             if not (path / n).is_file():

@@ -370,6 +370,8 @@ def load_job(path: str | Path) -> ResolvedJob:
         raise ConfigError("job file is not UTF-8 text", path=p) from None
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"not valid TOML: {exc}", path=p) from None
+    except RecursionError:
+        raise ConfigError("not a job file: nested too deeply", path=p) from None
     return parse_job(data, base_dir=p.resolve().parent, source=str(p))
 
 

@@ -327,6 +327,8 @@ def load_materials(source: str | Path | dict, *, base: MaterialLibrary | None = 
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise ConfigError(f"not valid TOML: {exc}", path=path) from None
+    except RecursionError:
+        raise ConfigError("not a materials file: nested too deeply", path=path) from None
     if set(data) - {"materials"}:
         raise ConfigError(f"unexpected table(s) {sorted(set(data) - {'materials'})}; expected [materials.NAME]", path=path)
     return base.with_materials(_materials_from_dict(data.get("materials", {}), str(path)))
