@@ -29,7 +29,7 @@ quantity                range                  used for
 ``COUNT``               0 ... 1000000          layer and overlay counts
 ``SWATHES``             1 ... 10000            radial swathes
 ``SEED``                0 ... 2**32 - 1        random seeds
-``OVERLAY_SCALE``       1 ... 64               overlay pixels per design pixel
+``OVERLAY_SCALE``       1 ... 16               overlay pixels per design pixel
 ======================  =====================  =======================================
 """
 
@@ -42,7 +42,7 @@ from pathlib import Path
 
 from .errors import ConfigError, RotoprintError
 
-__all__ = ["Range", "check_range", "check_count", "MAX_COUNT"]
+__all__ = ["Range", "check_range", "check_count", "check_direction", "field", "MAX_COUNT"]
 
 #: The largest count of swathes, firings, drops or pixels any array may be sized for.
 MAX_COUNT = 2**40
@@ -93,9 +93,18 @@ WORKERS = Range(1, 1024, integer=True)
 COUNT = Range(0, 1_000_000, integer=True)
 SWATHES = Range(1, 10_000, integer=True)
 SEED = Range(0, 2**32 - 1, integer=True)
-OVERLAY_SCALE = Range(1, 64, integer=True)
+OVERLAY_SCALE = Range(1, 16, integer=True)
 NOZZLE_INDEX = Range(0, 100_000, integer=True)  # the largest head (devices.models)
 DIRECTION = Range(-1, 1, integer=True)  # and not 0: see check_direction
+
+
+def field(rng: Range, **kw):
+    """A pydantic ``Field`` bounded by ``rng`` (the same range in a model as at the CLI)."""
+    from pydantic import Field
+
+    lo = {"gt": rng.lo} if rng.lo_open else {"ge": rng.lo}
+    hi = {"lt": rng.hi} if rng.hi_open else {"le": rng.hi}
+    return Field(**lo, **hi, **kw)
 
 
 def check_range(

@@ -57,13 +57,15 @@ def dlp_command(
 ) -> None:
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
-    from ..io.archives import JobInfo, format_from_path, job_dir_name
+    from ..io.archives import JobInfo, creation_time, format_from_path, job_dir_name
     from ..io.dlpjob import write_dlp_job
     from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
 
     setup_logging(verbose)
     kind = format_from_path(out, fmt)
+    if kind in ("sl1", "sl1s"):
+        creation_time()  # a bad SOURCE_DATE_EPOCH is refused before any work
     overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
     dev = load_device(device, **overrides)
     if not isinstance(dev, ProjectorDevice):

@@ -42,7 +42,7 @@ def simulate_command(
     from ..io.atomic import atomic_file
     from ..io.images import read_grey_image
     from ..rotary.files import read_print
-    from ..rotary.simulate import render_overlay, simulate
+    from ..rotary.simulate import check_overlay_fits, render_overlay, simulate
 
     if out.suffix.lower() != ".png":
         raise ConfigError(f"--out must end in .png, got {out.name!r}")
@@ -60,6 +60,7 @@ def simulate_command(
     img = read_grey_image(design)
     if dinfo.get("invert"):
         img = 255 - img
+    check_overlay_fits(img.shape, scale)  # before the simulation, not after it
     sim = simulate(pr, img, drop_diameter_um=drop_diameter, jitter_um=jitter, dead_nozzles=parse_dead(dead), seed=seed)
     overlay = render_overlay(sim, scale=scale)
     from PIL import Image

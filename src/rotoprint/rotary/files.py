@@ -155,7 +155,7 @@ def _check_sidecar(side: dict, head: InkjetHead, sp: Path) -> None:
     except RotoprintError as exc:
         raise InputFileError(f"sidecar field tilt_deg: {exc.problem}", path=sp) from None
     _number(side, "mount_angle_deg", "", sp, rng=R.ANGLE_DEG)
-    _number(side, "dpi_y", "", sp, rng=R.DPI)
+    _number(side, "dpi_y", "", sp, positive=True, rng=R.DPI)
     if side["direction"] not in (1, -1) or isinstance(side["direction"], bool):
         raise InputFileError(f"sidecar field direction must be 1 or -1, got {side['direction']!r}", path=sp)
     if not isinstance(side["swathes"], list) or not 1 <= len(side["swathes"]) <= R.SWATHES.hi:
@@ -163,14 +163,14 @@ def _check_sidecar(side: dict, head: InkjetHead, sp: Path) -> None:
     pixels = 0
     for j, d in enumerate(side["swathes"]):
         where = f"swathes[{j}]."
-        dphi = _number(d, "dphi_rad", where, sp, rng=_DPHI_RAD)
+        dphi = _number(d, "dphi_rad", where, sp, positive=True, rng=_DPHI_RAD)
         if "angle_per_firing_deg" in d:
             deg = _number(d, "angle_per_firing_deg", where, sp, positive=True)
             if not math.isclose(deg, math.degrees(dphi), rel_tol=1e-9):
                 raise InputFileError(f"sidecar field {where}angle_per_firing_deg is {deg!r}, but dphi_rad "
                                      f"{dphi!r} is {math.degrees(dphi)!r} deg", path=sp)
-        _number(d, "pivot_radius_mm", where, sp, rng=R.RADIUS_MM)
-        _number(d, "ref_radius_mm", where, sp, rng=R.RADIUS_MM)
+        _number(d, "pivot_radius_mm", where, sp, positive=True, rng=R.RADIUS_MM)
+        _number(d, "ref_radius_mm", where, sp, positive=True, rng=R.RADIUS_MM)
         _number(d, "index", where, sp, rng=R.COUNT)
         _number(d, "first_firing_index", where, sp, rng=_FIRING_INDEX)
         firings = _number(d, "firings", where, sp, rng=R.Range(1, R.MAX_COUNT, integer=True))
