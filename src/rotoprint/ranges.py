@@ -136,15 +136,13 @@ def check_range(
         (``error``) naming ``name``, the range and the value.
     """
     ok = isinstance(value, numbers.Real) and not isinstance(value, bool)
-    if ok and rng.integer:
-        ok = isinstance(value, numbers.Integral) or (math.isfinite(float(value)) and float(value).is_integer())
     if ok:
         try:
             v = float(value)  # type: ignore[arg-type]
         except OverflowError:  # an int past the float range
             ok = False
         else:
-            ok = v in rng
+            ok = v in rng and (not rng.integer or isinstance(value, numbers.Integral) or v.is_integer())
     if not ok:
         raise error(f"{name} must be {rng.text()}, got {_show(value)}", path=path)
     return int(value) if rng.integer else float(value)  # type: ignore[arg-type]
@@ -161,16 +159,17 @@ def check_direction(value: object, name: str, **kw) -> int:
 def check_count(n: float, what: str, limit: float = MAX_COUNT, *, error: type[RotoprintError] = ConfigError) -> int:
     """A count computed from inputs (swathes, firings, pixels, angles) before anything is sized
     for it: a finite number at most ``limit``, as an int; else an error saying how many."""
-    if not (isinstance(n, numbers.Real) and math.isfinite(float(n))) or n > limit:
-        shown = f"{float(n):.3g}" if isinstance(n, numbers.Real) else repr(n)
+    if not (isinstance(n, numbers.Real) and (isinstance(n, numbers.Integral) or math.isfinite(float(n)))) or n > limit:
+        shown = _show(float(n) if isinstance(n, float) else n) if isinstance(n, numbers.Real) else repr(n)
         raise error(f"{what} would be {shown}, more than {limit:.3g}")
     return int(n)
 
 
 def _show(value: object) -> str:
     if isinstance(value, float):
-        return f"{value:g}"
+        return f"{value:.6g}"
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**15:
-        return f"{value:.3g}"
+        digits = str(abs(value))
+        return f"{'-' if value < 0 else ''}{digits[0]}.{digits[1:3]}e+{len(digits) - 1}"
     text = repr(value)
     return text if len(text) <= 40 else text[:37] + "..."
