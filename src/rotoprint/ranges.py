@@ -22,7 +22,7 @@ quantity                range                  used for
 ``DPI``                 [1, 100000] dpi        print-direction and design densities
 ``EXPOSURE_S``          [1e-3, 3600] s         exposure times
 ``FRACTION``            [0, 1]                 cure threshold
-``OFFSET_UM``           [0, 10000] um          first-layer (elephant-foot) inset
+``OFFSET_UM``           [0, 2000] um           first-layer (elephant-foot) inset
 ``DROP_UM``             [0.1, 1e4] um          drop diameter
 ``JITTER_UM``           [0, 10000] um          drop misdirection
 ``WORKERS``             1 ... 1024             worker processes
@@ -86,7 +86,7 @@ SCALE = Range(1e-6, 1e6)
 DPI = Range(1.0, 100_000.0, "dpi")
 EXPOSURE_S = Range(1e-3, 3600.0, "s")
 FRACTION = Range(0.0, 1.0)
-OFFSET_UM = Range(0.0, 10_000.0, "um")
+OFFSET_UM = Range(0.0, 2000.0, "um")  # = masks.pipeline.FIRST_LAYER_OFFSET_MAX_UM
 DROP_UM = Range(0.1, 10_000.0, "um")
 JITTER_UM = Range(0.0, 10_000.0, "um")
 WORKERS = Range(1, 1024, integer=True)
