@@ -66,6 +66,17 @@ _GATHER_MIN = 1
 # ---------------------------------------------------------------- bucketing helpers
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _cell_index(v, n):  # pragma: no cover - jit
+    """``floor(v)`` clamped to ``0 .. n - 1``, the float clamped before the int conversion (a
+    float past int64, from a width of 1e19 mm, would wrap to any index); NaN gives 0."""
+    if not v > 0.0:
+        return 0
+    if v >= n - 1:
+        return n - 1
+    return int(v)
+
+
 @njit(cache=True, nogil=True)
 def _bands(sy, ey, y0, hb, nb):  # pragma: no cover - jit
     """CSR of segment indices per horizontal band of height ``hb`` starting at ``y0``."""
@@ -74,8 +85,8 @@ def _bands(sy, ey, y0, hb, nb):  # pragma: no cover - jit
     for k in range(n):
         a = min(sy[k], ey[k])
         b = max(sy[k], ey[k])
-        i0 = max(0, min(nb - 1, int(math.floor((a - y0) / hb))))
-        i1 = max(0, min(nb - 1, int(math.floor((b - y0) / hb))))
+        i0 = _cell_index((a - y0) / hb, nb)
+        i1 = _cell_index((b - y0) / hb, nb)
         for i in range(i0, i1 + 1):
             count[i + 1] += 1
     for i in range(nb):
@@ -85,8 +96,8 @@ def _bands(sy, ey, y0, hb, nb):  # pragma: no cover - jit
     for k in range(n):
         a = min(sy[k], ey[k])
         b = max(sy[k], ey[k])
-        i0 = max(0, min(nb - 1, int(math.floor((a - y0) / hb))))
-        i1 = max(0, min(nb - 1, int(math.floor((b - y0) / hb))))
+        i0 = _cell_index((a - y0) / hb, nb)
+        i1 = _cell_index((b - y0) / hb, nb)
         for i in range(i0, i1 + 1):
             idx[fill[i]] = k
             fill[i] += 1
@@ -241,8 +252,8 @@ def _clip_x(ax, ay, bx, by, y0, y1, lo, hi):  # pragma: no cover - jit
 def _rows(ay, by, y0, h, ncy, pad):  # pragma: no cover - jit
     """The first and last row of cells of side ``h`` (from ``y0``) that the y extent of a
     segment, grown by ``pad``, touches."""
-    r0 = max(0, min(ncy - 1, int(math.floor((min(ay, by) - pad - y0) / h))))
-    r1 = max(0, min(ncy - 1, int(math.floor((max(ay, by) + pad - y0) / h))))
+    r0 = _cell_index((min(ay, by) - pad - y0) / h, ncy)
+    r1 = _cell_index((max(ay, by) + pad - y0) / h, ncy)
     return r0, r1
 
 
@@ -255,8 +266,8 @@ def _span(ax, ay, bx, by, gr, x0, y0, h, ncx, pad):  # pragma: no cover - jit
     lo, hi = _clip_x(ax, ay, bx, by, yb, yb + h + 2.0 * pad, np.inf, -np.inf)
     if lo > hi:
         return 0, -1
-    c0 = max(0, min(ncx - 1, int(math.floor((lo - pad - x0) / h))))
-    c1 = max(0, min(ncx - 1, int(math.floor((hi + pad - x0) / h))))
+    c0 = _cell_index((lo - pad - x0) / h, ncx)
+    c1 = _cell_index((hi + pad - x0) / h, ncx)
     return c0, c1
 
 
@@ -656,10 +667,10 @@ def _split_cells(sx, sy, ex, ey, x0, y0, h, ncx, ncy, grow):  # pragma: no cover
                 bx = ex[k] if j == mk - 1 else sx[k] + f1 * (ex[k] - sx[k])
                 by = ey[k] if j == mk - 1 else sy[k] + f1 * (ey[k] - sy[k])
             # (truncation is the floor here: the negatives it rounds up are clamped to 0)
-            cx0 = max(0, min(ncx - 1, int((min(ax, bx) - pad - x0) * ih)))
-            cx1 = max(0, min(ncx - 1, int((max(ax, bx) + pad - x0) * ih)))
-            cy0 = max(0, min(ncy - 1, int((min(ay, by) - pad - y0) * ih)))
-            cy1 = max(0, min(ncy - 1, int((max(ay, by) + pad - y0) * ih)))
+            cx0 = _cell_index((min(ax, bx) - pad - x0) * ih, ncx)
+            cx1 = _cell_index((max(ax, bx) + pad - x0) * ih, ncx)
+            cy0 = _cell_index((min(ay, by) - pad - y0) * ih, ncy)
+            cy1 = _cell_index((max(ay, by) + pad - y0) * ih, ncy)
             cr[p, 0] = cx0
             cr[p, 1] = cx1
             cr[p, 2] = cy0
@@ -1355,10 +1366,10 @@ def _seg_cells(sx, sy, ex, ey, keep, run, x0, y0, h, ncx, ncy):  # pragma: no co
         b0 = sy[k]
         a1 = ex[k]
         b1 = ey[k]
-        cx0 = max(0, min(ncx - 1, int(math.floor((min(a0, a1) - pad - x0) * inv))))
-        cx1 = max(0, min(ncx - 1, int(math.floor((max(a0, a1) + pad - x0) * inv))))
-        cy0 = max(0, min(ncy - 1, int(math.floor((min(b0, b1) - pad - y0) * inv))))
-        cy1 = max(0, min(ncy - 1, int(math.floor((max(b0, b1) + pad - y0) * inv))))
+        cx0 = _cell_index((min(a0, a1) - pad - x0) * inv, ncx)
+        cx1 = _cell_index((max(a0, a1) + pad - x0) * inv, ncx)
+        cy0 = _cell_index((min(b0, b1) - pad - y0) * inv, ncy)
+        cy1 = _cell_index((max(b0, b1) + pad - y0) * inv, ncy)
         box[k, 0] = cx0
         box[k, 1] = cx1
         box[k, 2] = cy0
