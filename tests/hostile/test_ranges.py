@@ -272,6 +272,8 @@ def job_text(work) -> str:
         ("inner_radius_mm = 70.0", "inner_radius_mm = 1e300", ["inner_radius_mm"]),
         ("\nangle_deg = 0.0", "\nangle_deg = inf", ["placement.angle_deg"]),
         ("mount_angle_deg = 60.0", "mount_angle_deg = 1e300", ["mount_angle_deg"]),
+        ("size_mm = [14.0, 14.0, 0.1]", "size_mm = [1e300, 14.0, 0.1]", ["size_mm[0]", "10000"]),
+        ("origin_mm = [-2.0, -2.0, 0.0]", "origin_mm = [-2.0, -2.0, inf]", ["origin_mm[2]"]),
         ("tilt_deg = 20.0", "tilt_deg = nan", ["tilt_deg"]),
     ],
 )
