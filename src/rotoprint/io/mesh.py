@@ -268,8 +268,9 @@ def load_mesh(
                 tri = tri[:, ::-1, :]
     lo, hi = float(tri.min()), float(tri.max())
     if not (lo >= COORD_MM.lo and hi <= COORD_MM.hi):
+        far = lo if -lo > hi else hi
         raise MeshError(
-            f"coordinates reach {lo:.4g} .. {hi:.4g} mm after units, scale and transform; parts must lie within "
+            f"a coordinate reaches {far:.3g} mm after units, scale and transform; parts must lie within "
             f"{COORD_MM.text()} (check --units, --scale and --translate)",
             path=path,
         )
