@@ -34,6 +34,7 @@ import numpy as np
 from PIL import Image
 
 from .. import __version__
+from ..ranges import Range, check_range
 from ..errors import ConfigError, ImageError, InputFileError
 from .atomic import MANIFEST_NAME, OutputClaim, kill_point
 from .ownership import zip_marker
@@ -325,6 +326,9 @@ def _zinfo(name: str) -> zipfile.ZipInfo:
     return zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
 
 
+_EPOCH_S = Range(0, 253_402_300_799, integer=True)  # 1970 to the end of year 9999
+
+
 def creation_time() -> datetime.datetime:
     """Now, or ``SOURCE_DATE_EPOCH`` when set (reproducible outputs)."""
     import os
@@ -332,9 +336,11 @@ def creation_time() -> datetime.datetime:
     epoch = os.environ.get("SOURCE_DATE_EPOCH")
     if epoch is not None:
         try:
-            return datetime.datetime.fromtimestamp(int(epoch), datetime.timezone.utc)
+            secs = int(epoch)
         except ValueError:
             raise ConfigError(f"SOURCE_DATE_EPOCH must be whole seconds, got {epoch!r}") from None
+        secs = check_range(secs, _EPOCH_S, "SOURCE_DATE_EPOCH")
+        return datetime.datetime.fromtimestamp(secs, datetime.timezone.utc)
     return datetime.datetime.now(datetime.timezone.utc)
 
 
@@ -568,7 +574,7 @@ def read_job(path: str | Path) -> ArchiveContents:
             manifest = parse_json(read_input_bytes(mpath, what=MANIFEST_NAME, limit_bytes=MAX_JSON_BYTES),
                                   mpath, what=MANIFEST_NAME)
             names = [str(m["file"]) for m in manifest["masks"]]
-        except (ValueError, KeyError, TypeError) as exc:
+        except (ValueError, KeyError, TypeError, RecursionError) as exc:  # JSONDecodeError is a ValueError
             raise InputFileError(f"{MANIFEST_NAME} is not a mask list ({type(exc).__name__}: {exc})", path=path) from None
         except InputFileError as exc:
             raise InputFileError(f"{MANIFEST_NAME} is not a mask list ({exc.problem})", path=path) from None

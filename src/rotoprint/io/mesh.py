@@ -10,7 +10,8 @@ import numpy as np
 
 from .._resources import release_free_memory
 from ..constants import UNITS_TO_MM
-from ..errors import ConfigError, InputFileError, MeshError, RotoprintError
+from ..errors import ConfigError, MeshError, RotoprintError
+from ..ranges import COORD_MM
 from .inputs import MAX_MESH_BYTES, check_input_file, read_input_bytes, read_zip_members
 from ..mesh import Mesh
 from .stl import read_stl_bytes
@@ -110,6 +111,8 @@ def load_triangles(path: str | Path) -> np.ndarray:
         return read_stl_bytes(data, str(path))
     if len(data) == 0:
         raise MeshError("file is empty", path=path)
+    if suffix == ".ply":
+        check_ply_counts(data, path)
     return _load_with_trimesh(path, data)
 
 
@@ -138,6 +141,62 @@ def _text_for_trimesh(data: bytes, path: Path) -> bytes:
         raise MeshError(f"could not read as {kind}: binary data, not text "
                         f"({100 * printable / len(sample):.0f} % printable characters)", path=path)
     return data.decode("latin-1").encode("utf-8")
+
+
+_PLY_SIZES = {"char": 1, "int8": 1, "uchar": 1, "uint8": 1, "short": 2, "int16": 2, "ushort": 2, "uint16": 2,
+              "int": 4, "int32": 4, "uint": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8}
+_PLY_MAX_HEADER = 64 * 1024
+
+
+def check_ply_counts(data: bytes, path: Path) -> None:
+    """Refuse a PLY whose header declares more elements than the file holds (a lying header).
+
+    ASCII: every element is one line, so the data lines must number at least the declared
+    total. Binary: each element takes at least its fixed-size properties plus, per list, the
+    count and three entries (a face has three corners or more), so the file must be at least
+    that long. Only the header is parsed here; trimesh reads the data.
+
+    Raises
+    ------
+    MeshError
+        No complete header, or a declared count the file cannot hold.
+    """
+    head = data[:_PLY_MAX_HEADER]
+    end = head.find(b"end_header")
+    if not head.startswith(b"ply") or end < 0:
+        return  # not a header we can read: trimesh says what is wrong
+    nl = head.find(b"\n", end)
+    body_at = (nl + 1) if nl >= 0 else len(head)
+    fmt, elements = "", []  # [name, count, min bytes per element]
+    for raw in head[:end].decode("ascii", "replace").splitlines():
+        w = raw.split()
+        if len(w) >= 2 and w[0] == "format":
+            fmt = w[1]
+        elif len(w) >= 3 and w[0] == "element":
+            try:
+                elements.append([w[1], int(w[2]), 0])
+            except ValueError:
+                raise MeshError(f"PLY header: element {w[1]} has count {w[2]!r}, not an integer", path=path) from None
+        elif len(w) >= 3 and w[0] == "property" and elements:
+            if w[1] == "list" and len(w) >= 5:
+                elements[-1][2] += _PLY_SIZES.get(w[2], 1) + 3 * _PLY_SIZES.get(w[3], 1)
+            else:
+                elements[-1][2] += _PLY_SIZES.get(w[1], 1)
+    for name, n, _ in elements:
+        if n < 0:
+            raise MeshError(f"PLY header declares {n} {name} elements", path=path)
+    total = sum(n for _, n, _ in elements)
+    if fmt == "ascii":
+        lines = sum(1 for ln in data[body_at:].splitlines() if ln.strip())
+        if lines < total:
+            desc = ", ".join(f"{n} {name}" for name, n, _ in elements)
+            raise MeshError(f"PLY header declares {desc} ({total} lines) but the file holds {lines} data lines", path=path)
+    elif fmt.startswith("binary"):
+        need = sum(n * b for _, n, b in elements)
+        have = len(data) - body_at
+        if have < need:
+            desc = ", ".join(f"{n} {name}" for name, n, _ in elements)
+            raise MeshError(f"PLY header declares {desc}, at least {need} bytes, but the file holds {have}", path=path)
 
 
 def _load_with_trimesh(path: Path, data: bytes) -> np.ndarray:
@@ -260,6 +319,14 @@ def load_mesh(
             tri = tri @ T[:3, :3].T + T[:3, 3]
             if np.linalg.det(T[:3, :3]) < 0:  # a mirroring transform reverses every face
                 tri = tri[:, ::-1, :]
+    lo, hi = float(tri.min()), float(tri.max())
+    if not (lo >= COORD_MM.lo and hi <= COORD_MM.hi):
+        far = lo if -lo > hi else hi
+        raise MeshError(
+            f"a coordinate reaches {far:.3g} mm after units, scale and transform; parts must lie within "
+            f"{COORD_MM.text()} (check --units, --scale and --translate)",
+            path=path,
+        )
     mesh = Mesh.from_triangles(tri, source=str(path), fill_holes=fill_holes, _owned=True)
     del tri
     release_free_memory()

@@ -39,9 +39,11 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .. import ranges as R
 from ..errors import ConfigError, InputFileError
 from .materials import Material, MaterialLibrary, builtin_library, load_materials, validation_message
 from .shapes import Shape
@@ -62,9 +64,15 @@ DPI_Y_RANGE = (25.0, 100_000.0)
 FREQUENCY_HZ_MAX = 1_000_000.0
 
 
+_Angle = Annotated[float, R.field(R.ANGLE_DEG)]
+_Coord = Annotated[float, R.field(R.COORD_MM)]
+_PRIORITY = R.Range(-1_000_000, 1_000_000, integer=True)
+_CYCLES = R.Range(1, 10_000, integer=True)  # cycles (passes) per layer
+
+
 class JobInfo(_Strict):
     name: str = "job"
-    layer_height_mm: float = Field(gt=0, le=10)
+    layer_height_mm: float = Field(ge=R.LAYER_HEIGHT_MM.lo, le=10)
     materials_file: str | None = None
     description: str = ""
 
@@ -93,8 +101,8 @@ class HeadSpec(_Strict):
 
     name: str = Field(min_length=1)
     ink: str = Field(min_length=1)
-    mount_angle_deg: float = 0.0
-    tilt_deg: float | None = None
+    mount_angle_deg: Annotated[float, R.field(R.ANGLE_DEG)] = 0.0
+    tilt_deg: Annotated[float, R.field(R.TILT_DEG)] | None = None
 
     @field_validator("mount_angle_deg")
     @classmethod
@@ -106,10 +114,10 @@ class HeadSpec(_Strict):
 
 class PrinterSpec(_Strict):
     device: str = "omnidot760"
-    tilt_deg: float = 0.0
+    tilt_deg: Annotated[float, R.field(R.TILT_DEG)] = 0.0
     direction: int = 1
     equalise: bool = True
-    max_swathes: int | None = Field(default=None, ge=1)
+    max_swathes: Annotated[int, R.field(R.SWATHES)] | None = None
     clock: ClockSpec = ClockSpec()
     heads: tuple[HeadSpec, ...] = Field(min_length=1)
 
@@ -134,8 +142,8 @@ class PlacementSpec(_Strict):
     """Where the assembly's footprint sits: its inner edge (smallest model X) at
     ``inner_radius_mm`` on the centre line at ``angle_deg`` (see ``docs/rotary.md``)."""
 
-    inner_radius_mm: float = Field(gt=0)
-    angle_deg: float = 0.0
+    inner_radius_mm: Annotated[float, R.field(R.RADIUS_MM)]
+    angle_deg: Annotated[float, R.field(R.ANGLE_DEG)] = 0.0
 
 
 class PartSpec(_Strict):
@@ -146,13 +154,13 @@ class PartSpec(_Strict):
 
     name: str = Field(min_length=1)
     material: str = Field(min_length=1)
-    priority: int = 0
+    priority: Annotated[int, R.field(_PRIORITY)] = 0
     mesh: str | None = None
     shape: Shape | None = None
     units: str = "mm"
-    rotate_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    translate_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    terminals: dict[str, tuple[float, float, float, float]] = Field(default_factory=dict)
+    rotate_deg: tuple[_Angle, _Angle, _Angle] = (0.0, 0.0, 0.0)
+    translate_mm: tuple[_Coord, _Coord, _Coord] = (0.0, 0.0, 0.0)
+    terminals: dict[str, tuple[_Coord, _Coord, _Coord, _Coord]] = Field(default_factory=dict, max_length=10_000)
 
     @model_validator(mode="after")
     def _one_source(self) -> PartSpec:
@@ -174,8 +182,8 @@ class ProcessSpec(_Strict):
     warning, and per-material overrides of the cycles per layer."""
 
     order: tuple[str, ...] | None = None
-    max_passes_per_layer: int = Field(default=200, ge=1)
-    cycles_per_layer: dict[str, int] = Field(default_factory=dict)
+    max_passes_per_layer: int = Field(default=200, ge=1, le=_CYCLES.hi)
+    cycles_per_layer: dict[str, Annotated[int, R.field(_CYCLES)]] = Field(default_factory=dict)
     check: bool = True
     simulate_layers: int = Field(default=4, ge=0, le=1000)
 

@@ -20,7 +20,7 @@ of the system); measure your own and override them.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -40,8 +40,12 @@ __all__ = [
 ]
 
 
+_DAY_S = 86_400.0  # waits and post steps: at most a day each
+_SIGMA_MAX = 1e9  # S/m; silver, the best conductor, is 6.3e7
+
+
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Ink(_Strict):
@@ -54,10 +58,10 @@ class Ink(_Strict):
     name: str = Field(min_length=1)
     reactant: str = ""
     concentration_mol_per_l: float = Field(gt=0, le=50)
-    stoichiometry: float = Field(default=1.0, gt=0)
+    stoichiometry: float = Field(default=1.0, gt=0, le=1000)
     repeats: int = Field(default=1, ge=1, le=100)
-    wait_after_s: float = Field(default=0.0, ge=0)
-    ph: tuple[float, float] | None = None
+    wait_after_s: float = Field(default=0.0, ge=0, le=_DAY_S)
+    ph: tuple[Annotated[float, Field(ge=-2, le=16)], Annotated[float, Field(ge=-2, le=16)]] | None = None
     warning: str = ""
 
     @field_validator("name")
@@ -75,8 +79,8 @@ class PostStep(_Strict):
     """A wait or treatment after a material's passes in a layer."""
 
     kind: Literal["flash_heat", "cure", "dry", "uv_cure", "wait"]
-    temperature_c: float | None = None
-    duration_s: float = Field(default=0.0, ge=0)
+    temperature_c: float | None = Field(default=None, ge=-273.15, le=3000)
+    duration_s: float = Field(default=0.0, ge=0, le=_DAY_S)
     note: str = ""
 
     def describe(self) -> str:
@@ -89,8 +93,8 @@ class Product(_Strict):
     """The solid formed, for the thickness estimate ``t = n M / (rho (1 - porosity))``."""
 
     name: str
-    molar_mass_g_per_mol: float = Field(gt=0)
-    density_g_per_cm3: float = Field(gt=0)
+    molar_mass_g_per_mol: float = Field(gt=0, le=1e7)
+    density_g_per_cm3: float = Field(gt=0, le=100)
     porosity: float = Field(default=0.0, ge=0, lt=1)
 
 
@@ -102,8 +106,8 @@ class Material(_Strict):
     inks: tuple[Ink, ...] = Field(min_length=1)
     product: Product
     post_steps: tuple[PostStep, ...] = ()
-    conductivity_s_per_m: float | None = Field(default=None, gt=0)
-    bulk_conductivity_s_per_m: float | None = Field(default=None, gt=0)
+    conductivity_s_per_m: float | None = Field(default=None, gt=0, le=_SIGMA_MAX)
+    bulk_conductivity_s_per_m: float | None = Field(default=None, gt=0, le=_SIGMA_MAX)
     warnings: tuple[str, ...] = ()
     figures: dict[str, str] = Field(default_factory=dict)
     nominal: tuple[str, ...] = ()
