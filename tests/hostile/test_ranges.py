@@ -360,9 +360,9 @@ def test_check_kernel_widths_bounded_in_the_library():
 def test_check_kernel_cell_indices_clamp_before_the_int_conversion():
     """The kernels' cell lookups stay in the grid for any pad, even past int64 (was: a wrapped
     index and SIGSEGV)."""
-    from rotoprint.check import _kernels as K
+    from rotoprint.check._kernels.grid import _cell_index, _span
 
-    assert K._rows(0.0, 1.0, 0.0, 0.1, 10, 1e19) == (0, 9)
-    assert K._rows(0.0, 1.0, 0.0, 0.1, 10, float("nan")) == (0, 0)
-    assert K._rows(0.25, 0.55, 0.0, 0.1, 10, 0.0) == (2, 5)
-    assert K._cell_index(-1e300, 7) == 0 and K._cell_index(1e300, 7) == 6 and K._cell_index(3.7, 7) == 3
+    assert _span(0.0, 0.0, 1.0, 1.0, 0, 0.0, 0.0, 0.1, 10, 1e19) == (0, 9)
+    assert _span(0.25, 0.0, 0.55, 0.0, 0, 0.0, 0.0, 0.1, 10, 0.0) == (2, 5)
+    assert _cell_index(float("nan"), 7) == 0
+    assert _cell_index(-1e300, 7) == 0 and _cell_index(1e300, 7) == 6 and _cell_index(3.7, 7) == 3
