@@ -10,6 +10,8 @@ import typer
 
 from ..errors import ConfigError
 from .options import is_quiet, is_verbose, FibreAngleOpt, OffsetOpt, QuietOpt, ResumeOpt, SchedulerOpt, VerboseOpt, WorkersOpt
+from .. import ranges as R
+from ._common import in_range
 from ._common import (
     DeviceOpt,
     ForceOpt,
@@ -38,11 +40,11 @@ def dlp_command(
     invert: Annotated[bool, typer.Option("--invert", help="Black = expose.")] = False,
     mirror_x: Annotated[bool, typer.Option("--mirror-x", help="Flip masks left-right (besides the device's own setting).")] = False,
     mirror_y: Annotated[bool, typer.Option("--mirror-y", help="Flip masks top-bottom (besides the device's own setting).")] = False,
-    first_layers: Annotated[int, typer.Option("--first-layers", help="Layers over which the first-layer offset fades to zero.")] = 0,
-    first_layer_offset: Annotated[float, typer.Option("--first-layer-offset", help="Elephant-foot inset of layer 0, micrometres.")] = 0.0,
+    first_layers: Annotated[int, typer.Option("--first-layers", help="Layers over which the first-layer offset fades to zero.", callback=in_range(R.COUNT))] = 0,
+    first_layer_offset: Annotated[float, typer.Option("--first-layer-offset", help="Elephant-foot inset of layer 0, micrometres.", callback=in_range(R.OFFSET_UM))] = 0.0,
     fmt: Annotated[str, typer.Option("--format", help="auto (from --out), sl1, sl1s, png, perfactory.")] = "auto",
-    exposure: Annotated[float | None, typer.Option("--exposure", help="Exposure per layer, s (default: the device's).")] = None,
-    first_exposure: Annotated[float | None, typer.Option("--first-exposure", help="Exposure of the first layers, s (default: the device's).")] = None,
+    exposure: Annotated[float | None, typer.Option("--exposure", help="Exposure per layer, s (default: the device's).", callback=in_range(R.EXPOSURE_S))] = None,
+    first_exposure: Annotated[float | None, typer.Option("--first-exposure", help="Exposure of the first layers, s (default: the device's).", callback=in_range(R.EXPOSURE_S))] = None,
     fibre_angle: FibreAngleOpt = None,
     offset: OffsetOpt = None,
     units: UnitsOpt = "mm",
@@ -59,7 +61,7 @@ def dlp_command(
 ) -> None:
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
-    from ..io.archives import JobInfo, format_from_path, job_dir_name
+    from ..io.archives import JobInfo, creation_time, format_from_path, job_dir_name
     from ..io.dlpjob import write_dlp_job
     from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
@@ -68,9 +70,15 @@ def dlp_command(
 
     setup_logging(is_verbose(verbose))
     quiet = is_quiet(quiet)
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..runner import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     kind = format_from_path(out, fmt)
     inputs = [mesh, device_input(device)]
     check_output_path(out, is_dir=kind not in ("sl1", "sl1s"), inputs=inputs, force=force)  # before any work
+    if kind in ("sl1", "sl1s"):
+        creation_time()  # a bad SOURCE_DATE_EPOCH is refused before any work
     overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
     dev = load_device(device, **overrides)
     if not isinstance(dev, ProjectorDevice):

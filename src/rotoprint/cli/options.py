@@ -13,7 +13,9 @@ from typing import Annotated
 
 import typer
 
+from .. import ranges as R
 from ..constants import DEFAULT_GAP_RADIUS_MM
+from ._common import in_range
 
 __all__ = [
     "QuietOpt", "VerboseOpt", "WorkersOpt", "SchedulerOpt", "ResumeOpt", "FillOpt", "GapRadiusOpt", "OffsetOpt",
@@ -25,14 +27,14 @@ VERBOSE_HELP = "Log what happens (resume, workers, estimates, library warnings) 
 
 QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help=QUIET_HELP)]
 VerboseOpt = Annotated[bool, typer.Option("--verbose", "-v", help=VERBOSE_HELP)]
-WorkersOpt = Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")]
+WorkersOpt = Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.", callback=in_range(R.WORKERS))]
 SchedulerOpt = Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")]
 ResumeOpt = Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep the layers it verified, make the rest.")]
 FillOpt = Annotated[str, typer.Option("--fill", help="Fill rule: nonzero (overlapping shells union) or evenodd.")]
-GapRadiusOpt = Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends of a section closer than this, mm.")]
+GapRadiusOpt = Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends of a section closer than this, mm.", callback=in_range(R.GAP_RADIUS_MM))]
 OffsetOpt = Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")]
-DpiYOpt = Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: drops per inch along the print direction (circumferential, at the reference radius); default the head's.")]
-FibreAngleOpt = Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X (DLP: the model direction put along image rows). Default: the device's own direction.")]
+DpiYOpt = Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: drops per inch along the print direction (circumferential, at the reference radius); default the head's.", callback=in_range(R.DPI))]
+FibreAngleOpt = Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X (DLP: the model direction put along image rows). Default: the device's own direction.", callback=in_range(R.ANGLE_DEG))]
 
 
 @dataclass

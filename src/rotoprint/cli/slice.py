@@ -10,6 +10,8 @@ import typer
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
 from .options import is_quiet, is_verbose, DpiYOpt, FibreAngleOpt, FillOpt, GapRadiusOpt, OffsetOpt, QuietOpt, ResumeOpt, SchedulerOpt, VerboseOpt, WorkersOpt
+from .. import ranges as R
+from ._common import direction_cb, in_range
 from ._common import (
     styled,
     DeviceOpt,
@@ -49,12 +51,12 @@ def slice_command(
     quiet: QuietOpt = False,
     verbose: VerboseOpt = False,
     rotary: Annotated[bool, typer.Option("--rotary", help="Direct rotary slicing: per-nozzle firing images straight from the mesh (inkjet heads).")] = False,
-    tilt: Annotated[float | None, typer.Option("--tilt", help="--rotary: head tilt, degrees (counter-clockwise positive).")] = None,
-    radius: Annotated[float | None, typer.Option("--radius", help="--rotary: radius of the part's inner edge (smallest model X), mm.")] = None,
-    angle: Annotated[float, typer.Option("--angle", help="--rotary: angle of the part's centre line on the platform, degrees.")] = 0.0,
-    direction: Annotated[int, typer.Option("--direction", help="--rotary: +1 platform turns counter-clockwise seen from above, -1 clockwise.")] = 1,
-    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="--rotary: reference radius of the clock, mm (default: each swathe's outermost track).")] = None,
-    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.")] = None,
+    tilt: Annotated[float | None, typer.Option("--tilt", help="--rotary: head tilt, degrees (counter-clockwise positive).", callback=in_range(R.TILT_DEG))] = None,
+    radius: Annotated[float | None, typer.Option("--radius", help="--rotary: radius of the part's inner edge (smallest model X), mm.", callback=in_range(R.RADIUS_MM))] = None,
+    angle: Annotated[float, typer.Option("--angle", help="--rotary: angle of the part's centre line on the platform, degrees.", callback=in_range(R.ANGLE_DEG))] = 0.0,
+    direction: Annotated[int, typer.Option("--direction", help="--rotary: +1 platform turns counter-clockwise seen from above, -1 clockwise.", callback=direction_cb)] = 1,
+    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="--rotary: reference radius of the clock, mm (default: each swathe's outermost track).", callback=in_range(R.RADIUS_MM))] = None,
+    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.", callback=in_range(R.SWATHES))] = None,
     equalise: Annotated[bool, typer.Option("--equalise", help="--rotary: thin inner tracks so drops per unit area are uniform.")] = False,
     reference_images: Annotated[bool, typer.Option("--reference-images", help="--rotary: also write each layer's Cartesian cross-section (for 'rotoprint simulate').")] = False,
     force: ForceOpt = False,
@@ -74,6 +76,10 @@ def slice_command(
     quiet = is_quiet(quiet)
     inputs = [mesh, device_input(device)]
     check_output_path(out, is_dir=True, inputs=inputs, force=force)  # before any work
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..runner import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,

@@ -17,6 +17,8 @@ import numpy as np
 from PIL import Image
 
 from ...errors import ConfigError, ImageError, InputFileError
+from ...ranges import Range, check_range
+from ..images import open_image
 
 #: Keys of ``config.ini`` written in every SL1 / SL1S archive.
 CONFIG_KEYS = (
@@ -145,6 +147,9 @@ def _zinfo(name: str) -> zipfile.ZipInfo:
     return zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
 
 
+_EPOCH_S = Range(0, 253_402_300_799, integer=True)  # 1970 to the end of year 9999
+
+
 def creation_time() -> datetime.datetime:
     """Now, or ``SOURCE_DATE_EPOCH`` when set (reproducible outputs)."""
     import os
@@ -152,9 +157,11 @@ def creation_time() -> datetime.datetime:
     epoch = os.environ.get("SOURCE_DATE_EPOCH")
     if epoch is not None:
         try:
-            return datetime.datetime.fromtimestamp(int(epoch), datetime.timezone.utc)
+            secs = int(epoch)
         except ValueError:
             raise ConfigError(f"SOURCE_DATE_EPOCH must be whole seconds, got {epoch!r}") from None
+        secs = check_range(secs, _EPOCH_S, "SOURCE_DATE_EPOCH")
+        return datetime.datetime.fromtimestamp(secs, datetime.timezone.utc)
     return datetime.datetime.now(datetime.timezone.utc)
 
 
@@ -180,7 +187,7 @@ class ArchiveContents:
 
     def mask(self, i: int) -> np.ndarray:
         data = self._reader(self.mask_names[i])
-        with Image.open(io.BytesIO(data)) as im:
+        with open_image(data, self.path, f"mask {self.mask_names[i]}") as im:
             if im.mode != "L":
                 raise ImageError(f"mask {self.mask_names[i]} is mode {im.mode!r}, expected 'L' (8-bit grey)", path=self.path)
             return np.asarray(im).copy()

@@ -7,8 +7,9 @@ from pathlib import Path
 
 from ..._version import __version__
 from ..atomic import OutputClaim
+from ..inputs import MAX_JSON_BYTES, read_input_text
 from ._common import PERFACTORY_CFG, PERFACTORY_TXT, ArchiveContents, ArchiveFormat, JobInfo, _fmt, _ini, _parse_ini, _Stats
-from .png import write_folder
+from .png import mask_reader, write_folder
 
 __all__ = ["PERFACTORY"]
 
@@ -46,8 +47,9 @@ def _write(path, items, info: JobInfo, on_mask, claim: OutputClaim) -> dict:
 
 
 def _open(path: Path, manifest: dict, names: list[str]) -> ArchiveContents:
-    cfg = _parse_ini((path / PERFACTORY_CFG).read_text(encoding="utf-8"), PERFACTORY_CFG, path)
-    return ArchiveContents(path, "perfactory", cfg, {}, manifest, names, {}, lambda n: (path / n).read_bytes())
+    cfg = _parse_ini(read_input_text(path / PERFACTORY_CFG, what=PERFACTORY_CFG, limit_bytes=MAX_JSON_BYTES),
+                     PERFACTORY_CFG, path)
+    return ArchiveContents(path, "perfactory", cfg, {}, manifest, names, {}, mask_reader(path))
 
 
 PERFACTORY = ArchiveFormat("perfactory", is_dir=True, suffixes=(), kind="perfactory-job", write=_write, open=_open,

@@ -11,6 +11,7 @@ from pathlib import Path
 from ..._version import __version__
 from ...errors import ConfigError, InputFileError
 from ..atomic import MANIFEST_NAME, OutputClaim
+from ..inputs import MAX_IMAGE_BYTES, MAX_JSON_BYTES, parse_json, read_input_bytes
 from ._common import ArchiveContents, ArchiveFormat, JobInfo, _Stats
 
 __all__ = ["PNG", "write_folder", "read_folder"]
@@ -88,11 +89,17 @@ def read_folder(path: Path) -> tuple[dict, list[str]]:
     if not mpath.exists():
         raise InputFileError(f"folder holds no {MANIFEST_NAME}", path=path)
     try:
-        manifest = json.loads(mpath.read_text(encoding="utf-8"))
+        manifest = parse_json(read_input_bytes(mpath, what=MANIFEST_NAME, limit_bytes=MAX_JSON_BYTES),
+                              mpath, what=MANIFEST_NAME)
         names = [str(m["file"]) for m in manifest["masks"]]
-    except (ValueError, KeyError, TypeError) as exc:  # JSONDecodeError is a ValueError
+    except (ValueError, KeyError, TypeError, RecursionError) as exc:  # JSONDecodeError is a ValueError
         raise InputFileError(f"{MANIFEST_NAME} is not a mask list ({type(exc).__name__}: {exc})", path=path) from None
+    except InputFileError as exc:
+        raise InputFileError(f"{MANIFEST_NAME} is not a mask list ({exc.problem})", path=path) from None
+    root = path.resolve()
     for n in names:
+        if not (path / n).resolve().is_relative_to(root):
+            raise InputFileError(f"mask {n!r} listed in the manifest is outside the folder", path=path)
         if not (path / n).is_file():
             raise InputFileError(f"mask {n} listed in the manifest is missing", path=path)
     return manifest, names
@@ -103,7 +110,12 @@ def _write(path, items, info: JobInfo, on_mask, claim: OutputClaim) -> dict:
 
 
 def _open(path: Path, manifest: dict, names: list[str]) -> ArchiveContents:
-    return ArchiveContents(path, "png", {}, {}, manifest, names, {}, lambda n: (path / n).read_bytes())
+    return ArchiveContents(path, "png", {}, {}, manifest, names, {}, mask_reader(path))
+
+
+def mask_reader(path: Path):
+    """Reads the mask file ``name`` of the folder ``path``, bounded in size."""
+    return lambda n: read_input_bytes(path / n, what="mask image", limit_bytes=MAX_IMAGE_BYTES)
 
 
 PNG = ArchiveFormat("png", is_dir=True, suffixes=(), kind="dlp-masks", write=_write, open=_open,

@@ -16,11 +16,12 @@ import re
 import zipfile
 from pathlib import Path
 
-from PIL import Image
 
 from ..._version import __version__
 from ...errors import ConfigError, InputFileError
 from ..atomic import OutputClaim, kill_point
+from ..images import open_image
+from ..inputs import MAX_ARCHIVE_BYTES, read_input_bytes, read_zip_members
 from ..ownership import zip_marker
 from ._common import (
     CONFIG_KEYS,
@@ -112,17 +113,19 @@ def _write_sl1(path, items, info: JobInfo, on_mask, claim: OutputClaim, *, fmt: 
 
 def _open(path: Path, manifest=None, names=None) -> ArchiveContents:
     """Reopen an archive (any file that is not a folder is opened as a zip)."""
-    try:
-        zf = zipfile.ZipFile(path)
-    except zipfile.BadZipFile:
-        raise InputFileError("not a zip archive (SL1 / SL1S expected)", path=path) from None
-    with zf:
-        members = {i.filename: zf.read(i.filename) for i in zf.infolist()}
+    data = read_input_bytes(path, what="SL1 archive", limit_bytes=MAX_ARCHIVE_BYTES)
+    if not zipfile.is_zipfile(io.BytesIO(data)):
+        raise InputFileError("not a zip archive (SL1 / SL1S expected)", path=path)
+    members = read_zip_members(data, path, what="SL1 archive")
+    del data
     for req in ("config.ini", "prusaslicer.ini"):
         if req not in members:
             raise InputFileError(f"archive has no {req}", path=path)
-    config = _parse_ini(members["config.ini"].decode("utf-8"), "config.ini", path)
-    prusa = _parse_ini(members["prusaslicer.ini"].decode("utf-8"), "prusaslicer.ini", path)
+    try:
+        config = _parse_ini(members["config.ini"].decode("utf-8"), "config.ini", path)
+        prusa = _parse_ini(members["prusaslicer.ini"].decode("utf-8"), "prusaslicer.ini", path)
+    except UnicodeDecodeError as exc:
+        raise InputFileError(f"archive ini member is not UTF-8 text (byte {exc.start})", path=path) from None
     missing = [k for k in CONFIG_KEYS if k not in config] + [k for k in PRUSASLICER_KEYS if k not in prusa]
     if missing:
         raise InputFileError(f"archive lacks keys: {', '.join(missing)}", path=path)
@@ -132,13 +135,17 @@ def _open(path: Path, manifest=None, names=None) -> ArchiveContents:
     expect = [f"{job_dir}{i:05d}.png" for i in range(len(layers))]
     if layers != expect:
         raise InputFileError("layer names are not <jobDir>00000.png ... in sequence", path=path)
-    n_cfg = int(config["numFast"]) + int(config["numSlow"])
+    try:
+        n_cfg = int(config["numFast"]) + int(config["numSlow"])
+    except ValueError:
+        raise InputFileError(f"config.ini numFast / numSlow are not whole numbers: {config['numFast']!r}, "
+                             f"{config['numSlow']!r}", path=path) from None
     if n_cfg != len(layers):
         raise InputFileError(f"config.ini counts {n_cfg} layers (numFast + numSlow), the archive holds {len(layers)}", path=path)
     thumbs = {}
     for n, data in members.items():
         if n.startswith("thumbnail/") and n.endswith(".png"):
-            with Image.open(io.BytesIO(data)) as im:
+            with open_image(data, path, f"thumbnail {n}") as im:
                 thumbs[n] = im.size
     fmt = path.suffix.lower().lstrip(".") if path.suffix.lower() in (".sl1", ".sl1s") else "sl1"
     return ArchiveContents(path, fmt, config, prusa, {}, layers, thumbs, members.__getitem__)
