@@ -45,6 +45,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from ..errors import ConfigError, InputFileError
 from .materials import Material, MaterialLibrary, builtin_library, load_materials, validation_message
+from .cadparts import LayerFile
 from .shapes import Shape
 
 __all__ = ["JobSpec", "JobInfo", "PrinterSpec", "HeadSpec", "ClockSpec", "PlacementSpec", "PartSpec", "ResistanceSpec",
@@ -150,6 +151,7 @@ class PartSpec(_Strict):
     priority: int = 0
     mesh: str | None = None
     shape: Shape | None = None
+    layer: LayerFile | None = None  # a Gerber/Excellon/DXF/SVG region between two heights (cadparts)
     units: str = "mm"
     rotate_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
     translate_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -157,8 +159,11 @@ class PartSpec(_Strict):
 
     @model_validator(mode="after")
     def _one_source(self) -> PartSpec:
-        if (self.mesh is None) == (self.shape is None):
-            raise ValueError("give exactly one of 'mesh' (a file) or 'shape' (a built-in shape)")
+        if sum(v is not None for v in (self.mesh, self.shape, self.layer)) != 1:
+            raise ValueError("give exactly one of 'mesh' (a file), 'shape' (a built-in shape) or 'layer' "
+                             "(a Gerber, Excellon, DXF or SVG layer)")
+        if self.layer is not None and "units" in self.model_fields_set:
+            raise ValueError("a layer part takes its units inside layer = { ..., units = ... }")
         for k, (x0, y0, x1, y1) in self.terminals.items():
             if not (x1 > x0 and y1 > y0):
                 raise ValueError(f"terminal {k!r} must be [x0, y0, x1, y1] with x1 > x0 and y1 > y0")
@@ -291,6 +296,8 @@ def _check_refs(spec: JobSpec, lib: MaterialLibrary, src: str | None) -> None:
         if p.shape is not None:
             avail = {**p.shape.terminals(), **avail}
         for t in r.between:
+            if p.layer is not None:
+                break  # a layer's pads are named in its file: checked when the plan reads it
             if t not in avail:
                 err(f"resistance[{i}].between: part {r.part!r} has no terminal {t!r}; it has: {', '.join(sorted(avail)) or 'none'}")
         if r.between[0] == r.between[1]:
