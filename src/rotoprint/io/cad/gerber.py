@@ -171,7 +171,8 @@ def _object_shape(obj, idx: int, tol: float, path: Path):
 
 def _terminal_names(obj) -> list[str]:
     names = []
-    attrs = getattr(obj, "attrs", None) or {}
+    attrs = getattr(obj, "attrs", None)
+    attrs = attrs if isinstance(attrs, dict) else {}
     if ".N" in attrs and attrs[".N"] and attrs[".N"][0]:
         names.append(str(attrs[".N"][0]))
     if ".P" in attrs and len(attrs[".P"]) >= 2:
@@ -237,7 +238,8 @@ def _read(path: Path, tol: float, kind: str) -> PlanarLayer:
                     terms.setdefault(n, []).append(shape)
         elif isinstance(obj, go.Region):
             counts["regions"] += 1
-            attrs = getattr(obj, "attrs", None) or {}
+            attrs = getattr(obj, "attrs", None)
+            attrs = attrs if isinstance(attrs, dict) else {}
             if ".P" in attrs and obj.polarity_dark:
                 for n in _terminal_names(obj):
                     terms.setdefault(n, []).append(shape)

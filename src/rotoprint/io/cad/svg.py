@@ -51,7 +51,7 @@ def _precheck(path: Path) -> None:
                 if depth > MAX_ELEMENT_DEPTH:
                     raise CadError(f"elements are nested more than {MAX_ELEMENT_DEPTH} deep", path=path)
                 if t > MAX_TRANSFORM_DEPTH:
-                    raise CadError(f"transforms are nested {t} deep (more than {MAX_TRANSFORM_DEPTH}); flatten the "
+                    raise CadError(f"transforms are nested more than {MAX_TRANSFORM_DEPTH} deep; flatten the "
                                    "groups before reading", path=path)
                 if depth == 1:
                     for k in ("width", "height"):
@@ -158,7 +158,8 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
     if size > MAX_FILE_BYTES:
         raise CadError(f"file is {size / 2**20:.0f} MiB, more than the {MAX_FILE_BYTES // 2**20} MiB an SVG layer may be", path=p)
     _precheck(p)
-    mm_per_px = length_unit_mm(units or "px", path=p)
+    # svgelements' own CSS pixel per mm (it converts "mm" with this factor)
+    mm_per_px = length_unit_mm(units, path=p) if units else 1.0 / float(se.Length("1mm").value(ppi=96.0))
     tol = float(tolerance_mm) / mm_per_px
     try:
         doc = se.SVG.parse(str(p), reify=True, ppi=96.0)
