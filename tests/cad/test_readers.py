@@ -204,3 +204,13 @@ def test_info_json_reports_area(tmp_path, run_cli):
     assert d["narrowest_gap_mm"] == pytest.approx(1.0, abs=1e-9)
     assert d["bounds_mm"] == {"min": [-1.0, -0.5], "max": [1.0, 2.5]}
     np.testing.assert_allclose(d["size_mm"], [2.0, 3.0])
+
+
+def test_tolerance_range_and_units_for_gerber_refused(tmp_path):
+    p = _write(tmp_path, "r.gbr", HEAD + "%ADD10C,1.000000*%\nD10*\nX0Y0D03*\nM02*\n")
+    with pytest.raises(CadError, match="tolerance must be"):
+        read_layer(p, tolerance_mm=1e-9)
+    with pytest.raises(CadError, match="states its own units"):
+        read_layer(p, tolerance_mm=0.01, units="in")
+    with pytest.raises(CadError, match="not a length"):
+        read_layer(_write(tmp_path, "x.svg", _svg('<rect width="1" height="1"/>')), tolerance_mm=0.01, units="kg")

@@ -26,7 +26,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from ..errors import CadError
 from ..io.cad import CAD_SUFFIXES, PlanarLayer, read_layer
-from ..io.cad._geometry import LENGTH_UNITS_MM, as_multipolygon
+from ..io.cad._geometry import LENGTH_UNITS_MM, MIN_TOLERANCE_MM, as_multipolygon
 from ..mesh import Mesh
 from ..slicing._sections import Segments
 
@@ -44,7 +44,7 @@ class LayerFile(BaseModel):
     file: str = Field(min_length=1)
     z_mm: tuple[float, float]
     units: str | None = None
-    tolerance_mm: float | None = Field(default=None, gt=0, le=1.0)
+    tolerance_mm: float | None = Field(default=None, ge=MIN_TOLERANCE_MM, le=1.0)
     mirror: bool = False
     holes: tuple[str, ...] = ()
     terminals: dict[str, tuple[float, float]] = Field(default_factory=dict)

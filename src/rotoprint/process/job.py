@@ -26,6 +26,7 @@
     material = "plaster"
     priority = 1
     mesh = "body.stl"          # or: shape = { kind = "box", size_mm = [20, 20, 0.2] }
+                               # or: layer = { file = "coil-F_Cu.gbr", z_mm = [0.2, 0.24] } (docs/cad.md)
 
     [[resistance]]
     part = "coil"
@@ -141,7 +142,7 @@ class PlacementSpec(_Strict):
 
 
 class PartSpec(_Strict):
-    """A part: a mesh file or a built-in shape, made of one material.
+    """A part: a mesh file, a built-in shape or a CAD layer (:mod:`.cadparts`), of one material.
 
     Where parts of different materials overlap, the pixel (drop) belongs to the part with the
     highest ``priority``. ``cycles_per_layer`` overrides the planner's number of cycles."""

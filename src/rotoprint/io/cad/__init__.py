@@ -18,7 +18,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ...errors import CadError, InputFileError
-from ._geometry import PlanarLayer, length_unit_mm
+from ._geometry import MIN_TOLERANCE_MM, PlanarLayer, length_unit_mm
 
 __all__ = ["read_layer", "PlanarLayer", "CAD_SUFFIXES", "is_cad_file"]
 
@@ -44,8 +44,8 @@ def read_layer(path: str | Path, *, tolerance_mm: float, units: str | None = Non
         Largest distance of arc and curve chords from the curve, mm.
     units : str, optional
         Length unit of the file's coordinates where the file does not say (DXF without
-        ``$INSUNITS``, SVG user units); overrides the file's own for DXF and SVG. Gerber and
-        Excellon always state theirs and ignore it.
+        ``$INSUNITS``, SVG pixels); overrides the file's own for DXF and SVG. Gerber and
+        Excellon state theirs: giving one for them is refused.
 
     Returns
     -------
@@ -64,8 +64,12 @@ def read_layer(path: str | Path, *, tolerance_mm: float, units: str | None = Non
     if p.is_dir():
         raise InputFileError("is a directory, expected a Gerber, Excellon, DXF or SVG file", path=p)
     suf = p.suffix.lower()
+    if not (isinstance(tolerance_mm, int | float) and MIN_TOLERANCE_MM <= tolerance_mm <= 1.0):
+        raise CadError(f"the arc tolerance must be {MIN_TOLERANCE_MM:g} to 1 mm, got {tolerance_mm!r}", path=p)
     if units is not None:
         length_unit_mm(units, path=p)
+        if suf in GERBER_SUFFIXES | EXCELLON_SUFFIXES:
+            raise CadError(f"units = {units!r} given, but a Gerber or Excellon file states its own units", path=p)
     if suf in GERBER_SUFFIXES:
         from .gerber import read_gerber
 

@@ -19,7 +19,7 @@ from shapely.geometry.base import BaseGeometry
 
 from ...errors import CadError
 
-__all__ = ["PlanarLayer", "arc_points", "circle_polygon", "stroke", "segments_for_arc", "as_multipolygon",
+__all__ = ["MIN_TOLERANCE_MM", "PlanarLayer", "arc_points", "circle_polygon", "stroke", "segments_for_arc", "as_multipolygon",
            "LENGTH_UNITS_MM", "length_unit_mm", "narrowest_mm", "check_valid"]
 
 #: Millimetres per unit of the length units a layer may be given in.
@@ -28,6 +28,9 @@ LENGTH_UNITS_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "um": 1e-3, "in": 25.4, "
 #: At most this many vertices per layer after arcs are split (a tolerance far below the
 #: features would otherwise make millions).
 MAX_VERTICES = 2_000_000
+#: The finest arc tolerance accepted (mm): 0.1 um, far below any drop, and a bound on the
+#: vertices a circle can make (157 for a 1 mm pad, 2 200 for a 200 mm disc).
+MIN_TOLERANCE_MM = 1e-4
 #: Boundary samples of the ray test for the narrowest track and gap.
 MAX_RAY_SAMPLES = 20_000
 
