@@ -147,3 +147,18 @@ def test_layer_part_bad_terminal_and_file_one_line(tmp_path, run_cli):
     job.write_text(text.replace('z_mm = [0.12, 0.16], tolerance_mm', 'z_mm = [0.12, 0.16], units = "kg", tolerance_mm'))
     code, out, err = run_cli("build", job, "--out", tmp_path / "b3", "--no-check")
     assert code == 2 and "not a length unit" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_cad_example_files_are_reproducible(tmp_path):
+    """The example script writes the same bytes every time (the DXF has no time stamps), so a
+    second run over an earlier copy is accepted as unchanged."""
+    import time
+
+    from rotoprint.process.examples import example_files, write_example
+
+    a = example_files("cad-coil")
+    time.sleep(1.1)
+    assert example_files("cad-coil") == a
+    write_example("cad-coil", tmp_path / "ex")
+    write_example("cad-coil", tmp_path / "ex")  # no overwrite needed: nothing changed
+    assert (tmp_path / "ex" / "coil-body.dxf").read_bytes() == a["coil-body.dxf"]

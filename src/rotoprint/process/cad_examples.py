@@ -100,7 +100,20 @@ def excellon_holes(holes, *, plated: bool = True) -> str:
 
 def dxf_outline(x0: float, y0: float, x1: float, y1: float, *, corner_mm: float = 0.0, holes=()) -> bytes:
     """DXF (R2010, mm) of a rectangle outline with rounded corners (a closed LWPOLYLINE with
-    bulges) and optional circular cut-outs ``[(x, y, r), ...]``."""
+    bulges) and optional circular cut-outs ``[(x, y, r), ...]``. The same bytes every time
+    (ezdxf's fixed meta data: no creation time, random GUIDs or time stamps), so a rewritten
+    example is recognised as unchanged."""
+    import ezdxf
+
+    old = ezdxf.options.write_fixed_meta_data_for_testing
+    ezdxf.options.write_fixed_meta_data_for_testing = True
+    try:
+        return _dxf_outline(x0, y0, x1, y1, corner_mm=corner_mm, holes=holes)
+    finally:
+        ezdxf.options.write_fixed_meta_data_for_testing = old
+
+
+def _dxf_outline(x0, y0, x1, y1, *, corner_mm, holes) -> bytes:
     import ezdxf
 
     doc = ezdxf.new("R2010")
