@@ -162,3 +162,25 @@ def test_cad_example_files_are_reproducible(tmp_path):
     write_example("cad-coil", tmp_path / "ex")
     write_example("cad-coil", tmp_path / "ex")  # no overwrite needed: nothing changed
     assert (tmp_path / "ex" / "coil-body.dxf").read_bytes() == a["coil-body.dxf"]
+
+
+def test_point_terminals_in_the_job(tmp_path):
+    """Terminals given as points: the conductor within terminal_radius_mm of each point."""
+    (tmp_path / "coil.gbr").write_text(gerber_coil(CAD_COIL, track="region"))
+    pads = CAD_COIL.terminals()
+    (ox, oy), (ix, iy) = [((x0 + x1) / 2, (y0 + y1) / 2) for x0, y0, x1, y1 in (pads["outer"], pads["inner"])]
+    src = (f'layer = {{ file = "coil.gbr", z_mm = [0.0, 0.04], terminal_radius_mm = 0.6, '
+           f"terminals = {{ A = [{ox}, {oy}], B = [{ix}, {iy}] }} }}")
+    b = _job(tmp_path, src, '"A", "B"')
+    pads_job = _job(tmp_path, 'layer = { file = "coil.gbr", z_mm = [0.0, 0.04] }', '"COIL_OUT", "COIL_IN"')
+    rb = run_build(b, tmp_path / "b", report=False).summary["resistance"][0]["design"]["resistance_ohm"]
+    rp = run_build(pads_job, tmp_path / "p", report=False).summary["resistance"][0]["design"]["resistance_ohm"]
+    # a disc of 0.6 mm inside the 1.2 mm pad: the pad's corners add a little spreading resistance
+    assert rp < rb < rp * 1.02
+    print(f"pads {rp:.2f} ohm, 0.6 mm point discs {rb:.2f} ohm")
+    off = _job(tmp_path, 'layer = { file = "coil.gbr", z_mm = [0.0, 0.04], terminals = { A = [30, 30], B = [0, 0] } }',
+               '"A", "B"')
+    from rotoprint.errors import CadError
+
+    with pytest.raises(CadError, match="terminal 'A' at \\(30, 30\\) mm is not on the layer"):
+        plan_job(off)
