@@ -214,3 +214,22 @@ def test_tolerance_range_and_units_for_gerber_refused(tmp_path):
         read_layer(p, tolerance_mm=0.01, units="in")
     with pytest.raises(CadError, match="not a length"):
         read_layer(_write(tmp_path, "x.svg", _svg('<rect width="1" height="1"/>')), tolerance_mm=0.01, units="kg")
+
+
+def test_gerber_arc_draw_and_macro_exposure_off(tmp_path):
+    tol = 0.001
+    # quarter-circle draw (G02, clockwise) of radius 2 with a 0.4 mm round aperture
+    g = HEAD + "%ADD10C,0.400000*%\nD10*\nX0Y2000000D02*\nG02X2000000Y0I0J-2000000D01*\nG01*\nM02*\n"
+    lay = read_layer(_write(tmp_path, "arc.gbr", g), tolerance_mm=tol)
+    t = np.linspace(math.pi / 2, 0, 20001)
+    ref = shapely.LineString(np.stack([2 * np.cos(t), 2 * np.sin(t)], 1)).buffer(0.2, quad_segs=1024)
+    exact = math.pi / 4 * (2.2**2 - 1.8**2) + math.pi * 0.2**2
+    assert exact - tol * (2 * math.pi * 2.2 / 4 + 2 * math.pi * 1.8 / 4 + 2 * math.pi * 0.2) <= lay.area_mm2 <= exact
+    assert lay.region.hausdorff_distance(ref) <= tol * 1.01
+    # a macro's exposure-off circle clears only inside the macro, not the rectangle under it
+    m = HEAD + "%AMDONUT*1,1,2,0,0*1,0,1,0,0*%\n%ADD10R,4.000000X4.000000*%\n%ADD11DONUT*%\n"
+    m += "D10*\nX0Y0D03*\nD11*\nX0Y0D03*\nX5000000Y0D03*\nM02*\n"
+    lm = read_layer(_write(tmp_path, "macro.gbr", m), tolerance_mm=tol)
+    ring = math.pi * (1.0 - 0.25)
+    assert 16 + ring - tol * 2 * math.pi * 1.5 <= lm.area_mm2 <= 16 + ring + 1e-9
+    assert lm.holes == 1 and lm.regions == 2
