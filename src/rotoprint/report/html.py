@@ -158,6 +158,16 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
         w(f"<tr><td>{sw}{_e(m)}</td><td>{_e(ps)}</td><td>{inks}</td><td>{post}</td><td>{est.cycles} (needed {est.cycles_needed})</td>"
           f"<td>{est.passes_per_layer}</td><td>{_fmt(est.per_layer_um[0])} - {_fmt(est.per_layer_um[1])}</td></tr>")
     w("</table>")
+    if plan_json.get("layer_parts"):
+        w("<h3>CAD layers</h3><table id='cad-layers'><tr><th>part</th><th>material</th><th>file</th><th>z (mm)</th>"
+          "<th>area (mm2)</th><th>regions / holes</th><th>narrowest track / gap (mm)</th><th>terminals</th></tr>")
+        for lp in plan_json["layer_parts"]:
+            sw = f"<span class='sw' style='background:rgb{colours.get(lp['material'], (128, 128, 128))}'></span>"
+            holes = f" minus {', '.join(lp['holes_from'])}" if lp["holes_from"] else ""
+            w(f"<tr><td>{_e(lp['part'])}</td><td>{sw}{_e(lp['material'])}</td><td>{_e(lp['file'])} ({_e(lp['format'])}){_e(holes)}</td>"
+              f"<td>{lp['z_mm'][0]:g} - {lp['z_mm'][1]:g}</td><td>{lp['area_mm2']:.4f}</td><td>{lp['regions']} / {lp['holes']}</td>"
+              f"<td>{_fmt(lp['narrowest_track_mm'])} / {_fmt(lp['narrowest_gap_mm'])}</td><td>{_e(', '.join(lp['terminals']) or '-')}</td></tr>")
+        w("</table>")
     if plan.warnings:
         w("<h3>Warnings</h3>" + "".join(f"<div class='warn'>{_e(x)}</div>" for x in plan.warnings))
     w("</section>")
