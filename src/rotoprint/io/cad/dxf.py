@@ -24,6 +24,7 @@ import shapely
 from shapely.geometry import MultiLineString, Polygon
 
 from ...errors import CadError
+from ..inputs import check_input_file
 from ._geometry import PlanarLayer, arc_points, as_multipolygon, check_valid, fill_rings, length_unit_mm, stroke
 
 __all__ = ["read_dxf", "INSUNITS_MM"]
@@ -108,9 +109,7 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
     import ezdxf
 
     p = Path(path)
-    size = p.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise CadError(f"file is {size / 2**20:.0f} MiB, more than the {MAX_FILE_BYTES // 2**20} MiB a layer may be", path=p)
+    check_input_file(p, what="DXF file", limit_bytes=MAX_FILE_BYTES)  # regular, bounded: never a blocking read
     try:
         doc = ezdxf.readfile(p)
     except (ezdxf.DXFError, OSError, UnicodeDecodeError, ValueError) as exc:

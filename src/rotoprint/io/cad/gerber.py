@@ -36,10 +36,10 @@ MAX_FILE_BYTES = 256 * 1024 * 1024
 
 
 def _check_size(path: Path) -> None:
-    n = path.stat().st_size
-    if n > MAX_FILE_BYTES:
-        raise CadError(f"file is {n / 2**20:.0f} MiB, more than the {MAX_FILE_BYTES // 2**20} MiB a layer file may be",
-                       path=path)
+    """A regular file (never a FIFO or device the library would block on) within the size bound."""
+    from ..inputs import check_input_file
+
+    check_input_file(path, what="layer file", limit_bytes=MAX_FILE_BYTES)
 
 
 def _arcpoly_polygon(prim, tol: float) -> Polygon:

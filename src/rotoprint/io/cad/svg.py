@@ -26,6 +26,7 @@ import shapely
 from shapely.geometry import LinearRing, LineString
 
 from ...errors import CadError
+from ..inputs import check_input_file
 from ._geometry import PlanarLayer, as_multipolygon, fill_rings, length_unit_mm, segments_for_arc
 
 __all__ = ["read_svg", "MAX_TRANSFORM_DEPTH", "MAX_ELEMENT_DEPTH"]
@@ -154,9 +155,7 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
     import svgelements as se
 
     p = Path(path)
-    size = p.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise CadError(f"file is {size / 2**20:.0f} MiB, more than the {MAX_FILE_BYTES // 2**20} MiB an SVG layer may be", path=p)
+    check_input_file(p, what="SVG file", limit_bytes=MAX_FILE_BYTES)  # regular, bounded: never a blocking read
     _precheck(p)
     # svgelements' own CSS pixel per mm (it converts "mm" with this factor)
     mm_per_px = length_unit_mm(units, path=p) if units else 1.0 / float(se.Length("1mm").value(ppi=96.0))
