@@ -29,10 +29,12 @@ def simulate_command(
     jitter: Annotated[float, typer.Option("--jitter", help="Drop misdirection, standard deviation in um per axis.")] = 0.0,
     dead: Annotated[str | None, typer.Option("--dead", help="Extra dead nozzles 'K,K,...'.")] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of the jitter.")] = 0,
+    spread: Annotated[float | None, typer.Option("--spread", help="Deposit model: footprint / in-flight diameter (default: the head's spread_factor).")] = None,
+    footprint: Annotated[float | None, typer.Option("--footprint", help="Deposit model: footprint diameter of a full drop, um (instead of --spread).")] = None,
     scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.")] = 2,
     json_out: JsonOpt = False,
 ) -> None:
-    """IoU, area ratio, mean/max placement error, uncovered design area, drops outside the design."""
+    """Deposited film (uncovered interior, thinnest/mean thickness, radial spread), IoU, placement error, drops outside."""
     from ..io.atomic import atomic_file
     from ..io.images import read_grey_image
     from ..rotary.files import read_print
@@ -55,6 +57,12 @@ def simulate_command(
     if dinfo.get("invert"):
         img = 255 - img
     sim = simulate(pr, img, drop_diameter_um=drop_diameter, jitter_um=jitter, dead_nozzles=parse_dead(dead), seed=seed)
+    from ..rotary.deposit import DepositOptions, deposit_film, ink_drops
+
+    if spread is not None and footprint is not None:
+        raise ConfigError("give either --spread or --footprint, not both")
+    film = deposit_film(sim.inked, pr.placement, pr.head, [ink_drops(sim.drops, pr.head)],
+                        options=DepositOptions(spread_factor=spread, footprint_um=footprint)).films[0]
     overlay = render_overlay(sim, scale=scale)
     from PIL import Image
     import io
@@ -63,7 +71,7 @@ def simulate_command(
     Image.fromarray(overlay, mode="RGB").save(buf, format="PNG", compress_level=3)
     with atomic_file(out) as fh:
         fh.write(buf.getvalue())
-    r = sim.report.to_json()
+    r = {"deposit": film.to_json(), **sim.report.to_json()}
     r["method"] = pr.method
     r["tilt_deg"] = pr.tilt_deg
     r["swathes"] = len(pr.swathes)
@@ -71,9 +79,17 @@ def simulate_command(
     if json_out:
         print_json(r)
         return
+    f = r["deposit"]
+    out_console.print(
+        f"film ({f['footprint_um']:.1f} um footprints): interior uncovered {100 * f['uncovered_fraction']:.2f} % "
+        f"({f['uncovered_area_mm2']:.3f} mm2), boundary band {100 * f['band_uncovered_fraction']:.2f} %; "
+        f"thickness mean {f['mean_um']:.3f} um, thinnest {f['thinnest_um']:.3f} um, 1 mm radial bins within "
+        f"+-{100 * f['radial_spread']:.1f} %; ink volume {f['deposited_volume_pl']:.0f} pl "
+        f"(planned {f['planned_volume_pl']:.0f}), {100 * f['volume_outside_design_fraction']:.2f} % outside the design"
+    )
     out_console.print(
         f"{pr.method} print, tilt {pr.tilt_deg:g} deg, {len(pr.swathes)} swathe(s), {r['drops']} drops\n"
-        f"  IoU {r['iou']:.4f}   area ratio {r['area_ratio']:.4f}\n"
+        f"  cell model: IoU {r['iou']:.4f}   area ratio {r['area_ratio']:.4f}\n"
         f"  placement error: mean {r['mean_error_px']:.3f} px ({r['mean_error_um']:.1f} um), max {r['max_error_px']:.3f} px ({r['max_error_um']:.1f} um)\n"
         f"  design left uncovered: {r['uncovered_pixels']} px ({100 * r['uncovered_fraction']:.2f} %, {r['uncovered_area_mm2']:.3f} mm2)\n"
         f"  drops outside the design: {r['drops_outside']} ({100 * r['drops_outside_fraction']:.2f} %)\n"

@@ -30,6 +30,9 @@ class InkjetHead(_Strict):
     dpi_y: float = Field(default=360.0, gt=0, le=100_000)
     drop_volume_pl: float = Field(default=10.0, gt=0)
     drop_diameter_um: float = Field(default=60.0, gt=0)
+    #: footprint diameter on the substrate over the in-flight diameter (6 V / pi)^(1/3): an
+    #: ink/substrate figure used by the deposit model (rotary/deposit.py)
+    spread_factor: float = Field(default=2.0, gt=0, le=20)
     max_frequency_hz: float = Field(default=8000.0, gt=0)
     grey_levels: int = Field(default=1, ge=1, le=255)
     dead_nozzles: tuple[int, ...] = ()
