@@ -1,0 +1,109 @@
+"""Tilt choice and interlaced passes (rotary/interlace.py)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rotoprint import load_device
+from rotoprint.errors import ConfigError, GeometryError
+from rotoprint.rotary import Placement, plan_swathes, transform_exact
+from rotoprint.rotary.deposit import deposit_print
+from rotoprint.rotary.head import head_figures
+from rotoprint.rotary.interlace import best_tilt, plan_passes, tilt_scan, union_radii
+from rotoprint.rotary.testimage import test_design as make_design
+
+PX = 25.4 / 360
+
+
+@pytest.fixture(scope="module")
+def head():
+    return load_device("omnidot760").head
+
+
+def test_tilt_scan_matches_head_figures(head):
+    rows = tilt_scan(head, [0.0, 20.0, 45.0], pivot_radius_mm=60.0)
+    for r in rows:
+        f = head_figures(head, tilt_deg=r.tilt_deg, pivot_radius_mm=60.0)
+        assert r.largest_gap_mm == f.largest_track_gap_mm and r.tracks == f.tracks_in_band
+        lo, hi = f.overlap_band_mm
+        assert r.mean_pitch_mm == pytest.approx((hi - lo) / (r.tracks - 1))
+        assert r.even == (r.largest_gap_mm <= 1.25 * r.mean_pitch_mm)
+    assert rows[0].even and not rows[1].even  # the tilted rows pass through coincidence
+    assert best_tilt(rows) is rows[0]
+    assert best_tilt(rows[1:]) is None
+    # a loose ratio admits every tilt: the finest mean pitch wins
+    loose = tilt_scan(head, [0.0, 20.0, 45.0], pivot_radius_mm=60.0, even_ratio=3.0)
+    assert best_tilt(loose).tilt_deg == 45.0
+    with pytest.raises(ConfigError, match="even ratio"):
+        tilt_scan(head, [0.0], pivot_radius_mm=60.0, even_ratio=1.0)
+
+
+def test_head_cli_best(run_cli):
+    code, out, err = run_cli("head", "--tilt-range", "0:30:10", "--radius", "60", "--best")
+    assert code == 0, err
+    assert "best tilt 0 deg" in out and "70.4 um" in out
+    code, out, err = run_cli("head", "--tilt-range", "10:30:10", "--radius", "60", "--best", "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["best"] is None and data["tilts"][0]["interleave"]["even"] is False
+    code, out, err = run_cli("head", "--tilt-range", "10:30:10", "--best")
+    assert code == 0 and "passes" in out
+
+
+@pytest.mark.parametrize("tilt", [0.0, 20.0, 70.0])
+def test_passes_shrink_the_largest_gap(head, tilt):
+    sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=60.0, outer_radius_mm=75.0)
+    pp = plan_passes(head, sp, footprint_um=49.6, passes=4)
+    assert pp.passes == 4 and pp.offsets_mm[0] == 0.0
+    # the gap figure is that of the union of the passes' tracks over the design's range
+    r = union_radii(head, sp, pp.offsets_mm)
+    r = r[(r >= 60.0) & (r <= 75.0)]
+    assert np.diff(r).max() == pytest.approx(pp.largest_gap_mm)
+    single = np.diff(union_radii(head, sp, [0.0])[(union_radii(head, sp, [0.0]) >= 60) & (union_radii(head, sp, [0.0]) <= 75)]).max()
+    assert pp.single_pass_largest_gap_mm == pytest.approx(single)
+    # no worse than the even split q p / 4, and at most about a quarter of the single-pass gap
+    even = union_radii(head, sp, [q * pp.mean_gap_mm * 4 / 4 for q in range(4)])
+    assert pp.largest_gap_mm <= np.diff(even[(even >= 60) & (even <= 75)]).max() + 1e-9
+    assert pp.largest_gap_mm < 0.3 * single
+    # the clock closes the lattice within the cover share of the footprint
+    assert pp.largest_gap_mm**2 + pp.along_track_mm**2 <= (0.85 * 0.0496) ** 2 + 1e-12
+
+
+def test_dead_nozzles_covered_by_other_passes(head):
+    sp = plan_swathes(head, tilt_deg=20.0, inner_radius_mm=60.0, outer_radius_mm=75.0)
+    dead = tuple(int(k) for k in np.random.default_rng(5).choice(np.flatnonzero(sp.swathes[0].enabled), 5, replace=False))
+    pp = plan_passes(head, sp, footprint_um=49.6, passes=4, dead_nozzles=dead)
+    assert pp.dead_nozzles == tuple(sorted(dead)) and pp.dead_track_cover_mm
+    # every dead track has a live track of the union within the largest gap
+    assert max(pp.dead_track_cover_mm) <= pp.largest_gap_mm
+    r = union_radii(head, sp, pp.offsets_mm, dead_nozzles=dead)
+    assert np.diff(r[(r >= 60) & (r <= 75)]).max() == pytest.approx(pp.largest_gap_mm)
+
+
+def test_planner_chooses_passes_and_refuses_what_cannot_close(head):
+    sp = plan_swathes(head, tilt_deg=0.0, inner_radius_mm=60.0, outer_radius_mm=70.0)
+    pp = plan_passes(head, sp, footprint_um=49.6)
+    assert pp.passes == 3  # 70.4 / 3 = 23.5 um <= 0.85 x 49.6 / sqrt(2); 2 passes leave 35.2 um
+    with pytest.raises(GeometryError, match="footprint"):
+        plan_passes(head, sp, footprint_um=49.6, passes=1)
+    with pytest.raises(ConfigError, match="passes"):
+        plan_passes(head, sp, footprint_um=49.6, passes=0)
+
+
+def test_interlaced_film_is_closed(head):
+    """A 60 px crop of the test design at tilt 20: one pass leaves most of the interior bare,
+    four planned passes at the planned clock leave none of it, with the volume conserved."""
+    d = make_design(1200)[300:360, 300:360]
+    pl = Placement(60, 60, PX, PX, inner_radius_mm=60.0)
+    sp = plan_swathes(head, tilt_deg=20.0, inner_radius_mm=pl.radial_range_mm()[0], outer_radius_mm=pl.radial_range_mm()[1])
+    pp = plan_passes(head, sp, footprint_um=49.6)
+    prs = [transform_exact(d, head, pl, tilt_deg=20.0, dpi_y=pp.dpi_y, pivot_offset_mm=o) for o in pp.offsets_mm]
+    assert [p.swathes[0].pivot_radius_mm - prs[0].swathes[0].pivot_radius_mm for p in prs] == pytest.approx(list(pp.offsets_mm))
+    f = deposit_print(prs, d).films[0]
+    one = deposit_print(transform_exact(d, head, pl, tilt_deg=20.0), d).films[0]
+    assert one.uncovered_fraction > 0.3
+    assert f.uncovered_fraction < 0.005
+    assert abs(f.volume_error_fraction) < 0.005
