@@ -107,3 +107,62 @@ def test_interlaced_film_is_closed(head):
     assert one.uncovered_fraction > 0.3
     assert f.uncovered_fraction < 0.005
     assert abs(f.volume_error_fraction) < 0.005
+
+
+def test_transform_passes_cli_and_simulate_union(run_cli, tmp_path):
+    from rotoprint.io.images import write_png
+
+    p = tmp_path / "d.png"
+    write_png(p, make_design(1200)[300:360, 300:360])
+    out = tmp_path / "pr.png"
+    code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
+                           "--passes", "auto", "--out", out)
+    assert code == 0, err
+    man = json.loads((tmp_path / "pr-passes.json").read_text())
+    pp = man["pass_plan"]
+    assert man["format"] == "rotoprint-rotary-passes" and pp["passes"] == len(man["files"]) == 4
+    sides = [json.loads((tmp_path / f).read_text()) for f in man["files"]]
+    for q, s in enumerate(sides):
+        sw = s["swathes"][0]
+        assert sw["pass"] == q and sw["pass_offset_mm"] == pp["offsets_mm"][q] and s["dpi_y"] == man["dpi_y"]
+    piv = [s["swathes"][0]["pivot_radius_mm"] for s in sides]
+    assert [v - piv[0] for v in piv] == pytest.approx(pp["offsets_mm"])
+    code, o, err = run_cli("simulate", tmp_path / "pr-passes.json", "--out", tmp_path / "ov.png", "--json")
+    assert code == 0, err
+    r = json.loads(o)
+    assert r["passes"] == 4 and r["deposit"]["uncovered_fraction"] < 0.005
+    code, o1, err = run_cli("simulate", tmp_path / "pr-p1.png", "--out", tmp_path / "ov.png", "--json")
+    assert code == 0, err
+    assert json.loads(o1)["deposit"]["uncovered_fraction"] > 0.2  # one pass of the four at the fine clock
+    # equalised: the same plan, thinned tracks, a finer clock
+    code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
+                           "--passes", "4", "--equalise", "--out", tmp_path / "eq.png", "-q")
+    assert code == 0, err
+    assert json.loads((tmp_path / "eq-passes.json").read_text())["equalise"] is True
+    for bad, msg in ((("--passes", "0"), "passes"), (("--passes", "x"), "passes"), (("--equalise",), "needs --passes"),
+                     (("--passes", "2", "--method", "paper"), "exact")):
+        code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--out", tmp_path / "b.png", *bad)
+        assert code == 2 and msg in err, err
+    (tmp_path / "bad-passes.json").write_text('{"format": "rotoprint-rotary-passes", "files": ["../x.json"]}')
+    code, _, err = run_cli("simulate", tmp_path / "bad-passes.json", "--out", tmp_path / "ov.png")
+    assert code == 2 and "file names" in err
+
+
+def test_equalised_fractions(head):
+    """Shares are in [floor, 1]; at tilt 0 (even tracks) they follow 1 / r: outer tracks keep
+    every drop, the radial thickness at the tracks is flat to a few per cent."""
+    from rotoprint.rotary.interlace import EQUALISE_FLOOR, track_fractions
+
+    sp = plan_swathes(head, tilt_deg=0.0, inner_radius_mm=60.0, outer_radius_mm=75.0)
+    pp = plan_passes(head, sp, footprint_um=49.6)
+    fr = track_fractions(head, sp, pp.offsets_mm, dpi_y=pp.dpi_y, footprint_um=49.6)
+    en = sp.swathes[0].enabled
+    f = fr[0][0][en]
+    assert f.min() >= EQUALISE_FLOOR and f.max() <= 1.0
+    from rotoprint.rotary.head import Mount, nozzle_layout
+
+    r = nozzle_layout(head, Mount(sp.swathes[0].pivot_radius_mm)).r_mm[en]
+    inner = (r > 61) & (r < 62)
+    outer = (r > 73) & (r < 74)
+    # drops per area ~ f / r: equal at both ends
+    assert (f[inner] / r[inner]).mean() == pytest.approx((f[outer] / r[outer]).mean(), rel=0.03)

@@ -22,7 +22,8 @@ def parse_dead(text: str | None) -> tuple[int, ...]:
 
 
 def simulate_command(
-    print_file: Annotated[Path, typer.Argument(help="A print written by 'rotoprint transform' (PRINT.png, PRINT-s1.png or PRINT.json).")],
+    print_file: Annotated[list[Path], typer.Argument(help="A print written by 'rotoprint transform' (PRINT.png, PRINT-s1.png or PRINT.json); "
+                                                 "several, or a PRINT-passes.json: the passes of one layer, deposited together.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Overlay PNG: design, drops and errors in colour.")],
     design: Annotated[Path | None, typer.Option("--design", help="Design image (default: the one named in the sidecar, if unchanged).")] = None,
     drop_diameter: Annotated[float | None, typer.Option("--drop-diameter", help="Drop diameter on the substrate, um (default: the head's).")] = None,
@@ -42,7 +43,16 @@ def simulate_command(
 
     if out.suffix.lower() != ".png":
         raise ConfigError(f"--out must end in .png, got {out.name!r}")
-    pr, side, sp = read_print(print_file)
+    from ..rotary.interlace import PASSES_FORMAT, read_passes
+
+    paths: list[Path] = []
+    for f in print_file:
+        paths.extend(read_passes(f) if f.suffix.lower() == ".json" and PASSES_FORMAT in f.read_text(encoding="utf-8", errors="replace")[:400] else [f])
+    prints = [read_print(f) for f in paths]
+    pr, side, sp = prints[0]
+    for other, _, osp in prints[1:]:
+        if other.placement != pr.placement or other.head != pr.head:
+            raise InputFileError(f"this pass is not of the same design and head as {sp.name}", path=osp)
     dinfo = side.get("design", {})
     if design is None:
         cand = Path(dinfo.get("path", ""))
@@ -61,7 +71,14 @@ def simulate_command(
 
     if spread is not None and footprint is not None:
         raise ConfigError("give either --spread or --footprint, not both")
-    film = deposit_film(sim.inked, pr.placement, pr.head, [ink_drops(sim.drops, pr.head)],
+    from ..rotary.deposit import InkDrops
+    from ..rotary.simulate import place_drops
+
+    parts = [ink_drops(sim.drops, pr.head)] + [
+        ink_drops(place_drops(o, jitter_um=jitter, dead_nozzles=parse_dead(dead), seed=seed + q + 1), pr.head)
+        for q, (o, _, _) in enumerate(prints[1:])
+    ]
+    film = deposit_film(sim.inked, pr.placement, pr.head, [InkDrops.concat(parts)],
                         options=DepositOptions(spread_factor=spread, footprint_um=footprint)).films[0]
     overlay = render_overlay(sim, scale=scale)
     from PIL import Image
@@ -75,20 +92,21 @@ def simulate_command(
     r["method"] = pr.method
     r["tilt_deg"] = pr.tilt_deg
     r["swathes"] = len(pr.swathes)
+    r["passes"] = len(prints)
     r["overlay"] = str(out)
     if json_out:
         print_json(r)
         return
     f = r["deposit"]
     out_console.print(
-        f"film ({f['footprint_um']:.1f} um footprints): interior uncovered {100 * f['uncovered_fraction']:.2f} % "
+        f"film of {len(prints)} pass(es) ({f['footprint_um']:.1f} um footprints): interior uncovered {100 * f['uncovered_fraction']:.2f} % "
         f"({f['uncovered_area_mm2']:.3f} mm2), boundary band {100 * f['band_uncovered_fraction']:.2f} %; "
         f"thickness mean {f['mean_um']:.3f} um, thinnest {f['thinnest_um']:.3f} um, 1 mm radial bins within "
         f"+-{100 * f['radial_spread']:.1f} %; ink volume {f['deposited_volume_pl']:.0f} pl "
         f"(planned {f['planned_volume_pl']:.0f}), {100 * f['volume_outside_design_fraction']:.2f} % outside the design"
     )
     out_console.print(
-        f"{pr.method} print, tilt {pr.tilt_deg:g} deg, {len(pr.swathes)} swathe(s), {r['drops']} drops\n"
+        f"{'pass 1: ' if len(prints) > 1 else ''}{pr.method} print, tilt {pr.tilt_deg:g} deg, {len(pr.swathes)} swathe(s), {r['drops']} drops\n"
         f"  cell model: IoU {r['iou']:.4f}   area ratio {r['area_ratio']:.4f}\n"
         f"  placement error: mean {r['mean_error_px']:.3f} px ({r['mean_error_um']:.1f} um), max {r['max_error_px']:.3f} px ({r['max_error_um']:.1f} um)\n"
         f"  design left uncovered: {r['uncovered_pixels']} px ({100 * r['uncovered_fraction']:.2f} %, {r['uncovered_area_mm2']:.3f} mm2)\n"

@@ -337,3 +337,225 @@ def plan_passes(
         dpi_y=25.4 / b,
         footprint_um=float(footprint_um),
     )
+
+
+PASSES_FORMAT = "rotoprint-rotary-passes"
+
+
+def parse_passes(text: str | int) -> int | None:
+    """``"auto"`` -> None (the planner's choice), else an integer 1..64."""
+    if isinstance(text, str) and text.strip().lower() == "auto":
+        return None
+    try:
+        n = int(text)
+    except (TypeError, ValueError):
+        raise ConfigError(f"passes must be a whole number 1..64 or 'auto', got {text!r}") from None
+    if not 1 <= n <= 64:
+        raise ConfigError(f"passes must be 1..64 or 'auto', got {n}")
+    return n
+
+
+def pass_files(out_png, n: int) -> list:
+    """``PRINT.png`` -> ``[PRINT-p1.png, ..., PRINT-pN.png]``."""
+    from pathlib import Path
+
+    p = Path(out_png)
+    return [p.with_name(f"{p.stem}-p{q + 1}{p.suffix}") for q in range(n)]
+
+
+def transform_passes(design: np.ndarray, head: InkjetHead, placement, out_png, *, passes: str | int = "auto", tilt_deg: float,
+                     dpi_y: float | None = None, ref_radius_mm: float | None = None, mount_angle_deg: float = 0.0,
+                     direction: int = 1, max_swathes: int | None = None, device_name: str = "", design_info: dict | None = None,
+                     footprint_um: float | None = None, equalise: bool = False) -> dict:
+    """Plan interlaced passes for ``design`` and write each pass as its own exact print.
+
+    Pass ``q`` is written as ``PRINT-p{q+1}.png`` (swathes ``-p{q+1}-s1.png``, ...) with its own
+    sidecar; every swathe of it records ``pass``, ``passes`` and ``pass_offset_mm`` (its
+    ``pivot_radius_mm`` is already moved by the offset). ``PRINT-passes.json`` (format
+    :data:`PASSES_FORMAT`) lists the plan and the files. The clock is the plan's unless
+    ``dpi_y`` is given. With ``equalise``, every track keeps the share of its drops of
+    :func:`track_fractions` (the same volume per area everywhere), and the clock is made finer
+    ``ceil(1 / smallest share)`` times, so that no track's kept drops are farther apart than planned.
+
+    Returns
+    -------
+    dict
+        The passes manifest as written.
+    """
+    import dataclasses
+    import json
+    from pathlib import Path
+
+    from ..io.atomic import atomic_file
+    from .deposit import DepositOptions
+    from .exact import transform_exact
+    from .files import write_print
+    from .swathes import plan_swathes
+
+    n = parse_passes(passes)
+    r_in, r_out = placement.radial_range_mm()
+    sp = plan_swathes(head, tilt_deg=tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
+                      mount_angle_deg=mount_angle_deg, direction=direction, max_swathes=max_swathes)
+    d_um = DepositOptions(footprint_um=footprint_um).full_footprint_um(head)
+    pp = plan_passes(head, sp, footprint_um=d_um, passes=n)
+    clock = pp.dpi_y if dpi_y is None else float(dpi_y)
+    fracs = None
+    if equalise:
+        fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um)
+        f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
+        # the shares do not change with the clock; the ordered pattern spaces kept drops at most
+        # ceil(1 / f) firings apart, so this keeps every track within the planned spacing
+        clock = clock * math.ceil(1.0 / f_min - 1e-9)
+    files = pass_files(out_png, pp.passes)
+    sides = []
+    for q, (off, f) in enumerate(zip(pp.offsets_mm, files)):
+        pr = transform_exact(design, head, placement, tilt_deg=tilt_deg, dpi_y=clock, ref_radius_mm=ref_radius_mm,
+                             mount_angle_deg=mount_angle_deg, direction=direction, max_swathes=max_swathes, pivot_offset_mm=off)
+        if fracs is not None:
+            pr = thin_print(pr, fracs[q], pass_index=q)
+        sw = tuple(dataclasses.replace(s, extra={**s.extra, "pass": q, "passes": pp.passes, "pass_offset_mm": off}) for s in pr.swathes)
+        pr = dataclasses.replace(pr, swathes=sw)
+        sides.append(write_print(pr, f, device_name=device_name, design=design_info))
+    manifest = {
+        "format": PASSES_FORMAT,
+        "version": 1,
+        "device": device_name,
+        "tilt_deg": float(tilt_deg),
+        "dpi_y": clock,
+        "equalise": bool(equalise),
+        "pass_plan": pp.to_json(),
+        "files": [f.with_suffix(".json").name for f in files],
+    }
+    mp = Path(out_png).with_name(Path(out_png).stem + "-passes.json")
+    with atomic_file(mp) as fh:
+        fh.write((json.dumps(manifest, indent=2) + "\n").encode("utf-8"))
+    return manifest
+
+
+def read_passes(path) -> list:
+    """The sidecar paths of a passes manifest written by :func:`transform_passes` (or of
+    ``slice --rotary --passes``), in pass order, resolved beside the manifest."""
+    import json
+    from pathlib import Path
+
+    from ..errors import InputFileError
+
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise InputFileError(f"cannot read the passes manifest: {exc}", path=p) from None
+    if not isinstance(data, dict) or data.get("format") != PASSES_FORMAT:
+        raise InputFileError(f"not a passes manifest (format {PASSES_FORMAT!r} expected)", path=p)
+    files = data.get("files")
+    if not isinstance(files, list) or not files or not all(isinstance(f, str) and "/" not in f and "\\" not in f for f in files):
+        raise InputFileError("passes manifest field files must be a non-empty list of file names", path=p)
+    return [p.parent / f for f in files]
+
+
+_GOLDEN = 0.6180339887498949
+#: Smallest share of its drops a track keeps under equalisation.
+EQUALISE_FLOOR = 0.5
+#: Percentile of the unthinned radial thickness (at the tracks) that equalisation aims at.
+EQUALISE_TARGET_PERCENTILE = 10.0
+
+
+def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], *, dpi_y: float,
+                    ref_radius_mm: float | None = None, dead_nozzles: Sequence[int] | None = None,
+                    footprint_um: float | None = None, iterations: int = 60) -> list[list[np.ndarray]]:
+    """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
+
+    Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
+    ``f_k`` lays ``f_k / (r_k dphi_k)`` drops per mm; averaged along the track, a drop of
+    footprint radius ``a`` adds across the radius the profile ``(1 - x^2 / a^2)^(3/2)`` (a
+    paraboloid cap integrated along the track). The radial thickness at track ``m`` is
+    ``T_m = sum_k f_k / (r_k dphi_k) * K(r_m - r_k)``; multiplicative updates
+    ``f_k <- clip(f_k * T* / T_k, EQUALISE_FLOOR, 1)`` (``iterations`` times) drive ``T``
+    towards ``T*``, the :data:`EQUALISE_TARGET_PERCENTILE` percentile of the unthinned ``T``
+    over the tracks where every pass prints: sparse tracks keep every drop, tracks in a
+    cluster share theirs. No track keeps
+    less than :data:`EQUALISE_FLOOR` (so a clock ``ceil(1 / f_min)`` times finer keeps every
+    track's drops at most the planned spacing apart).
+
+    Returns
+    -------
+    list (pass) of list (swathe) of (N,) float64
+        Shares in (0, 1] for enabled live nozzles, 0 elsewhere.
+    """
+    from .deposit import DepositOptions
+    from .exact import swathe_clock
+
+    live = np.ones(head.nozzles, bool)
+    dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
+    live[list(dead)] = False
+    a_mm = 0.5e-3 * (DepositOptions().full_footprint_um(head) if footprint_um is None else float(footprint_um))
+    psi = math.radians(plan.mount_angle_deg)
+    e = np.array([math.cos(psi), math.sin(psi)])
+    rs, ws, where = [], [], []
+    for q, o in enumerate(offsets_mm):
+        for j, sw in enumerate(plan.swathes):
+            dphi, _ = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
+            xy = nozzle_layout(head, plan.mount(j)).xy_mm + float(o) * e
+            r = np.hypot(xy[:, 0], xy[:, 1])
+            k = np.flatnonzero(sw.enabled & live)
+            rs.append(r[k])
+            ws.append(1.0 / (r[k] * dphi))
+            where.append((q, j, k))
+    r = np.concatenate(rs)
+    w = np.concatenate(ws)
+    order = np.argsort(r, kind="stable")
+    r_s, w_s = r[order], w[order]
+    # neighbour pairs within a footprint radius (both directions) and their profile weights
+    ii, jj, kk = [np.arange(r_s.size)], [np.arange(r_s.size)], [np.ones(r_s.size)]
+    shift = 1
+    while shift < r_s.size:
+        d = r_s[shift:] - r_s[:-shift]
+        near = np.flatnonzero(d < a_mm)
+        if near.size == 0:
+            break
+        kv = (1.0 - (d[near] / a_mm) ** 2) ** 1.5
+        ii += [near, near + shift]
+        jj += [near + shift, near]
+        kk += [kv, kv]
+        shift += 1
+    ii, jj, kk = np.concatenate(ii), np.concatenate(jj), np.concatenate(kk)
+    f = np.ones(r_s.size)
+    # the target is the thinnest track where every pass prints, a footprint in from either end
+    # (nearer the ends tracks lack neighbours on one side)
+    lo_t = max(float(r_s[0]), plan.inner_radius_mm + max(0.0, max(offsets_mm))) + a_mm
+    hi_t = min(float(r_s[-1]), plan.outer_radius_mm + min(0.0, min(offsets_mm))) - a_mm
+    mid = (r_s >= lo_t) & (r_s <= hi_t)
+    if not mid.any():
+        mid[:] = True
+    t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
+    target = float(np.percentile(t[mid], EQUALISE_TARGET_PERCENTILE))
+    for _ in range(max(0, int(iterations))):
+        f = np.clip(f * (target / t), EQUALISE_FLOOR, 1.0)
+        t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
+    f_all = np.empty_like(f)
+    f_all[order] = f
+    out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
+    pos = 0
+    for q, j, k in where:
+        out[q][j][k] = f_all[pos:pos + k.size]
+        pos += k.size
+    return out
+
+
+def thin_print(pr, fractions: Sequence[np.ndarray], *, pass_index: int = 0):
+    """``pr`` with track ``k`` of swathe ``j`` keeping firing ``i`` only when
+    ``floor((i + 1) f + o) > floor(i f + o)`` (``f = fractions[j][k]``, ``o`` a golden-ratio
+    step per nozzle and pass): an ordered, even pattern on the absolute firing index, exactly
+    ``f`` of the firings over any run."""
+    import dataclasses
+
+    out = []
+    for sw, f in zip(pr.swathes, fractions):
+        n_f = sw.levels.shape[0]
+        i = (np.arange(n_f, dtype=np.float64) + sw.first_firing)[:, None]
+        k = np.arange(sw.levels.shape[1])
+        o = np.mod((k + 7919 * pass_index) * _GOLDEN, 1.0)[None, :]
+        ff = np.asarray(f, np.float64)[None, :]
+        keep = np.floor((i + 1) * ff + o) > np.floor(i * ff + o)
+        out.append(dataclasses.replace(sw, levels=np.where(keep, sw.levels, 0).astype(np.uint8)))
+    return dataclasses.replace(pr, swathes=tuple(out))
