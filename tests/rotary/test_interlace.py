@@ -138,7 +138,7 @@ def test_transform_passes_cli_and_simulate_union(run_cli, tmp_path):
     code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
                            "--passes", "4", "--equalise", "--out", tmp_path / "eq.png", "-q")
     assert code == 0, err
-    assert json.loads((tmp_path / "eq-passes.json").read_text())["equalise"] is True
+    assert json.loads((tmp_path / "eq-passes.json").read_text())["equalise"] == "thinning"
     for bad, msg in ((("--passes", "0"), "passes"), (("--passes", "x"), "passes"), (("--equalise",), "needs --passes"),
                      (("--passes", "2", "--method", "paper"), "exact")):
         code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--out", tmp_path / "b.png", *bad)

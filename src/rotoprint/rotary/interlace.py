@@ -373,7 +373,9 @@ def transform_passes(design: np.ndarray, head: InkjetHead, placement, out_png, *
     sidecar; every swathe of it records ``pass``, ``passes`` and ``pass_offset_mm`` (its
     ``pivot_radius_mm`` is already moved by the offset). ``PRINT-passes.json`` (format
     :data:`PASSES_FORMAT`) lists the plan and the files. The clock is the plan's unless
-    ``dpi_y`` is given. With ``equalise``, every track keeps the share of its drops of
+    ``dpi_y`` is given. With ``equalise`` and a grey-level head, every site keeps its drop and
+    its size follows the track's share (:func:`~rotoprint.rotary.halftone.halftone_print`);
+    with a binary head, every track keeps the share of its drops of
     :func:`track_fractions` (the same volume per area everywhere), and the clock is made finer
     ``ceil(1 / smallest share)`` times, so that no track's kept drops are farther apart than planned.
 
@@ -400,7 +402,16 @@ def transform_passes(design: np.ndarray, head: InkjetHead, placement, out_png, *
     pp = plan_passes(head, sp, footprint_um=d_um, passes=n)
     clock = pp.dpi_y if dpi_y is None else float(dpi_y)
     fracs = None
-    if equalise:
+    grey = equalise and head.grey_levels > 1
+    if grey:  # by drop size: every site keeps its drop; the plan is made for the smallest drop used
+        fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um,
+                                floor=1.0 / head.grey_levels, target_percentile=0.0)
+        f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
+        pp = plan_passes(head, sp, footprint_um=d_um * f_min ** (1.0 / 3.0), passes=n)
+        clock = pp.dpi_y if dpi_y is None else float(dpi_y)
+        fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um,
+                                floor=1.0 / head.grey_levels, target_percentile=0.0)
+    elif equalise:
         fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um)
         f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
         # the shares do not change with the clock; the ordered pattern spaces kept drops at most
@@ -411,7 +422,11 @@ def transform_passes(design: np.ndarray, head: InkjetHead, placement, out_png, *
     for q, (off, f) in enumerate(zip(pp.offsets_mm, files)):
         pr = transform_exact(design, head, placement, tilt_deg=tilt_deg, dpi_y=clock, ref_radius_mm=ref_radius_mm,
                              mount_angle_deg=mount_angle_deg, direction=direction, max_swathes=max_swathes, pivot_offset_mm=off)
-        if fracs is not None:
+        if grey:
+            from .halftone import halftone_print
+
+            pr = halftone_print(pr, fracs[q])
+        elif fracs is not None:
             pr = thin_print(pr, fracs[q], pass_index=q)
         sw = tuple(dataclasses.replace(s, extra={**s.extra, "pass": q, "passes": pp.passes, "pass_offset_mm": off}) for s in pr.swathes)
         pr = dataclasses.replace(pr, swathes=sw)
@@ -422,7 +437,7 @@ def transform_passes(design: np.ndarray, head: InkjetHead, placement, out_png, *
         "device": device_name,
         "tilt_deg": float(tilt_deg),
         "dpi_y": clock,
-        "equalise": bool(equalise),
+        "equalise": ("grey levels" if grey else "thinning") if equalise else None,
         "pass_plan": pp.to_json(),
         "files": [f.with_suffix(".json").name for f in files],
     }
@@ -462,7 +477,8 @@ EQUALISE_TARGET_PERCENTILE = 10.0
 
 def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], *, dpi_y: float,
                     ref_radius_mm: float | None = None, dead_nozzles: Sequence[int] | None = None,
-                    footprint_um: float | None = None, iterations: int = 60) -> list[list[np.ndarray]]:
+                    footprint_um: float | None = None, iterations: int = 60, floor: float | None = None,
+                    target_percentile: float | None = None) -> list[list[np.ndarray]]:
     """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
 
     Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
@@ -477,12 +493,20 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     less than :data:`EQUALISE_FLOOR` (so a clock ``ceil(1 / f_min)`` times finer keeps every
     track's drops at most the planned spacing apart).
 
+    ``floor`` replaces :data:`EQUALISE_FLOOR` (e.g. ``1 / grey_levels`` for halftoning) and
+    ``target_percentile`` :data:`EQUALISE_TARGET_PERCENTILE` (0: the thinnest track, which
+    every other can match when the floor allows, as with grey levels).
+
     Returns
     -------
     list (pass) of list (swathe) of (N,) float64
         Shares in (0, 1] for enabled live nozzles, 0 elsewhere.
     """
     from .deposit import DepositOptions
+
+    lo_f = EQUALISE_FLOOR if floor is None else float(floor)
+    if not 0 < lo_f <= 1:
+        raise ConfigError(f"floor must be in (0, 1], got {floor!r}")
     from .exact import swathe_clock
 
     live = np.ones(head.nozzles, bool)
@@ -528,9 +552,10 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     if not mid.any():
         mid[:] = True
     t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
-    target = float(np.percentile(t[mid], EQUALISE_TARGET_PERCENTILE))
+    pct = EQUALISE_TARGET_PERCENTILE if target_percentile is None else float(target_percentile)
+    target = float(np.percentile(t[mid], pct))
     for _ in range(max(0, int(iterations))):
-        f = np.clip(f * (target / t), EQUALISE_FLOOR, 1.0)
+        f = np.clip(f * (target / t), lo_f, 1.0)
         t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
     f_all = np.empty_like(f)
     f_all[order] = f
