@@ -405,12 +405,12 @@ def transform_passes(design: np.ndarray, head: InkjetHead, placement, out_png, *
     grey = equalise and head.grey_levels > 1
     if grey:  # by drop size: every site keeps its drop; the plan is made for the smallest drop used
         fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um,
-                                floor=1.0 / head.grey_levels, target_percentile=0.0)
+                                floor=max(1.0 / head.grey_levels, GREY_FLOOR), target_percentile=0.0)
         f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
         pp = plan_passes(head, sp, footprint_um=d_um * f_min ** (1.0 / 3.0), passes=n)
         clock = pp.dpi_y if dpi_y is None else float(dpi_y)
         fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um,
-                                floor=1.0 / head.grey_levels, target_percentile=0.0)
+                                floor=max(1.0 / head.grey_levels, GREY_FLOOR), target_percentile=0.0)
     elif equalise:
         fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um)
         f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
@@ -471,6 +471,9 @@ def read_passes(path) -> list:
 _GOLDEN = 0.6180339887498949
 #: Smallest share of its drops a track keeps under equalisation.
 EQUALISE_FLOOR = 0.5
+#: Smallest share of the full volume a grey-level site keeps under equalisation (its footprint,
+#: ``cbrt`` of it, sets the passes and the clock; 0.3 allows a 3:1 radius span).
+GREY_FLOOR = 0.3
 #: Percentile of the unthinned radial thickness (at the tracks) that equalisation aims at.
 EQUALISE_TARGET_PERCENTILE = 10.0
 
