@@ -166,3 +166,54 @@ def test_equalised_fractions(head):
     outer = (r > 73) & (r < 74)
     # drops per area ~ f / r: equal at both ends
     assert (f[inner] / r[inner]).mean() == pytest.approx((f[outer] / r[outer]).mean(), rel=0.03)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 20.0])
+def test_direct_slicer_pass_is_exact_at_its_pivot(tilt):
+    """A pass of the direct slicer: every swathe's pivot moved by the offset, and still a drop
+    fires exactly when it lands inside the exact cross-section."""
+    from _direct_checks import section_geom, shapely_mismatches
+
+    from rotoprint.rotary.direct import slice_rotary
+    from rotoprint.testing import box_mesh
+
+    dev = load_device("omnidot760")
+    mesh = box_mesh((20.0, 12.0, 2.0), origin=(3.0, -4.0, 0.0))
+    kw = dict(layer_height_mm=1.0, tilt_deg=tilt, inner_radius_mm=40.0, angle_deg=15.0)
+    base = slice_rotary(mesh, dev, **kw)
+    job = slice_rotary(mesh, dev, pivot_offset_mm=0.0375, **kw)
+    assert [t.pivot_radius_mm for t in job.tracks] == pytest.approx([t.pivot_radius_mm + 0.0375 for t in base.tracks])
+    assert job.rotary_options["pivot_offset_mm"] == 0.0375
+    pr = job.layer(1)
+    checked, bad, worst = shapely_mismatches(job, pr, section_geom(job, 1), n_random=20000, seed=1)
+    assert checked > 0 and (bad == 0 or worst <= 1e-6), (bad, worst)
+    assert not np.array_equal(pr.swathes[0].levels, base.layer(1).swathes[0].levels)
+
+
+def test_slice_rotary_passes_cli_then_simulate_union(run_cli, tmp_path):
+    import struct
+
+    from rotoprint.testing import box_triangles
+
+    mesh_path = tmp_path / "box.stl"
+    tri = box_triangles((4.0, 3.0, 0.4))
+    with open(mesh_path, "wb") as fh:
+        fh.write(b"\0" * 80 + struct.pack("<I", len(tri)))
+        for t in tri:
+            fh.write(struct.pack("<12fH", 0, 0, 0, *t.ravel().tolist(), 0))
+    out = tmp_path / "o"
+    code, _, err = run_cli("slice", mesh_path, "--device", "omnidot760", "--rotary", "--tilt", "20", "--radius", "40",
+                           "--layer-height", "0.2", "--out", out, "--passes", "auto", "--reference-images")
+    assert code == 0, err
+    man = json.loads((tmp_path / "o-passes.json").read_text())
+    n = man["pass_plan"]["passes"]
+    assert n == 4 and man["folders"] == [f"o-p{q + 1}" for q in range(n)]
+    sides = [json.loads((tmp_path / f / "layer_00000.json").read_text()) for f in man["folders"]]
+    piv = [s["swathes"][0]["pivot_radius_mm"] for s in sides]
+    assert [p - piv[0] for p in piv] == pytest.approx(man["pass_plan"]["offsets_mm"])
+    code, o, err = run_cli("simulate", *[tmp_path / f / "layer_00001.json" for f in man["folders"]], "--out", tmp_path / "ov.png", "--json")
+    assert code == 0, err
+    r = json.loads(o)
+    assert r["passes"] == n and r["deposit"]["uncovered_fraction"] < 0.005
+    code, _, err = run_cli("slice", mesh_path, "--device", "omnidot760", "--layer-height", "0.2", "--out", tmp_path / "x", "--passes", "2")
+    assert code == 2 and "need --rotary" in err
