@@ -65,7 +65,7 @@ def head_command(
     t = Table(title=f"{dev.name}: {dev.head.nozzles} nozzles, {dev.head.rows} rows, swathe {dev.head.swathe_mm} mm, "
                     f"pitch {dev.head.pitch_mm * 1000:.2f} um, cx = {radius:g} mm; max tilt {tmax:.2f} deg")
     for col in ("tilt deg", "cx_T mm", "ps_p mm", "dpi_xp", "p cos um", "band (exact) mm", "pitch exact um",
-                "largest gap um", "mean gap um", "even", "single-row bands mm"):
+                "largest gap um", *(("mean gap um", "even") if best else ()), "single-row bands mm"):
         t.add_column(col, justify="right")
     for f, ev in zip(figs, scan):
         p = f.paper
@@ -74,8 +74,9 @@ def head_command(
             f"{f.tilt_deg:g}", f"{p['cx_T_mm']:.3f}", f"{p['ps_p_mm']:.3f}", f"{p['dpi_xp']:.1f}",
             f"{p['pitch_radial_mm'] * 1000:.2f}", f"{lo:.3f}-{hi:.3f} ({hi - lo:.3f})",
             f"{f.pitch_radial_min_mm * 1000:.1f}-{f.pitch_radial_max_mm * 1000:.1f}",
-            f"{f.largest_track_gap_mm * 1000:.1f}", f"{ev.mean_pitch_mm * 1000:.1f}",
-            ("yes" if ev.even else f"no ({ev.evenness:.2f})") + (" best" if chosen is ev else ""),
+            f"{f.largest_track_gap_mm * 1000:.1f}",
+            *((f"{ev.mean_pitch_mm * 1000:.1f}", ("yes" if ev.even else f"no ({ev.evenness:.2f})") + (" best" if chosen is ev else ""))
+              if best else ()),
             f"{f.inner_single_row_band_mm[0]:.2f}-{f.inner_single_row_band_mm[1]:.2f}, "
             f"{f.outer_single_row_band_mm[0]:.2f}-{f.outer_single_row_band_mm[1]:.2f}",
         )
