@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from rotoprint import load_device
+from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
 from rotoprint.rotary.deposit import deposit_print
 from rotoprint.rotary.files import read_print
@@ -35,6 +36,7 @@ def film_row(label, tilt, passes, gap_um, dpi, f, secs, extra=""):
 
 def main() -> None:
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 1200
+    tilts = [float(t) for t in sys.argv[2].split(",")] if len(sys.argv) > 2 else [0.0, 20.0, 45.0, 70.0]
     head0 = load_device("omnidot760").head
     d = test_design(n)
     px = 25.4 / 360
@@ -43,7 +45,7 @@ def main() -> None:
     print("| tilt deg | print | passes | largest track gap um | clock dpi | uncovered interior % | uncovered band % | "
           "thinnest / mean | mean um | 1 mm bins max dev % | volume error | drops | s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-    for tilt in (0.0, 20.0, 45.0, 70.0):
+    for tilt in tilts:
         sp = plan_swathes(head0, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
         rng = np.random.default_rng(14)
         dead = tuple(sorted(int(k) for k in rng.choice(np.flatnonzero(sp.swathes[0].enabled), 5, replace=False)))
@@ -58,13 +60,19 @@ def main() -> None:
                        f" issue's baseline (60 um discs at pixel centres): {100 * base:.1f} % |"), flush=True)
         for label, head, eq in (("planned passes", head0, False), ("planned passes, 5 dead nozzles", head0.model_copy(update={"dead_nozzles": dead}), False),
                                 ("planned passes, equalised", head0, True)):
-            t = time.perf_counter()
-            with tempfile.TemporaryDirectory() as td:
-                m = transform_passes(d, head, pl, Path(td) / "p.png", passes="auto", tilt_deg=tilt, equalise=eq)
-                prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
-            f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles).films[0]
-            pp = m["pass_plan"]
-            print(film_row(label, tilt, pp["passes"], pp["largest_gap_mm"] * 1000, m["dpi_y"], f, time.perf_counter() - t), flush=True)
+            for passes in ("auto", "6"):
+                t = time.perf_counter()
+                try:
+                    with tempfile.TemporaryDirectory() as td:
+                        m = transform_passes(d, head, pl, Path(td) / "p.png", passes=passes, tilt_deg=tilt, equalise=eq)
+                        prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
+                except GeometryError as exc:
+                    print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)
+                    continue
+                f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles).films[0]
+                pp = m["pass_plan"]
+                print(film_row(label, tilt, pp["passes"], pp["largest_gap_mm"] * 1000, m["dpi_y"], f, time.perf_counter() - t), flush=True)
+                break
 
 
 if __name__ == "__main__":
