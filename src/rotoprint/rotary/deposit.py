@@ -389,7 +389,6 @@ def deposit_film(
                 bins_sum=np.zeros(0), bins_n=np.zeros(0, np.int64), covered_design=0) for _ in range(nsets)]
     pair_acc = [[0, 0] for _ in pairs]
     full = np.zeros((rows, cols), np.float64) if keep_map else None
-    bin_origin = None
     for r0 in range(0, rows, strip_rows):
         r1 = min(rows, r0 + strip_rows)
         e0, e1 = max(0, r0 - margin), min(rows, r1 + margin)
@@ -411,8 +410,6 @@ def deposit_film(
             yd = (ii + r0 + 0.5 - oy) / ny
             X, Y = placement.to_platform(xd, yd)
             rad = np.hypot(X, Y)
-            if bin_origin is None:
-                bin_origin = 0
             bidx = np.floor(rad).astype(np.int64)
         covered = []
         for si, (u, v, vol, a, rs, hh, norm, _) in enumerate(prepared):
@@ -453,7 +450,6 @@ def deposit_film(
     for si, (s, ac, prep) in enumerate(zip(drop_sets, acc, prepared)):
         planned = float(np.sum(s.volume_pl))
         dep = ac["dep"] * gx * gy / UM3_PER_PL
-        # volume of drops whose footprint reaches beyond the grid (none when the grid covers every site)
         n_int = ac["interior"]
         mean = ac["tsum"] / n_int if n_int else float("nan")
         tmin = ac["tmin"] if n_int else float("nan")
