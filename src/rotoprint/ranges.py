@@ -89,6 +89,7 @@ FRACTION = Range(0.0, 1.0)
 OFFSET_UM = Range(0.0, 2000.0, "um")  # = masks.pipeline.FIRST_LAYER_OFFSET_MAX_UM
 DROP_UM = Range(0.1, 10_000.0, "um")
 JITTER_UM = Range(0.0, 10_000.0, "um")
+SPREAD = Range(0.0, 20.0, lo_open=True)  # footprint / in-flight diameter (devices.models spread_factor)
 WORKERS = Range(1, 1024, integer=True)
 COUNT = Range(0, 1_000_000, integer=True)
 SWATHES = Range(1, 10_000, integer=True)

@@ -257,9 +257,13 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
                 pr = plan.material_print(mname, plan.head(ink0), sections, i, thinned=False)
                 ref = plan.reference_image(mname, sections).astype(np.uint8) * 255
                 sim = simulate(pr, ref)
+                from ..rotary.deposit import deposit_film, ink_drops
+
+                film = deposit_film(sim.inked, pr.placement, pr.head, [ink_drops(sim.drops, pr.head)]).films[0].to_json()
                 name = f"overlays/layer_{i:05d}-{mname}.png"
                 (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))
                 overlays.append({"layer": i, "material": mname, "ink": ink0, "head": plan.head(ink0).name, "file": name,
+                                 "deposit": {k: v for k, v in film.items() if k != "radial_bins"},
                                  "iou": sim.report.iou, "uncovered_fraction": sim.report.uncovered_fraction,
                                  "drops_outside": sim.report.drops_outside, "mean_error_um": sim.report.mean_error_um})
         timings["simulate_s"] = time.perf_counter() - ts

@@ -205,11 +205,13 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
     w("</table></div></div></section>")
     # overlays
     w("<section id='overlays'><h2>Simulator overlays</h2><p style='font-size:13px'>Drops placed by the forward formula "
-      "from the print-ready data (coverage before density thinning), against the material's exact region: light blue "
+      "from the print-ready data; the headline is the deposit model's film (each drop's volume spread to a footprint and merged; "
+      "interior = the region less half a footprint), the cell-model IoU is secondary. Overlay (coverage before density "
+      "thinning), against the material's exact region: light blue "
       "printed, orange uncovered, pink printed outside, dark blue / red drops on / off the design.</p><div class='ovl'>")
     for o in plan_json["overlays"]:
         w(f"<figure><img alt='overlay' src='{_print_thumb(overlays_dir / o['file'])}'><figcaption>layer {o['layer']} "
-          f"{_e(o['material'])} ({_e(o['head'])}): IoU {o['iou']:.4f}, uncovered {100 * o['uncovered_fraction']:.2f} %</figcaption></figure>")
+          f"{_e(o['material'])} ({_e(o['head'])}): {_film_caption(o)}cell model IoU {o['iou']:.4f}, uncovered {100 * o['uncovered_fraction']:.2f} %</figcaption></figure>")
     w("</div></section>")
     # printability
     w("<section id='printability'><h2>Printability</h2>")
@@ -260,3 +262,12 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
       "<code>rotoprint simulate</code>) are the print-ready images.</p></section>")
     w(f"</main><script type='application/json' id='layer-data'>{layer_data}</script><script>{_JS}</script></body></html>")
     return "".join(w_ for w_ in parts)
+
+
+def _film_caption(o: dict) -> str:
+    """Headline of an overlay: the deposit model's film (rotary/deposit.py), when recorded."""
+    f = o.get("deposit")
+    if not f:
+        return ""
+    return (f"<b>film: {100 * f['uncovered_fraction']:.2f} % of the interior uncovered</b> "
+            f"({f['footprint_um']:.0f} um footprints; thinnest / mean {f['thinnest_to_mean']:.2f}); ")
