@@ -39,7 +39,7 @@ def head_command(
     radius: Annotated[float, typer.Option("--radius", help="Pivot radius cx for the exact figures, mm.", callback=in_range(R.RADIUS_MM))] = 60.0,
     plot: Annotated[Path | None, typer.Option("--plot", help="Write the paper's Figure 5 (a), (b) to this .png/.svg/.pdf.")] = None,
     best: Annotated[bool, typer.Option("--best", help="Name the evenly interleaved tilt with the finest radial pitch.")] = False,
-    even_ratio: Annotated[float, typer.Option("--even-ratio", help="Even: largest track gap <= this x the mean gap.")] = 1.25,
+    even_ratio: Annotated[float, typer.Option("--even-ratio", help="Even: largest track gap <= this x the mean gap.", callback=in_range(R.EVEN_RATIO))] = 1.25,
     json_out: JsonOpt = False,
     force: ForceOpt = False,
 ) -> None:
