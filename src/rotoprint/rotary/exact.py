@@ -10,6 +10,7 @@ costs one gather.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import logging
 import math
@@ -285,8 +286,10 @@ def exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup | None
     (1, 764)
     """
     st = options_from(RotarySetup, setup, keywords, what="exact_maps")
-    if not (type(st.tilt_deg) is float and type(st.mount_angle_deg) is float and type(st.direction) is int):
-        st = replace(st, tilt_deg=float(st.tilt_deg), mount_angle_deg=float(st.mount_angle_deg), direction=int(st.direction))
+    if not (type(st.tilt_deg) is float and type(st.mount_angle_deg) is float and type(st.direction) is int
+            and type(st.pivot_offset_mm) is float):
+        st = replace(st, tilt_deg=float(st.tilt_deg), mount_angle_deg=float(st.mount_angle_deg), direction=int(st.direction),
+                     pivot_offset_mm=float(st.pivot_offset_mm))
     return _exact_maps(head, placement, st)
 
 
@@ -295,6 +298,7 @@ def exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup | None
 def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> ExactMaps:
     tilt_deg, dpi_y, ref_radius_mm = setup.tilt_deg, setup.dpi_y, setup.ref_radius_mm
     mount_angle_deg, direction, max_swathes, kernel = setup.mount_angle_deg, setup.direction, setup.max_swathes, setup.kernel
+    pivot_offset_mm = setup.pivot_offset_mm
     dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
     r_in, r_out = placement.radial_range_mm()
     plan = plan_swathes(
@@ -314,6 +318,8 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
     setup = []
     for j, sw in enumerate(plan.swathes):
         mount = plan.mount(j)
+        if pivot_offset_mm:
+            mount = dataclasses.replace(mount, pivot_radius_mm=mount.pivot_radius_mm + float(pivot_offset_mm))
         lay = nozzle_layout(head, mount)
         dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
         i0, i1 = firing_range(lay.phi_rad[sw.enabled], a_lo, a_hi, dphi, direction)

@@ -44,6 +44,9 @@ class RotarySetup:
         Refuse designs that need more radial swathes.
     kernel : {'numba', 'numpy'}
         The jit kernel or the pure-numpy reference; their output is identical.
+    pivot_offset_mm : float
+        Radial offset of every swathe's pivot from the planned one (an interlaced pass,
+        :mod:`rotoprint.rotary.interlace`); the swathes keep their nozzles and bands.
     """
 
     tilt_deg: float
@@ -53,6 +56,7 @@ class RotarySetup:
     direction: int = 1
     max_swathes: int | None = None
     kernel: str = "numba"
+    pivot_offset_mm: float = 0.0
 
     def __post_init__(self) -> None:
         _check_kernel(self.kernel)
@@ -83,6 +87,9 @@ class RotarySliceOptions:
     gap_radius_mm : float
         Open meshes: see :func:`rotoprint.slice_mesh`.
     kernel : {'numba', 'numpy'}
+    pivot_offset_mm : float
+        Radial offset of every swathe's pivot from the planned one: one interlaced pass
+        (:func:`rotoprint.rotary.interlace.plan_passes`); the swathes keep their nozzles.
     """
 
     layer_height_mm: float
@@ -97,6 +104,7 @@ class RotarySliceOptions:
     fill: str = "nonzero"
     gap_radius_mm: float = DEFAULT_GAP_RADIUS_MM
     kernel: str = "numba"
+    pivot_offset_mm: float = 0.0
 
     def __post_init__(self) -> None:
         from ..slicing import FILL_RULES
@@ -112,7 +120,8 @@ class RotarySliceOptions:
     def setup(self) -> RotarySetup:
         """The head's setup (mount angle 0: the part's angle places it)."""
         return RotarySetup(tilt_deg=self.tilt_deg, dpi_y=self.dpi_y, ref_radius_mm=self.ref_radius_mm,
-                           direction=self.direction, max_swathes=self.max_swathes, kernel=self.kernel)
+                           direction=self.direction, max_swathes=self.max_swathes, kernel=self.kernel,
+                           pivot_offset_mm=self.pivot_offset_mm)
 
     def as_dict(self) -> dict[str, Any]:
         """The options as :func:`~rotoprint.rotary.direct.slice_rotary` keywords, JSON-ready."""
@@ -121,6 +130,9 @@ class RotarySliceOptions:
             d[k] = float(d[k])
         d["direction"] = int(d["direction"])
         d["equalise"] = bool(d["equalise"])
+        off = d.pop("pivot_offset_mm")
+        if off:  # recorded only when set (an interlaced pass), as before
+            d["pivot_offset_mm"] = float(off)
         return d
 
 
