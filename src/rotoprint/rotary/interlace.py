@@ -606,7 +606,8 @@ def slice_rotary_passes(mesh, device, out_dir, *, passes: str | int = "auto", la
 
     from ..io.atomic import write_owned_file
     from .deposit import DepositOptions
-    from .direct import DEFAULT_GAP_RADIUS_MM, PartPlacement, slice_rotary, write_rotary_slices
+    from ..constants import DEFAULT_GAP_RADIUS_MM
+    from .direct import PartPlacement, slice_rotary, write_rotary_slices
     from .swathes import plan_swathes
 
     head = device.head
