@@ -60,7 +60,7 @@ def test_levels_that_do_not_fit_and_bad_files_are_refused():
         bits_for_levels(8)
     with pytest.raises(ImageError, match="does not fit 1 bit"):
         pack_levels(np.array([[2]], np.uint8), 1, np.arange(1))
-    with pytest.raises(ImageError, match="needs 8"):
+    with pytest.raises(ImageError, match="need 8"):
         read_packed(b"\0" * 7, 2, 32, 1)
     bad = np.array([[0x1]], np.uint32)  # a padding bit after nozzle 0 of 1
     with pytest.raises(ImageError, match="padding"):
