@@ -38,6 +38,9 @@ def _register() -> None:
     from . import build as build_cmd
 
     app.command("build")(build_cmd.build_command)
+    from . import replay
+
+    app.command("replay")(replay.replay_command)
 
 
 _register()

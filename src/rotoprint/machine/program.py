@@ -34,7 +34,7 @@ from ..rotary.printdata import _runs
 from .clock import FLAG_FRACTION, clock_ratio
 from .spec import MachineSpec
 
-__all__ = ["MachineOptions", "MachineWriter", "PROGRAM_FORMAT", "PROGRAM_VERSION", "row_offsets_firings",
+__all__ = ["MachineOptions", "MachineWriter", "machine_stage", "PROGRAM_FORMAT", "PROGRAM_VERSION", "row_offsets_firings",
            "write_machine_folder", "shift_rows", "unshift_rows"]
 
 PROGRAM_FORMAT = "rotoprint-machine-program"
@@ -409,6 +409,18 @@ class MachineWriter:
                 f.close()
 
 
+def machine_stage(plan, folder: Path, options=None):
+    """The build's machine stage: a :class:`MachineWriter` on ``folder`` with the job's
+    ``[machine]`` section, or None when ``options`` is False."""
+    if options is False:
+        return None
+    try:
+        return MachineWriter(plan, folder, plan.job.spec.machine, options if isinstance(options, MachineOptions) else None,
+                             source=Path(plan.job.source).name if plan.job.source else None)
+    except ConfigError as exc:
+        raise ConfigError(exc.problem, path=plan.job.source) from None
+
+
 def write_machine_folder(plan, out: str | Path, spec: MachineSpec | None = None, options: MachineOptions | None = None, *,
                          on_step=None, force: bool = False, inputs=(), layers=None) -> dict:
     """Write a plan's machine folder at ``out`` atomically (without the rest of a build).
@@ -434,7 +446,8 @@ def write_machine_folder(plan, out: str | Path, spec: MachineSpec | None = None,
     n = len(plan) if layers is None else min(int(layers), len(plan))
     step = on_step or (lambda *a: None)
     with atomic_dir(out, kind="machine", inputs=inputs, force=force) as tmp:
-        w = MachineWriter(plan, tmp, spec, options, source=plan.job.source)
+        w = MachineWriter(plan, tmp, plan.job.spec.machine if spec is None else spec, options,
+                          source=Path(plan.job.source).name if plan.job.source else None)
         try:
             for i in range(n):
                 step("machine", i, n)

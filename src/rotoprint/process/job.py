@@ -44,6 +44,7 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ..errors import ConfigError, InputFileError
+from ..machine.spec import MachineSpec
 from .materials import Material, MaterialLibrary, builtin_library, load_materials, validation_message
 from .shapes import Shape
 
@@ -197,6 +198,7 @@ class JobSpec(_Strict):
     resistance: tuple[ResistanceSpec, ...] = ()
     process: ProcessSpec = ProcessSpec()
     materials: dict[str, dict] = Field(default_factory=dict)
+    machine: MachineSpec = MachineSpec()  # the [machine] section: encoder, radial stage, speeds (docs/machine.md)
 
     @model_validator(mode="after")
     def _names(self) -> JobSpec:
