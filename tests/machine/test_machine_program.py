@@ -282,6 +282,17 @@ radial_stage_mm = [20.0, 150.0]
     prog = json.loads((tmp_path / "b" / "machine" / "program.json").read_text())
     assert prog["packing"]["bits_per_nozzle"] == 2 and prog["row_delays"] == "program"
     assert prog["machine"]["radial_stage_mm"] == [20.0, 150.0]
+    import tifffile
+
+    from rotoprint.io.machine import nozzle_order, read_packed, unpack_levels
+
+    rec = prog["layers"][0]["images"][0]
+    folder = tmp_path / "b" / "machine"
+    lv = unpack_levels(read_packed((folder / rec["file"]).read_bytes(), rec["firings"], rec["nozzles"], 2), 2,
+                       nozzle_order(764, 2))
+    assert lv.any() and np.array_equal(tifffile.imread(folder / rec["tiff"]), lv[:, nozzle_order(764, 2)])
+    code, out, err = run_cli("build", job, "--out", tmp_path / "b2", "--no-report")
+    assert code == 0 and "machine: " in out and "program.json" in out
     code, out, err = run_cli("build", job, "--out", tmp_path / "c", "--row-delays", "sideways")
     assert code == 2 and "--row-delays must be 'baked' or 'program'" in err and not (tmp_path / "c").exists()
     code, out, err = run_cli("build", job, "--out", tmp_path / "c", "--bits", "3")

@@ -50,6 +50,11 @@ def report_summary(res, *, label: str = "") -> None:
         console.print(styled(("printability: some features fall short", "red"), " (see the report)"))
     out_console.print(f"report: {res.report_path}")
     out_console.print(f"plan:   {res.plan_path}")
+    m = s.get("machine")
+    if m:
+        flag = f", FLAGGED clocks: {', '.join(m['flagged_clocks'])}" if m["flagged_clocks"] else ""
+        out_console.print(f"machine: {res.out_dir / 'machine' / 'program.json'} ({m['steps']} steps, {m['revolutions']} revolutions, "
+                          f"{_fmt_time(m['time_s'])}{flag})")
 
 
 def build_command(
