@@ -25,7 +25,7 @@ from .errors import ConfigError
 
 __all__ = ["LayerTask", "LayerResult", "MaskLayerResult", "RotaryLayerResult", "produce_layers", "task_fingerprint"]
 
-#: Seconds to wait for a Dask scheduler before giving up.
+#: Seconds to wait for a Dask scheduler (connection and handshake) before giving up.
 DASK_CONNECT_TIMEOUT_S = 10.0
 
 
@@ -216,8 +216,14 @@ def produce_layers(
         raise ConfigError(f"workers must be at least 1, got {workers}")
     task = _keyed(task)
     if scheduler is not None:
-        yield from _produce_dask(task, indices, scheduler, window)
-        return
+        if indices:  # connect now, not at the first next(): a dead scheduler fails before any layer is kept
+            check_scheduler_address(scheduler)
+            _probe_scheduler(scheduler, DASK_CONNECT_TIMEOUT_S)
+        return _produce_dask(task, indices, scheduler, window)
+    return _produce_local(task, indices, workers, window)
+
+
+def _produce_local(task: LayerTask, indices: list[int], workers: int, window: int | None) -> Iterator[LayerResult]:
     if workers == 1 or len(indices) <= 1:
         threads = min(2, cpu_count())
         if threads == 1 or len(indices) <= 1:
@@ -259,8 +265,36 @@ def check_scheduler_address(address: str) -> None:
     """Refuse, before any work, a scheduler address that is not ``[tcp://]host:port``."""
     import re
 
-    if not re.fullmatch(r"(tcp|tls|inproc|ws|wss)://[^\s:/]+:\d{1,5}|[^\s:/]+:\d{1,5}", address or ""):
+    m = re.fullmatch(r"(?:(?:tcp|tls|inproc|ws|wss)://)?[^\s:/]+:(\d{1,5})", address or "")
+    if not m:
         raise ConfigError(f"scheduler address must look like tcp://HOST:PORT, got {address!r}")
+    if not 1 <= int(m.group(1)) <= 65535:
+        raise ConfigError(f"scheduler address {address!r}: port {m.group(1)} is not a TCP port (1 to 65535)")
+
+
+def _probe_scheduler(address: str, timeout_s: float) -> None:
+    """Connect to the scheduler and complete Dask's handshake within ``timeout_s``.
+
+    ``distributed.Client`` bounds the TCP connect but not the handshake read after it, so a
+    server that accepts and never answers would block it forever; this refuses such an
+    address first, in bounded time.
+    """
+    import asyncio
+
+    from distributed.comm import connect
+    from distributed.security import Security
+
+    async def handshake() -> None:
+        comm = await connect(address, timeout=timeout_s, **Security().get_connection_args("client"))
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(handshake(), timeout_s))
+    except (asyncio.TimeoutError, TimeoutError):
+        raise ConfigError(f"the Dask scheduler at {address} did not answer within {timeout_s:g} s "
+                          "(is it a Dask scheduler?)") from None
+    except (OSError, ValueError, TypeError) as exc:
+        raise ConfigError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
 
 
 def _produce_dask(task: LayerTask, indices: list[int], address: str, window: int | None) -> Iterator[LayerResult]:

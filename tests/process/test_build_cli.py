@@ -79,7 +79,7 @@ def test_build_demo_builds_the_coil_and_says_where_the_report_is(run_cli, tmp_pa
     [
         (lambda d: d["parts"][0].update(material="silvr"), "parts[0].material: unknown material 'silvr'"),
         (lambda d: d["job"].pop("layer_height_mm"), "job.layer_height_mm: Field required"),
-        (lambda d: d["job"].update(layer_height_mm=-1), "job.layer_height_mm: Input should be greater than 0"),
+        (lambda d: d["job"].update(layer_height_mm=-1), "job.layer_height_mm: Input should be greater than or equal to 0.0001"),
         (lambda d: d["printer"]["heads"].pop(1), "no head carries the ink 'calcium_chloride'"),
         (lambda d: d["parts"][1].update(priority=1), "parts[1].priority: 1 is also the priority of a 'plaster' part"),
         (lambda d: d["parts"][0].update(mesh="x.stl"), "parts[0]: give exactly one of"),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated
 
@@ -9,7 +10,9 @@ import typer
 from rich.table import Table
 
 from ..errors import ConfigError
-from ._common import DeviceOpt, ForceOpt, JsonOpt, console, device_input, out_console, print_json
+from .. import ranges as R
+from ..ranges import check_count, check_range
+from ._common import DeviceOpt, ForceOpt, JsonOpt, console, device_input, in_range, out_console, print_json
 
 
 def parse_tilt_range(text: str) -> list[float]:
@@ -19,9 +22,11 @@ def parse_tilt_range(text: str) -> list[float]:
         a, b, step = (float(p) for p in parts)
     except ValueError:
         raise ConfigError(f"--tilt-range must be 'A:B:STEP' in degrees, got {text!r}") from None
-    if step <= 0 or b < a:
-        raise ConfigError(f"--tilt-range needs A <= B and STEP > 0, got {text!r}")
-    n = int((b - a) / step + 1e-9)
+    if not all(math.isfinite(v) for v in (a, b, step)) or step <= 0 or b < a:
+        raise ConfigError(f"--tilt-range needs finite A <= B and STEP > 0, got {text!r}")
+    check_range(a, R.TILT_DEG, "--tilt-range A")
+    check_range(b, R.TILT_DEG, "--tilt-range B")
+    n = check_count(math.floor((b - a) / step + 1e-9), "--tilt-range: the number of tilts", 10_000)
     if n > 10_000:
         raise ConfigError(f"--tilt-range gives {n + 1} tilts; at most 10001")
     return [a + i * step for i in range(n + 1)]
@@ -29,9 +34,9 @@ def parse_tilt_range(text: str) -> list[float]:
 
 def head_command(
     device: DeviceOpt = "omnidot760",
-    tilt: Annotated[float | None, typer.Option("--tilt", help="One tilt, degrees.")] = None,
+    tilt: Annotated[float | None, typer.Option("--tilt", help="One tilt, degrees.", callback=in_range(R.TILT_DEG))] = None,
     tilt_range: Annotated[str | None, typer.Option("--tilt-range", help="Tilts 'A:B:STEP', degrees (default 0:80:10).")] = None,
-    radius: Annotated[float, typer.Option("--radius", help="Pivot radius cx for the exact figures, mm.")] = 60.0,
+    radius: Annotated[float, typer.Option("--radius", help="Pivot radius cx for the exact figures, mm.", callback=in_range(R.RADIUS_MM))] = 60.0,
     plot: Annotated[Path | None, typer.Option("--plot", help="Write the paper's Figure 5 (a), (b) to this .png/.svg/.pdf.")] = None,
     json_out: JsonOpt = False,
     force: ForceOpt = False,

@@ -9,35 +9,41 @@ from typing import Annotated
 import typer
 
 from ..errors import ConfigError, InputFileError
-from ._common import ForceOpt, JsonOpt, console, out_console, print_json
+from .. import ranges as R
+from ..ranges import NOZZLE_INDEX, check_range
+from ._common import ForceOpt, JsonOpt, console, in_range, out_console, print_json
 
 
 def parse_dead(text: str | None) -> tuple[int, ...]:
     if not text:
         return ()
     try:
-        return tuple(sorted({int(t) for t in text.split(",") if t.strip()}))
+        ks = {int(t) for t in text.split(",") if t.strip()}
     except ValueError:
         raise ConfigError(f"--dead must be nozzle indices 'K,K,...', got {text!r}") from None
+    for k in ks:  # the head's own count is checked by simulate(); this keeps them machine ints
+        check_range(k, NOZZLE_INDEX, "--dead")
+    return tuple(sorted(ks))
 
 
 def simulate_command(
     print_file: Annotated[Path, typer.Argument(help="A print written by 'rotoprint transform' (PRINT.png, PRINT-s1.png or PRINT.json).")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Overlay PNG: design, drops and errors in colour.")],
     design: Annotated[Path | None, typer.Option("--design", help="Design image (default: the one named in the sidecar, if unchanged).")] = None,
-    drop_diameter: Annotated[float | None, typer.Option("--drop-diameter", help="Drop diameter on the substrate, um (default: the head's).")] = None,
-    jitter: Annotated[float, typer.Option("--jitter", help="Drop misdirection, standard deviation in um per axis.")] = 0.0,
+    drop_diameter: Annotated[float | None, typer.Option("--drop-diameter", help="Drop diameter on the substrate, um (default: the head's).", callback=in_range(R.DROP_UM))] = None,
+    jitter: Annotated[float, typer.Option("--jitter", help="Drop misdirection, standard deviation in um per axis.", callback=in_range(R.JITTER_UM))] = 0.0,
     dead: Annotated[str | None, typer.Option("--dead", help="Extra dead nozzles 'K,K,...'.")] = None,
-    seed: Annotated[int, typer.Option("--seed", help="Seed of the jitter.")] = 0,
-    scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.")] = 2,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the jitter.", callback=in_range(R.SEED))] = 0,
+    scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.", callback=in_range(R.OVERLAY_SCALE))] = 2,
     json_out: JsonOpt = False,
     force: ForceOpt = False,
 ) -> None:
     """IoU, area ratio, mean/max placement error, uncovered design area, drops outside the design."""
     from ..io.atomic import check_output_path, write_owned_file
     from ..io.images import read_grey_image
+    from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes
     from ..rotary.files import read_print
-    from ..rotary.simulate import render_overlay, simulate
+    from ..rotary.simulate import check_overlay_fits, render_overlay, simulate
 
     if out.suffix.lower() != ".png":
         raise ConfigError(f"--out must end in .png, got {out.name!r}")
@@ -52,7 +58,8 @@ def simulate_command(
             cand = sp.parent / cand  # a path relative to the sidecar's folder
         if not dinfo.get("path") or not cand.exists():
             raise InputFileError("the design named in the sidecar is not available; give --design IMAGE", path=sp)
-        if hashlib.sha256(cand.read_bytes()).hexdigest() != dinfo.get("sha256"):
+        data = read_input_bytes(cand, what="design image", limit_bytes=MAX_IMAGE_BYTES)
+        if hashlib.sha256(data).hexdigest() != dinfo.get("sha256"):
             raise InputFileError(f"the design {cand} changed since the transform; give --design IMAGE", path=sp)
         design = cand
         inputs.append(design)
@@ -60,6 +67,7 @@ def simulate_command(
     img = read_grey_image(design)
     if dinfo.get("invert"):
         img = 255 - img
+    check_overlay_fits(img.shape, scale)  # before the simulation, not after it
     sim = simulate(pr, img, drop_diameter_um=drop_diameter, jitter_um=jitter, dead_nozzles=parse_dead(dead), seed=seed)
     overlay = render_overlay(sim, scale=scale)
     from PIL import Image

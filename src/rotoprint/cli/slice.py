@@ -9,6 +9,8 @@ import typer
 
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
+from .. import ranges as R
+from ._common import direction_cb, in_range
 from ._common import (
     styled,
     DeviceOpt,
@@ -32,28 +34,28 @@ def slice_command(
     device: DeviceOpt,
     layer_height: LayerHeightOpt,
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created; replaced only if provably an earlier rotoprint output, or with --force).")],
-    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X. Default: the device's own direction.")] = None,
+    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X. Default: the device's own direction.", callback=in_range(R.ANGLE_DEG))] = None,
     fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero (overlapping shells union) or evenodd.")] = "nonzero",
     offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
-    gap_radius: Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends of a section closer than this, mm.")] = DEFAULT_GAP_RADIUS_MM,
-    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: circumferential / print-direction density, dpi.")] = None,
+    gap_radius: Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends of a section closer than this, mm.", callback=in_range(R.GAP_RADIUS_MM))] = DEFAULT_GAP_RADIUS_MM,
+    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: circumferential / print-direction density, dpi.", callback=in_range(R.DPI))] = None,
     units: UnitsOpt = "mm",
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
     fill_holes: FillHolesOpt = True,
-    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
+    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.", callback=in_range(R.WORKERS))] = 1,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified layers, make the rest.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log what happens (resume, workers) on stderr.")] = False,
     rotary: Annotated[bool, typer.Option("--rotary", help="Direct rotary slicing: per-nozzle firing images straight from the mesh (inkjet heads).")] = False,
-    tilt: Annotated[float | None, typer.Option("--tilt", help="--rotary: head tilt, degrees (counter-clockwise positive).")] = None,
-    radius: Annotated[float | None, typer.Option("--radius", help="--rotary: radius of the part's inner edge (smallest model X), mm.")] = None,
-    angle: Annotated[float, typer.Option("--angle", help="--rotary: angle of the part's centre line on the platform, degrees.")] = 0.0,
-    direction: Annotated[int, typer.Option("--direction", help="--rotary: +1 platform turns counter-clockwise seen from above, -1 clockwise.")] = 1,
-    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="--rotary: reference radius of the clock, mm (default: each swathe's outermost track).")] = None,
-    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.")] = None,
+    tilt: Annotated[float | None, typer.Option("--tilt", help="--rotary: head tilt, degrees (counter-clockwise positive).", callback=in_range(R.TILT_DEG))] = None,
+    radius: Annotated[float | None, typer.Option("--radius", help="--rotary: radius of the part's inner edge (smallest model X), mm.", callback=in_range(R.RADIUS_MM))] = None,
+    angle: Annotated[float, typer.Option("--angle", help="--rotary: angle of the part's centre line on the platform, degrees.", callback=in_range(R.ANGLE_DEG))] = 0.0,
+    direction: Annotated[int, typer.Option("--direction", help="--rotary: +1 platform turns counter-clockwise seen from above, -1 clockwise.", callback=direction_cb)] = 1,
+    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="--rotary: reference radius of the clock, mm (default: each swathe's outermost track).", callback=in_range(R.RADIUS_MM))] = None,
+    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.", callback=in_range(R.SWATHES))] = None,
     equalise: Annotated[bool, typer.Option("--equalise", help="--rotary: thin inner tracks so drops per unit area are uniform.")] = False,
     reference_images: Annotated[bool, typer.Option("--reference-images", help="--rotary: also write each layer's Cartesian cross-section (for 'rotoprint simulate').")] = False,
     force: ForceOpt = False,
@@ -72,6 +74,10 @@ def slice_command(
     setup_logging(verbose)
     inputs = [mesh, device_input(device)]
     check_output_path(out, is_dir=True, inputs=inputs, force=force)  # before any work
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..runner import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,

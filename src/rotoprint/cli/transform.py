@@ -9,7 +9,8 @@ from typing import Annotated
 import typer
 
 from ..errors import ConfigError
-from ._common import DeviceOpt, ForceOpt, JsonOpt, console, device_input, print_json
+from .. import ranges as R
+from ._common import DeviceOpt, ForceOpt, JsonOpt, console, device_input, direction_cb, in_range, print_json
 
 METHODS = ("exact", "paper")
 
@@ -17,16 +18,16 @@ METHODS = ("exact", "paper")
 def transform_command(
     image: Annotated[Path, typer.Argument(help="8-bit greyscale or monochrome design (PNG, BMP, TIFF...); non-zero = ink.")],
     device: DeviceOpt,
-    tilt: Annotated[float, typer.Option("--tilt", help="Head tilt, degrees (counter-clockwise positive).")],
-    radius: Annotated[float, typer.Option("--radius", help="Radius of the design's first column (inner edge), mm.")],
+    tilt: Annotated[float, typer.Option("--tilt", help="Head tilt, degrees (counter-clockwise positive).", callback=in_range(R.TILT_DEG))],
+    radius: Annotated[float, typer.Option("--radius", help="Radius of the design's first column (inner edge), mm.", callback=in_range(R.RADIUS_MM))],
     out: Annotated[Path, typer.Option("--out", "-o", help="PRINT.png (several swathes: PRINT-s1.png, ...) and sidecar PRINT.json.")],
     method: Annotated[str, typer.Option("--method", help="exact (sample where every drop lands) or paper (polar + linear, eqs 1-6).")] = "exact",
-    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Circumferential density at the reference radius (default: the head's).")] = None,
-    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="Reference radius of the clock, mm (default: each swathe's outermost track).")] = None,
-    design_dpi: Annotated[float | None, typer.Option("--design-dpi", help="The design's resolution, dpi (default: the head's native dpi).")] = None,
-    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="Refuse designs that need more radial swathes.")] = None,
-    angle: Annotated[float, typer.Option("--angle", help="Angle of the design's centre line on the platform, degrees.")] = 0.0,
-    direction: Annotated[int, typer.Option("--direction", help="+1: platform turns counter-clockwise seen from above; -1 clockwise.")] = 1,
+    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Circumferential density at the reference radius (default: the head's).", callback=in_range(R.DPI))] = None,
+    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="Reference radius of the clock, mm (default: each swathe's outermost track).", callback=in_range(R.RADIUS_MM))] = None,
+    design_dpi: Annotated[float | None, typer.Option("--design-dpi", help="The design's resolution, dpi (default: the head's native dpi).", callback=in_range(R.DPI))] = None,
+    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="Refuse designs that need more radial swathes.", callback=in_range(R.SWATHES))] = None,
+    angle: Annotated[float, typer.Option("--angle", help="Angle of the design's centre line on the platform, degrees.", callback=in_range(R.ANGLE_DEG))] = 0.0,
+    direction: Annotated[int, typer.Option("--direction", help="+1: platform turns counter-clockwise seen from above; -1 clockwise.", callback=direction_cb)] = 1,
     invert: Annotated[bool, typer.Option("--invert", help="Dark pixels are ink (e.g. black shapes on white).")] = False,
     json_out: JsonOpt = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No summary.")] = False,
@@ -37,6 +38,7 @@ def transform_command(
     from ..io.images import read_grey_image
     from ..io.atomic import check_output_path
     from ..rotary.files import print_paths, write_print
+    from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes
     from ..rotary.placement import Placement
 
     if method not in METHODS:
@@ -68,7 +70,7 @@ def transform_command(
         pr = transform_paper(design, head, pl, **kw)
     info = {
         "path": str(image.resolve()),
-        "sha256": hashlib.sha256(image.read_bytes()).hexdigest(),
+        "sha256": hashlib.sha256(read_input_bytes(image, what="image file", limit_bytes=MAX_IMAGE_BYTES)).hexdigest(),
         "invert": invert,
         "design_dpi": dpi,
     }

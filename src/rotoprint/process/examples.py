@@ -192,6 +192,19 @@ def example_files(name: str) -> dict[str, bytes]:
     return files
 
 
+
+def _holds(p: Path, data: bytes) -> bool:
+    """Whether ``p`` is a regular file holding exactly ``data`` (read bounded: a FIFO or a
+    device is never read, it just does not hold the example)."""
+    from ..io.inputs import read_input_bytes
+
+    try:
+        if not p.is_file() or p.stat().st_size != len(data):
+            return False
+        return read_input_bytes(p, what="example file", limit_bytes=len(data)) == data
+    except (OSError, InputFileError):
+        return False
+
 def write_example(name: str, folder: str | Path, *, overwrite: bool = False) -> Path:
     """Write example ``name`` (job file and its meshes) into ``folder``; returns the job path.
 
@@ -232,7 +245,7 @@ def write_example(name: str, folder: str | Path, *, overwrite: bool = False) -> 
                                  f"{', ...' if len(others) > 3 else ''}); refusing to write the example there", path=folder)
         for fname, data in files.items():
             p = folder / fname
-            if p.is_dir() or (p.exists() and not overwrite and p.read_bytes() != data):
+            if p.is_dir() or (p.exists() and not overwrite and not _holds(p, data)):
                 raise InputFileError(f"differs from the {name} example (edited?); refusing to overwrite it", path=p)
     folder.mkdir(parents=True, exist_ok=True)
     # Every file is renamed into place only when all are written; the stack renames in reverse

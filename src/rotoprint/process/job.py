@@ -7,7 +7,7 @@
     layer_height_mm = 0.02
 
     [printer]
-    device = "omnidot760"      # preset or device .toml
+    device = "omnidot760"      # preset or device .toml (relative: from the job file's folder)
     tilt_deg = 20.0
     equalise = true            # thin inner tracks: the same drops per mm2 at every radius
     [printer.clock]
@@ -38,11 +38,12 @@ file, and are :class:`~rotoprint.errors.ConfigError` (exit code 2 on the command
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
+from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .. import ranges as R
 from ..errors import ConfigError, InputFileError
 from ..machine.spec import MachineSpec
 from .materials import Material, MaterialLibrary, builtin_library, load_materials, validation_message
@@ -64,9 +65,15 @@ DPI_Y_RANGE = (25.0, 100_000.0)
 FREQUENCY_HZ_MAX = 1_000_000.0
 
 
+_Angle = Annotated[float, R.field(R.ANGLE_DEG)]
+_Coord = Annotated[float, R.field(R.COORD_MM)]
+_PRIORITY = R.Range(-1_000_000, 1_000_000, integer=True)
+_CYCLES = R.Range(1, 10_000, integer=True)  # cycles (passes) per layer
+
+
 class JobInfo(_Strict):
     name: str = "job"
-    layer_height_mm: float = Field(gt=0, le=10)
+    layer_height_mm: float = Field(ge=R.LAYER_HEIGHT_MM.lo, le=10)
     materials_file: str | None = None
     description: str = ""
 
@@ -95,8 +102,8 @@ class HeadSpec(_Strict):
 
     name: str = Field(min_length=1)
     ink: str = Field(min_length=1)
-    mount_angle_deg: float = 0.0
-    tilt_deg: float | None = None
+    mount_angle_deg: Annotated[float, R.field(R.ANGLE_DEG)] = 0.0
+    tilt_deg: Annotated[float, R.field(R.TILT_DEG)] | None = None
 
     @field_validator("mount_angle_deg")
     @classmethod
@@ -108,10 +115,10 @@ class HeadSpec(_Strict):
 
 class PrinterSpec(_Strict):
     device: str = "omnidot760"
-    tilt_deg: float = 0.0
+    tilt_deg: Annotated[float, R.field(R.TILT_DEG)] = 0.0
     direction: int = 1
     equalise: bool = True
-    max_swathes: int | None = Field(default=None, ge=1)
+    max_swathes: Annotated[int, R.field(R.SWATHES)] | None = None
     clock: ClockSpec = ClockSpec()
     heads: tuple[HeadSpec, ...] = Field(min_length=1)
 
@@ -136,8 +143,8 @@ class PlacementSpec(_Strict):
     """Where the assembly's footprint sits: its inner edge (smallest model X) at
     ``inner_radius_mm`` on the centre line at ``angle_deg`` (see ``docs/rotary.md``)."""
 
-    inner_radius_mm: float = Field(gt=0)
-    angle_deg: float = 0.0
+    inner_radius_mm: Annotated[float, R.field(R.RADIUS_MM)]
+    angle_deg: Annotated[float, R.field(R.ANGLE_DEG)] = 0.0
 
 
 class PartSpec(_Strict):
@@ -148,13 +155,13 @@ class PartSpec(_Strict):
 
     name: str = Field(min_length=1)
     material: str = Field(min_length=1)
-    priority: int = 0
+    priority: Annotated[int, R.field(_PRIORITY)] = 0
     mesh: str | None = None
     shape: Shape | None = None
     units: str = "mm"
-    rotate_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    translate_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    terminals: dict[str, tuple[float, float, float, float]] = Field(default_factory=dict)
+    rotate_deg: tuple[_Angle, _Angle, _Angle] = (0.0, 0.0, 0.0)
+    translate_mm: tuple[_Coord, _Coord, _Coord] = (0.0, 0.0, 0.0)
+    terminals: dict[str, tuple[_Coord, _Coord, _Coord, _Coord]] = Field(default_factory=dict, max_length=10_000)
 
     @model_validator(mode="after")
     def _one_source(self) -> PartSpec:
@@ -176,8 +183,8 @@ class ProcessSpec(_Strict):
     warning, and per-material overrides of the cycles per layer."""
 
     order: tuple[str, ...] | None = None
-    max_passes_per_layer: int = Field(default=200, ge=1)
-    cycles_per_layer: dict[str, int] = Field(default_factory=dict)
+    max_passes_per_layer: int = Field(default=200, ge=1, le=_CYCLES.hi)
+    cycles_per_layer: dict[str, Annotated[int, R.field(_CYCLES)]] = Field(default_factory=dict)
     check: bool = True
     simulate_layers: int = Field(default=4, ge=0, le=1000)
 
@@ -239,6 +246,21 @@ class ResolvedJob:
             if p.name == name:
                 return p
         raise ConfigError(f"no part named {name!r}", path=self.source)
+
+    def resolve(self, path: str | Path) -> Path:
+        """A path named in the job: relative paths are taken from the job file's folder."""
+        p = Path(path)
+        return p if p.is_absolute() else self.base_dir / p
+
+    def device_spec(self) -> str:
+        """``printer.device`` for :func:`~rotoprint.devices.load_device`: a preset name as it
+        is, a device file resolved against the job file's folder (like meshes)."""
+        from ..devices import preset_names
+
+        dev = self.spec.printer.device
+        if dev in preset_names() or (Path(dev).suffix.lower() != ".toml" and "/" not in dev):
+            return dev  # a preset, or an unknown name load_device explains
+        return str(self.resolve(dev))
 
     def head_for_ink(self, ink: str) -> int:
         for j, h in enumerate(self.spec.printer.heads):
@@ -366,12 +388,10 @@ def load_job(path: str | Path) -> ResolvedJob:
         raise InputFileError("no such job file", path=p)
     if p.is_dir():
         raise InputFileError("is a directory, expected a job .toml file", path=p)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise ConfigError("job file is not UTF-8 text", path=p) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"not valid TOML: {exc}", path=p) from None
+    from ..io.inputs import MAX_TOML_BYTES, parse_toml, read_input_text
+
+    text = read_input_text(p, what="job file", limit_bytes=MAX_TOML_BYTES, error=ConfigError)
+    data = parse_toml(text, p, what="job file", error=ConfigError)
     return parse_job(data, base_dir=p.resolve().parent, source=str(p))
 
 

@@ -436,7 +436,7 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
     BuildPlan
     """
     sp = job.spec
-    device = load_device(sp.printer.device)
+    device = load_device(job.device_spec())
     if not isinstance(device, InkjetDevice):
         raise ConfigError(f"printer.device: {device.name!r} is not an inkjet head; a multi-material job needs print heads",
                           path=job.source)
