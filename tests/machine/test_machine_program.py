@@ -243,6 +243,12 @@ def test_replay_refuses_altered_and_missing_files_impossible_stage_and_unreachab
     assert not (tmp_path / "o.png").exists()
     code, out, err = run_cli("replay", p, "--layer", "9", "--out", tmp_path / "o.png")
     assert code == 2 and "--layer 9" in err
+    code, out, err = run_cli("replay", tmp_path / "none.json", "--out", tmp_path / "o.png")
+    assert code == 2 and "none.json: no such file" in err
+    (tmp_path / "other.json").write_text('{"format": "rotoprint-build-plan"}')
+    code, out, err = run_cli("replay", tmp_path / "other.json", "--out", tmp_path / "o.png")
+    assert code == 2 and "not a rotoprint machine program" in err and err.strip().count("\n") == 0
+    assert not (tmp_path / "o.png").exists()
 
 
 def test_build_cli_options(tmp_path, run_cli):

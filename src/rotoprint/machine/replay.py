@@ -18,7 +18,6 @@ the image's firings per revolution).
 from __future__ import annotations
 
 import hashlib
-import json
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -29,6 +28,7 @@ from pydantic import ValidationError
 
 from ..devices.models import InkjetHead
 from ..errors import InputFileError, RotoprintError
+from ..io.inputs import parse_json, read_input_bytes
 from ..io.machine import nozzle_order, read_packed, unpack_levels
 from ..rotary.placement import Placement
 from ..rotary.printdata import RotaryPrint, SwatheImage, runs_to_mask
@@ -44,14 +44,14 @@ MAX_IMAGE_BYTES = 1 * 2**30
 
 
 def _read_bounded(path: Path, limit: int, what: str, where: str, program: Path) -> bytes:
+    """A regular file of at most ``limit`` bytes (:func:`rotoprint.io.inputs.read_input_bytes`),
+    its refusals as one line naming ``where`` in ``program``."""
+    if not path.exists() and not path.is_symlink():
+        raise InputFileError(f"{where}: {what} {path.name} is missing", path=program)
     try:
-        size = path.stat().st_size
-    except FileNotFoundError:
-        raise InputFileError(f"{where}: {what} {path.name} is missing", path=program) from None
-    if size > limit:
-        raise InputFileError(f"{where}: {what} {path.name} is {size / 2**20:.1f} MB, more than the {limit / 2**20:.0f} MB read",
-                             path=program)
-    return path.read_bytes()
+        return read_input_bytes(path, what=what, limit_bytes=limit)
+    except InputFileError as exc:
+        raise InputFileError(f"{where}: {what} {path.name} {exc.problem}", path=program) from None
 
 
 def load_program(path: str | Path) -> dict:
@@ -75,13 +75,7 @@ def load_program(path: str | Path) -> dict:
         speed the machine cannot make (the message names the head and swathe).
     """
     p = Path(path)
-    if not p.is_file():
-        raise InputFileError("no such file", path=p)
-    data = _read_bounded(p, MAX_PROGRAM_BYTES, "program", "program", p)
-    try:
-        prog = json.loads(data)
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputFileError(f"program is not valid JSON: {exc}", path=p) from None
+    prog = parse_json(read_input_bytes(p, what="machine program", limit_bytes=MAX_PROGRAM_BYTES), p, what="program")
     if not isinstance(prog, dict) or prog.get("format") != PROGRAM_FORMAT:
         raise InputFileError(f"not a rotoprint machine program (format {PROGRAM_FORMAT!r} expected)", path=p)
     if not isinstance(prog.get("version"), int) or prog["version"] > PROGRAM_VERSION:
