@@ -94,6 +94,7 @@ COUNT = Range(0, 1_000_000, integer=True)
 SWATHES = Range(1, 10_000, integer=True)
 SEED = Range(0, 2**32 - 1, integer=True)
 OVERLAY_SCALE = Range(1, 16, integer=True)
+MACHINE_BITS = Range(1, 4, integer=True)  # and 1, 2 or 4: see machine.program.MachineOptions
 NOZZLE_INDEX = Range(0, 100_000, integer=True)  # the largest head (devices.models)
 DIRECTION = Range(-1, 1, integer=True)  # and not 0: see check_direction
 

@@ -33,6 +33,10 @@ BASE = {
     "head": ["head", "-d", "omnidot760"],
     "transform": ["transform", "d.png", "-d", "omnidot760", "--tilt", "30", "--radius", "50", "-o", "p.png", "-q"],
     "simulate": ["simulate", "pr/p.png", "-o", "ov.png"],
+    # build and replay: the swept value is refused while the options are parsed, before the
+    # job or the program is looked at
+    "build": ["build", "job.toml", "--out", "bout", "--no-report"],
+    "replay": ["replay", "bout/machine/program.json", "-o", "ov.png"],
 }
 
 

@@ -12,7 +12,8 @@ from typing import Annotated
 
 import typer
 
-from ._common import ForceOpt, JsonOpt, console, out_console, print_json, progress, styled
+from .. import ranges as R
+from ._common import ForceOpt, JsonOpt, console, in_range, out_console, print_json, progress, styled
 
 EXIT_SHORT = 3
 
@@ -64,7 +65,7 @@ def build_command(
     no_report: Annotated[bool, typer.Option("--no-report", help="Do not write report.html.")] = False,
     json_out: JsonOpt = False,
     force: ForceOpt = False,
-    bits: Annotated[int | None, typer.Option("--bits", help="Bits per nozzle in machine/ (1, 2 or 4; default: from the head's grey levels).")] = None,
+    bits: Annotated[int | None, typer.Option("--bits", help="Bits per nozzle in machine/ (1, 2 or 4; default: from the head's grey levels).", callback=in_range(R.MACHINE_BITS))] = None,
     row_delays: Annotated[str, typer.Option("--row-delays", help="machine/: 'baked' into the images (exact at every radius) or as per-row offsets in the 'program'.")] = "baked",
     no_machine: Annotated[bool, typer.Option("--no-machine", help="Do not write machine/.")] = False,
 ) -> int:

@@ -8,15 +8,16 @@ from typing import Annotated
 
 import typer
 
+from .. import ranges as R
 from ..errors import ConfigError
-from ._common import ForceOpt, JsonOpt, console, out_console, print_json, progress
+from ._common import ForceOpt, JsonOpt, console, in_range, out_console, print_json, progress
 
 
 def replay_command(
     program: Annotated[Path, typer.Argument(help="machine/program.json written by 'rotoprint build'.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Overlay PNG of one layer's images (design, drops, errors).")],
-    layer: Annotated[int | None, typer.Option("--layer", help="Replay only this layer (every step is still checked).")] = None,
-    scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.", min=1, max=16)] = 2,
+    layer: Annotated[int | None, typer.Option("--layer", help="Replay only this layer (every step is still checked).", callback=in_range(R.COUNT))] = None,
+    scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.", callback=in_range(R.OVERLAY_SCALE))] = 2,
     json_out: JsonOpt = False,
     force: ForceOpt = False,
 ) -> None:
@@ -42,7 +43,7 @@ def replay_command(
             bar.update(task, completed=done, total=total)
 
         keep = 0 if layer is None else layer
-        res = replay_program(program, layer=layer, on_step=on_step, keep_layer=keep)
+        res = replay_program(program, layer=layer, on_step=on_step, keep_layer=keep, overlay_scale=scale)
     sims = res.pop("_sims")
     if sims:
         tiles = [render_overlay(sim, scale=scale) for _, sim in sims]

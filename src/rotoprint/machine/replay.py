@@ -249,7 +249,7 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
 
 
 def replay_program(path: str | Path, *, layer: int | None = None, on_step: Callable[[str, int, int], None] | None = None,
-                   keep_layer: int | None = None) -> dict:
+                   keep_layer: int | None = None, overlay_scale: int | None = None) -> dict:
     """Replay a program: the simulator's figures for every image of every (or one) layer.
 
     Parameters
@@ -263,6 +263,8 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
     keep_layer : int, optional
         Keep the :class:`~rotoprint.rotary.simulate.Simulation` objects of this layer (for
         the overlay), under ``"_sims"``.
+    overlay_scale : int, optional
+        The overlay's scale, checked against memory before anything is simulated.
 
     Returns
     -------
@@ -273,10 +275,17 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
         ``drops_outside`` summed; ``time_s``, ``steps``, the program's totals; ``clock`` the
         largest angle error per revolution and the flagged swathes.
     """
-    from ..rotary.simulate import simulate
+    from ..rotary.simulate import check_overlay_fits, simulate
 
     p = Path(path)
     prog = load_program(p)
+    if overlay_scale is not None:
+        try:
+            g = prog["design_grid"]
+            shape = (int(g["height_px"]), int(g["width_px"]))
+        except (KeyError, TypeError, ValueError):
+            raise InputFileError("program has no valid design_grid", path=p) from None
+        check_overlay_fits(shape, overlay_scale)
     nl = len(prog["layers"])
     if layer is not None and not 0 <= layer < nl:
         raise InputFileError(f"--layer {layer}: the program has layers 0..{nl - 1}", path=p)
