@@ -25,6 +25,8 @@ quantity                range                  used for
 ``OFFSET_UM``           [0, 2000] um           first-layer (elephant-foot) inset
 ``DROP_UM``             [0.1, 1e4] um          drop diameter
 ``JITTER_UM``           [0, 10000] um          drop misdirection
+``SPREAD``              (0, 20]                footprint / in-flight diameter
+``EVEN_RATIO``          [1, 100]               largest / mean track gap taken as even
 ``WORKERS``             1 ... 1024             worker processes
 ``COUNT``               0 ... 1000000          layer and overlay counts
 ``SWATHES``             1 ... 10000            radial swathes
@@ -89,6 +91,8 @@ FRACTION = Range(0.0, 1.0)
 OFFSET_UM = Range(0.0, 2000.0, "um")  # = masks.pipeline.FIRST_LAYER_OFFSET_MAX_UM
 DROP_UM = Range(0.1, 10_000.0, "um")
 JITTER_UM = Range(0.0, 10_000.0, "um")
+SPREAD = Range(0.0, 20.0, lo_open=True)  # footprint / in-flight diameter (devices.models spread_factor)
+EVEN_RATIO = Range(1.0, 100.0)
 WORKERS = Range(1, 1024, integer=True)
 COUNT = Range(0, 1_000_000, integer=True)
 SWATHES = Range(1, 10_000, integer=True)

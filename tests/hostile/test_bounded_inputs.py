@@ -377,3 +377,13 @@ def test_sidecar_swathe_image_outside_its_folder_is_refused(rotary_print, tmp_pa
     run = run_cli_bounded("simulate", "p.json", "-o", "o.png", cwd=d)
     assert_refused(run, "p.json", "outside its folder")
     assert not (d / "o.png").exists()
+
+
+@pytest.mark.parametrize(("kind", "suffix"), [("fifo", ".gbr"), ("fifo", ".drl"), ("zero", ".dxf"), ("fifo", ".svg")])
+def test_cad_layer_that_never_ends_is_refused(tmp_path, kind, suffix):
+    """Gerber, Excellon, DXF and SVG readers open the file themselves: it is checked first."""
+    _special(tmp_path, f"layer{suffix}", kind)
+    before = tree(tmp_path)
+    run = run_cli_bounded("info", f"layer{suffix}", cwd=tmp_path)
+    assert_refused(run, f"layer{suffix}", KINDS[kind])
+    assert tree(tmp_path) == before

@@ -201,7 +201,6 @@ def test_every_range_is_finite_and_ordered():
     assert len(rngs) >= 20
     for r in rngs:
         assert np.isfinite([r.lo, r.hi]).all() and r.lo < r.hi and abs(r.hi) < 2**40
-        assert r.text() in R.__doc__ or r.integer or True  # the table documents each one
     names = {k for k, v in vars(R).items() if isinstance(v, R.Range)}
     for k in names - {"DIRECTION", "NOZZLE_INDEX"}:
         assert f"``{k}``" in R.__doc__, f"{k} is not in the documented table"

@@ -50,6 +50,10 @@ def test_build_cli_writes_plan_images_and_report(gas_build):
     assert plan["interdigitated"]["electrode"]["cell_constant_per_mm"] == pytest.approx(0.3 / (8.0 * 15))
     assert all(c["ok"] for c in plan["printability"])
     assert plan["overlays"] and all((out / o["file"]).exists() for o in plan["overlays"])
+    # the deposit model's film is the headline of every overlay (issue 14)
+    for o in plan["overlays"]:
+        f = o["deposit"]
+        assert 0 <= f["uncovered_fraction"] <= 1 and abs(f["volume_error_fraction"]) < 0.005 and f["footprint_um"] > 0
 
 
 def test_build_cli_layer_images_are_binary_drops(gas_build):

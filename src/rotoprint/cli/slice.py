@@ -59,6 +59,7 @@ def slice_command(
     equalise: Annotated[bool, typer.Option("--equalise", help="--rotary: thin inner tracks so drops per unit area are uniform.")] = False,
     reference_images: Annotated[bool, typer.Option("--reference-images", help="--rotary: also write each layer's Cartesian cross-section (for 'rotoprint simulate').")] = False,
     force: ForceOpt = False,
+    passes: Annotated[str, typer.Option("--passes", help="--rotary: interlaced passes N or 'auto' (at most 4); N > 1 writes DIR-p1/, DIR-p2/, ... and DIR-passes.json.")] = "1",
 ) -> None:
     """Slice MESH into DIR/layer_00000.png ... (255 = material) and DIR/manifest.json.
 
@@ -82,8 +83,8 @@ def slice_command(
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,
                               fibre_angle=fibre_angle, offset=offset)
-    elif any(v is not None for v in (tilt, radius, ref_radius, max_swathes)) or equalise or reference_images or angle != 0.0 or direction != 1:
-        raise ConfigError("--tilt, --radius, --angle, --direction, --ref-radius, --max-swathes, --equalise and --reference-images need --rotary")
+    elif any(v is not None for v in (tilt, radius, ref_radius, max_swathes)) or equalise or reference_images or angle != 0.0 or direction != 1 or passes != "1":
+        raise ConfigError("--tilt, --radius, --angle, --direction, --ref-radius, --max-swathes, --equalise, --reference-images and --passes need --rotary")
     dev = load_device(device, **overrides)
     m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     if rotary:
@@ -91,7 +92,7 @@ def slice_command(
                       ref_radius=ref_radius, max_swathes=max_swathes, equalise=equalise, reference_images=reference_images,
                       fill=fill, gap_radius=gap_radius, quiet=quiet, workers=workers, scheduler=scheduler, resume=resume,
                       options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate,
-                               "fill_holes": fill_holes})
+                               "fill_holes": fill_holes}, passes=passes)
         return
     job = slice_mesh(
         m,
@@ -158,12 +159,26 @@ def _check_rotary_options(*, tilt, radius, workers, scheduler, resume, fibre_ang
 
 def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, radius, angle, direction, ref_radius, max_swathes,
                   equalise, reference_images, fill, gap_radius, quiet, options, workers=1, scheduler=None, resume=False,
-                  force=False, inputs=()) -> None:
+                  force=False, inputs=(), passes="1") -> None:
     from ..devices import InkjetDevice
     from ..rotary.direct import slice_rotary, write_rotary_slices
 
     if not isinstance(dev, InkjetDevice):
         raise ConfigError(f"device {dev.name!r} is a projector; --rotary needs an inkjet device")
+    if passes != "1":
+        from ..rotary.interlace import slice_rotary_passes
+
+        man = slice_rotary_passes(m, dev, out, passes=passes, layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius,
+                                  angle_deg=angle, direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes,
+                                  fill=fill, gap_radius_mm=gap_radius, reference_images=reference_images,
+                                  options={"equalise": equalise, **options}, mesh_path=mesh_path, equalise=equalise,
+                                  force=force, inputs=inputs)
+        if not quiet:
+            pp = man["pass_plan"]
+            console.print(f"{pp['passes']} interlaced pass(es), offsets {', '.join(f'{o * 1000:.1f}' for o in pp['offsets_mm'])} um, "
+                          f"largest track gap {pp['largest_gap_mm'] * 1000:.1f} um (one pass {pp['single_pass_largest_gap_mm'] * 1000:.1f} um), "
+                          f"clock {man['dpi_y']:.0f} dpi -> {', '.join(man['folders'])} ({out.name}-passes.json)")
+        return
     job = slice_rotary(m, dev, layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius, angle_deg=angle,
                        direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes, equalise=equalise,
                        fill=fill, gap_radius_mm=gap_radius)

@@ -35,6 +35,9 @@ class InkjetHead(_Strict):
     dpi_y: float = Field(default=360.0, ge=R.DPI.lo, le=R.DPI.hi)
     drop_volume_pl: float = Field(default=10.0, gt=0, le=1e6)
     drop_diameter_um: float = Field(default=60.0, ge=R.DROP_UM.lo, le=R.DROP_UM.hi)
+    #: footprint diameter on the substrate over the in-flight diameter (6 V / pi)^(1/3): an
+    #: ink/substrate figure used by the deposit model (rotary/deposit.py)
+    spread_factor: float = Field(default=2.0, gt=0, le=20)
     max_frequency_hz: float = Field(default=8000.0, gt=0, le=1e7)
     grey_levels: int = Field(default=1, ge=1, le=255)
     dead_nozzles: tuple[int, ...] = Field(default=(), max_length=100_000)

@@ -5,6 +5,8 @@
   gap) in the top of a plaster body (a mesh file), its pads rising through an epoxy cover.
   Priorities: silver 3 > epoxy 2 > plaster 1, so the coil displaces the plaster where they
   overlap and the pads stay open through the cover.
+- ``cad-coil``: the coil from electronics CAD (:mod:`.cad_examples`): a Gerber copper layer,
+  an Excellon drill file of two vias and a DXF body outline, each a planar layer part.
 - ``gas-sensor``: an interdigitated silver electrode (2 x 8 fingers, 0.3 mm wide, 0.3 mm
   gaps) on a plaster substrate, inside a polyamide well that holds the sensing film.
 """
@@ -182,12 +184,34 @@ EXAMPLES = {
 }
 
 
+def _cad_file(name: str):
+    def make() -> bytes:
+        from .cad_examples import cad_coil_files
+
+        return cad_coil_files()[name]
+
+    return make
+
+
+def _add_cad_example() -> None:
+    from .cad_examples import CAD_COIL_JOB
+
+    EXAMPLES["cad-coil"] = ("cad-coil.toml", CAD_COIL_JOB, {n: _cad_file(n) for n in
+                                                           ("coil-F_Cu.gbr", "coil-vias.drl", "coil-body.dxf")})
+
+
+_add_cad_example()
+
+
 def example_files(name: str) -> dict[str, bytes]:
     """The files of example ``name``: ``{file name: bytes}``, the meshes first, the job file last."""
     if name not in EXAMPLES:
         raise ConfigError(f"unknown example {name!r}; examples: {', '.join(EXAMPLES)}")
     job_name, text, meshes = EXAMPLES[name]
-    files = {fname: binary_stl_bytes(make()) for fname, make in meshes.items()}
+    files = {}
+    for fname, make in meshes.items():
+        data = make()
+        files[fname] = data if isinstance(data, bytes) else binary_stl_bytes(data)  # CAD files come as bytes
     files[job_name] = text.encode("utf-8")
     return files
 

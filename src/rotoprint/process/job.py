@@ -26,6 +26,7 @@
     material = "plaster"
     priority = 1
     mesh = "body.stl"          # or: shape = { kind = "box", size_mm = [20, 20, 0.2] }
+                               # or: layer = { file = "coil-F_Cu.gbr", z_mm = [0.2, 0.24] } (docs/cad.md)
 
     [[resistance]]
     part = "coil"
@@ -47,6 +48,7 @@ from .. import ranges as R
 from ..errors import ConfigError, InputFileError
 from ..machine.spec import MachineSpec
 from .materials import Material, MaterialLibrary, builtin_library, load_materials, validation_message
+from .cadparts import LayerFile
 from .shapes import Shape
 
 __all__ = ["JobSpec", "JobInfo", "PrinterSpec", "HeadSpec", "ClockSpec", "PlacementSpec", "PartSpec", "ResistanceSpec",
@@ -148,7 +150,7 @@ class PlacementSpec(_Strict):
 
 
 class PartSpec(_Strict):
-    """A part: a mesh file or a built-in shape, made of one material.
+    """A part: a mesh file, a built-in shape or a CAD layer (:mod:`.cadparts`), of one material.
 
     Where parts of different materials overlap, the pixel (drop) belongs to the part with the
     highest ``priority``. ``cycles_per_layer`` overrides the planner's number of cycles."""
@@ -158,6 +160,7 @@ class PartSpec(_Strict):
     priority: Annotated[int, R.field(_PRIORITY)] = 0
     mesh: str | None = None
     shape: Shape | None = None
+    layer: LayerFile | None = None  # a Gerber/Excellon/DXF/SVG region between two heights (cadparts)
     units: str = "mm"
     rotate_deg: tuple[_Angle, _Angle, _Angle] = (0.0, 0.0, 0.0)
     translate_mm: tuple[_Coord, _Coord, _Coord] = (0.0, 0.0, 0.0)
@@ -165,8 +168,11 @@ class PartSpec(_Strict):
 
     @model_validator(mode="after")
     def _one_source(self) -> PartSpec:
-        if (self.mesh is None) == (self.shape is None):
-            raise ValueError("give exactly one of 'mesh' (a file) or 'shape' (a built-in shape)")
+        if sum(v is not None for v in (self.mesh, self.shape, self.layer)) != 1:
+            raise ValueError("give exactly one of 'mesh' (a file), 'shape' (a built-in shape) or 'layer' "
+                             "(a Gerber, Excellon, DXF or SVG layer)")
+        if self.layer is not None and "units" in self.model_fields_set:
+            raise ValueError("a layer part takes its units inside layer = { ..., units = ... }")
         for k, (x0, y0, x1, y1) in self.terminals.items():
             if not (x1 > x0 and y1 > y0):
                 raise ValueError(f"terminal {k!r} must be [x0, y0, x1, y1] with x1 > x0 and y1 > y0")
@@ -315,6 +321,8 @@ def _check_refs(spec: JobSpec, lib: MaterialLibrary, src: str | None) -> None:
         if p.shape is not None:
             avail = {**p.shape.terminals(), **avail}
         for t in r.between:
+            if p.layer is not None:
+                break  # a layer's pads are named in its file: checked when the plan reads it
             if t not in avail:
                 err(f"resistance[{i}].between: part {r.part!r} has no terminal {t!r}; it has: {', '.join(sorted(avail)) or 'none'}")
         if r.between[0] == r.between[1]:
