@@ -76,6 +76,23 @@ def test_replay_of_the_coil_program_gives_simulates_figures_for_every_layer_and_
     assert rep["iou"] == min(r["iou"] for r in rep["images"])
 
 
+def test_replay_with_the_deposit_model_gives_the_builds_film_figures(coil):
+    from rotoprint.rotary.deposit import deposit_film, ink_drops
+
+    job, _, prog_path = coil
+    rep = replay_program(prog_path, layer=2, deposit=True)
+    plan = plan_job(job)
+    sched = plan.layer(2)
+    secs = plan.sections(2)
+    assert len(rep["images"]) == len(sched.images) > 0
+    for r in rep["images"][:2]:
+        pr = sched.images[(r["material"], r["ink"])]
+        sim = simulate(pr, plan.reference_image(r["material"], secs).astype(np.uint8) * 255)
+        film = deposit_film(sim.inked, pr.placement, pr.head, [ink_drops(sim.drops, pr.head)]).films[0].to_json()
+        _same(r["deposit"], {k: v for k, v in film.items() if k not in ("radial_bins", "grid_um")})
+        assert r["deposit"]["grid_um"] == film["grid_um"]
+
+
 def test_program_time_is_the_sum_of_its_steps_and_the_plans_estimate(coil):
     _, res, prog_path = coil
     prog = json.loads(prog_path.read_text())

@@ -18,6 +18,7 @@ def replay_command(
     out: Annotated[Path, typer.Option("--out", "-o", help="Overlay PNG of one layer's images (design, drops, errors).")],
     layer: Annotated[int | None, typer.Option("--layer", help="Replay only this layer (every step is still checked).", callback=in_range(R.COUNT))] = None,
     scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.", callback=in_range(R.OVERLAY_SCALE))] = 2,
+    deposit: Annotated[bool, typer.Option("--deposit", help="Also run the deposit model (film thickness, coverage) on every image; about a second each.")] = False,
     json_out: JsonOpt = False,
     force: ForceOpt = False,
 ) -> None:
@@ -43,7 +44,8 @@ def replay_command(
             bar.update(task, completed=done, total=total)
 
         keep = 0 if layer is None else layer
-        res = replay_program(program, layer=layer, on_step=on_step, keep_layer=keep, overlay_scale=scale)
+        res = replay_program(program, layer=layer, on_step=on_step, keep_layer=keep, overlay_scale=scale,
+                             deposit=deposit)
     sims = res.pop("_sims")
     if sims:
         tiles = [render_overlay(sim, scale=scale) for _, sim in sims]
@@ -71,6 +73,8 @@ def replay_command(
     for r in res["images"]:
         out_console.print(f"  layer {r['layer']:5d} {r['material']}/{r['ink']} on {r['head']}: {r['drops']} drops, "
                           f"IoU {r['iou']:.4f}, uncovered {100 * r['uncovered_fraction']:.2f} %, "
-                          f"outside {r['drops_outside']}, mean error {r['mean_error_um']:.1f} um")
+                          f"outside {r['drops_outside']}, mean error {r['mean_error_um']:.1f} um"
+                          + (f"; film: uncovered {100 * r['deposit']['uncovered_fraction']:.2f} %, mean {r['deposit']['mean_um']:.3f} um"
+                             if "deposit" in r else ""))
     out_console.print(f"  lowest IoU {res['iou']:.4f}, highest uncovered {100 * res['uncovered_fraction']:.2f} %")
     console.print(f"overlay of layer {keep} -> {out}")

@@ -249,7 +249,7 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
 
 
 def replay_program(path: str | Path, *, layer: int | None = None, on_step: Callable[[str, int, int], None] | None = None,
-                   keep_layer: int | None = None, overlay_scale: int | None = None) -> dict:
+                   keep_layer: int | None = None, overlay_scale: int | None = None, deposit: bool = False) -> dict:
     """Replay a program: the simulator's figures for every image of every (or one) layer.
 
     Parameters
@@ -265,6 +265,10 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
         the overlay), under ``"_sims"``.
     overlay_scale : int, optional
         The overlay's scale, checked against memory before anything is simulated.
+    deposit : bool
+        Also run the deposit model (:func:`rotoprint.rotary.deposit.deposit_film`, the film
+        figures a build gives for its overlays) on every image: ``deposit`` per image, without
+        the radial bins. About a second per image.
 
     Returns
     -------
@@ -298,9 +302,15 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
             sim = simulate(im.print, im.design)
             if keep_layer is not None and im.layer == keep_layer:
                 sims.append((im, sim))
-            results.append({"layer": im.layer, "material": im.material, "ink": im.ink, "head": im.head,
-                            "method": im.print.method, "tilt_deg": im.print.tilt_deg, "swathes": len(im.print.swathes),
-                            **sim.report.to_json()})
+            r = {"layer": im.layer, "material": im.material, "ink": im.ink, "head": im.head,
+                 "method": im.print.method, "tilt_deg": im.print.tilt_deg, "swathes": len(im.print.swathes),
+                 **sim.report.to_json()}
+            if deposit:
+                from ..rotary.deposit import deposit_film, ink_drops
+
+                film = deposit_film(sim.inked, im.print.placement, im.print.head, [ink_drops(sim.drops, im.print.head)])
+                r["deposit"] = {k: v for k, v in film.films[0].to_json().items() if k != "radial_bins"}
+            results.append(r)
     step("replay", nl, nl)
     tot = prog["totals"]
     errs = [s["clock"]["angle_error_per_rev_deg"] for h in prog["heads"] for s in h["swathes"]]
