@@ -32,6 +32,7 @@ quantity                range                  used for
 ``SWATHES``             1 ... 10000            radial swathes
 ``SEED``                0 ... 2**32 - 1        random seeds
 ``OVERLAY_SCALE``       1 ... 16               overlay pixels per design pixel
+``MACHINE_BITS``        1 ... 4 (1, 2 or 4)    bits per nozzle of machine/ firing data
 ======================  =====================  =======================================
 """
 
