@@ -27,8 +27,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from scipy import sparse
-from scipy.sparse import csgraph
 
 from .constants import DEGENERATE_AREA_REL, MAX_COORDINATE_MM, MAX_OPEN_SIDE_FRACTION
 from .errors import MeshError
@@ -254,14 +252,47 @@ class _Topology:
             bad = first[self.pair_same_direction]
             suspect[e_sorted[bad]] = True
         self.suspect_edges = suspect
-        # Shells: faces connected through any shared edge (manifold or not).
-        n_e = self.edges.shape[0]
-        rows = np.repeat(np.arange(n_f), 3)
-        g = sparse.coo_matrix((np.ones(3 * n_f, np.int8), (rows, n_f + self.face_edges.ravel())), shape=(n_f + n_e,) * 2)
-        n_comp, labels = csgraph.connected_components(g, directed=False)
-        face_labels = labels[:n_f]
-        _, self.shell = np.unique(face_labels, return_inverse=True)
-        self.n_shells = int(self.shell.max()) + 1
+        # Shells: faces connected through any shared edge (manifold or not), numbered by
+        # their lowest face index.
+        self.shell, self.n_shells = shell_labels(self.face_edges, self.edges.shape[0])
+
+
+def shell_labels(face_edges: np.ndarray, n_edges: int) -> tuple[np.ndarray, int]:
+    """Connected shells: faces sharing an edge are one shell.
+
+    Parameters
+    ----------
+    face_edges : (F, 3) int64
+        Edge index of every face side, in ``[0, n_edges)``.
+    n_edges : int
+
+    Returns
+    -------
+    labels : (F,) int64
+        Shell of every face; shells are numbered in the order of their lowest face index.
+    n_shells : int
+    """
+    from ._accel import native
+
+    fe = np.ascontiguousarray(face_edges, dtype=np.int64)
+    if native is not None:
+        labels = np.empty(fe.shape[0], np.int64)
+        n = native.shell_labels(fe, int(n_edges), labels)
+        return labels, int(n)
+    return shell_labels_scipy(fe, n_edges)
+
+
+def shell_labels_scipy(face_edges: np.ndarray, n_edges: int) -> tuple[np.ndarray, int]:
+    """Reference of :func:`shell_labels` (scipy's connected components over faces and edges)."""
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
+    n_f = face_edges.shape[0]
+    rows = np.repeat(np.arange(n_f), 3)
+    g = sparse.coo_matrix((np.ones(3 * n_f, np.int8), (rows, n_f + face_edges.ravel())), shape=(n_f + n_edges,) * 2)
+    _, labels = csgraph.connected_components(g, directed=False)
+    _, shell = np.unique(labels[:n_f], return_inverse=True)
+    return shell.astype(np.int64), int(shell.max()) + 1
 
 
 class PrebuiltTopology:
@@ -310,6 +341,9 @@ def _make_winding_consistent(faces: np.ndarray, topo: _Topology) -> tuple[np.nda
     """Flip faces so that neighbours across manifold edges traverse the edge oppositely."""
     if topo.orientation_conflicts == 0:
         return faces, 0
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
     n_f = faces.shape[0]
     pf = topo.pair_faces
     parity = topo.pair_same_direction.astype(np.int8)
