@@ -148,3 +148,17 @@ def Mesh_box():
     from rotoprint.mesh import Mesh
 
     return Mesh.from_triangles(box_triangles((3.3, 2.1, 2.0), (-1.7, -1.0, 0.0)))
+
+
+def test_vertex_merge_and_areas_match_numpy():
+    from rotoprint.mesh import _double_areas, _double_areas_numpy, _unique_rows, _unique_rows_numpy
+
+    rng = np.random.default_rng(5)
+    pts = rng.integers(-3, 4, (500, 3)).astype(np.float64) * 0.25  # many repeats
+    pts[::7] = pts[::7] + 0.0  # folded zeros
+    rows = np.ascontiguousarray(pts[rng.integers(0, 500, 3000)])
+    v1, i1 = _unique_rows(rows)
+    v2, i2 = _unique_rows_numpy(rows)
+    assert np.array_equal(v1, v2) and np.array_equal(i1, i2)
+    faces = rng.integers(0, len(v1), (400, 3))
+    assert np.array_equal(_double_areas(v1, faces), _double_areas_numpy(v1, faces))

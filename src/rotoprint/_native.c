@@ -588,7 +588,97 @@ native_shell_labels(PyObject *self, PyObject *args)
     return PyLong_FromLongLong(count);
 }
 
+/* ------------------------------------------------------------------------ vertices */
+
+static inline uint64_t
+mix64(uint64_t x)
+{
+    x ^= x >> 33; x *= 0xff51afd7ed558ccdULL;
+    x ^= x >> 33; x *= 0xc4ceb9fe1a85ec53ULL;
+    x ^= x >> 33;
+    return x;
+}
+
+static PyObject *
+native_merge_rows(PyObject *self, PyObject *args)
+{
+    /* merge_rows(rows (M * 3) float64, first (M) int64 out, inverse (M) int64 out) -> U.
+     * Bit-identical rows get one id, numbered by first occurrence; first[:U] holds the row
+     * index of each id's first occurrence. */
+    Py_buffer R, FIRST, INV;
+    if (!PyArg_ParseTuple(args, "y*w*w*", &R, &FIRST, &INV)) return NULL;
+    Py_ssize_t m = R.len / (Py_ssize_t)(3 * sizeof(double));
+    const uint64_t *rows = (const uint64_t *)R.buf;
+    int64_t *first = (int64_t *)FIRST.buf, *inv = (int64_t *)INV.buf;
+    size_t cap = 16;
+    while (cap < (size_t)m * 2) cap <<= 1;
+    int64_t *table = (int64_t *)malloc(cap * sizeof(int64_t));
+    if (table == NULL) {
+        PyBuffer_Release(&R); PyBuffer_Release(&FIRST); PyBuffer_Release(&INV);
+        return PyErr_NoMemory();
+    }
+    int64_t u = 0;
+    Py_BEGIN_ALLOW_THREADS
+    memset(table, 0xff, cap * sizeof(int64_t)); /* -1: empty */
+    for (Py_ssize_t i = 0; i < m; i++) {
+        const uint64_t *r = rows + 3 * i;
+        uint64_t h = mix64(r[0] ^ mix64(r[1] ^ mix64(r[2])));
+        size_t slot = (size_t)h & (cap - 1);
+        for (;;) {
+            int64_t id = table[slot];
+            if (id < 0) {
+                table[slot] = u;
+                first[u] = i;
+                inv[i] = u++;
+                break;
+            }
+            const uint64_t *q = rows + 3 * first[id];
+            if (q[0] == r[0] && q[1] == r[1] && q[2] == r[2]) {
+                inv[i] = id;
+                break;
+            }
+            slot = (slot + 1) & (cap - 1);
+        }
+    }
+    Py_END_ALLOW_THREADS
+    free(table);
+    PyBuffer_Release(&R); PyBuffer_Release(&FIRST); PyBuffer_Release(&INV);
+    return PyLong_FromLongLong((long long)u);
+}
+
+static PyObject *
+native_double_areas(PyObject *self, PyObject *args)
+{
+    /* double_areas(V (nv * 3) float64, F (nf * 3) int64, out (nf) float64): |(v1 - v0) x (v2 - v0)| */
+    Py_buffer V, F, OUT;
+    if (!PyArg_ParseTuple(args, "y*y*w*", &V, &F, &OUT)) return NULL;
+    const double *v = (const double *)V.buf;
+    const int64_t *f = (const int64_t *)F.buf;
+    double *out = (double *)OUT.buf;
+    Py_ssize_t nf = F.len / (Py_ssize_t)(3 * sizeof(int64_t));
+    Py_ssize_t nv = V.len / (Py_ssize_t)(3 * sizeof(double));
+    int bad = 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t k = 0; k < nf; k++) {
+        int64_t a = f[3 * k], b = f[3 * k + 1], c = f[3 * k + 2];
+        if (a < 0 || b < 0 || c < 0 || a >= nv || b >= nv || c >= nv) { bad = 1; break; }
+        double ux = v[3 * b] - v[3 * a], uy = v[3 * b + 1] - v[3 * a + 1], uz = v[3 * b + 2] - v[3 * a + 2];
+        double wx = v[3 * c] - v[3 * a], wy = v[3 * c + 1] - v[3 * a + 1], wz = v[3 * c + 2] - v[3 * a + 2];
+        double cx = uy * wz - uz * wy, cy = uz * wx - ux * wz, cz = ux * wy - uy * wx;
+        out[k] = sqrt(cx * cx + cy * cy + cz * cz);
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&V); PyBuffer_Release(&F); PyBuffer_Release(&OUT);
+    if (bad) {
+        PyErr_SetString(PyExc_IndexError, "vertex index out of range");
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
+    {"merge_rows", native_merge_rows, METH_VARARGS, "merge_rows(rows, first, inverse) -> number of distinct rows"},
+    {"double_areas", native_double_areas, METH_VARARGS, "double_areas(V, F, out)"},
     {"shell_labels", native_shell_labels, METH_VARARGS, "shell_labels(face_edges, n_edges, labels) -> n_shells"},
     {"section", native_section, METH_VARARGS, "section(V, F, FE, faces, z, start, end, se, ee)"},
     {"coverage", native_coverage, METH_VARARGS, "coverage(x0, y0, x1, y1, height, width, out, tail)"},

@@ -305,6 +305,16 @@ class PrebuiltTopology:
 
 
 def _double_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    from ._accel import native
+
+    if native is not None:
+        out = np.empty(faces.shape[0], np.float64)
+        native.double_areas(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64), out)
+        return out
+    return _double_areas_numpy(vertices, faces)
+
+
+def _double_areas_numpy(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     v0, v1, v2 = (vertices[faces[:, k]] for k in range(3))
     return np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
 
@@ -325,7 +335,28 @@ def _unique_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def _unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unique ``(N, 3) float64`` rows (sorted) and the inverse: bit-identical rows merge."""
+    """Unique ``(N, 3) float64`` rows (sorted) and the inverse: bit-identical rows merge.
+
+    With the C extension: merged by hashing, then only the distinct rows sorted; the result
+    is that of :func:`_unique_rows_numpy` (tested)."""
+    from ._accel import native
+
+    if native is None or not rows.flags.c_contiguous or rows.dtype != np.float64:
+        return _unique_rows_numpy(rows)
+    first = np.empty(rows.shape[0], np.int64)
+    ids = np.empty(rows.shape[0], np.int64)
+    u = native.merge_rows(rows, first, ids)
+    distinct = rows[first[:u]]
+    del first
+    order = np.lexsort(distinct.T[::-1])
+    rank = np.empty(u, np.int64)
+    rank[order] = np.arange(u)
+    np.take(rank, ids, out=ids)
+    return distinct[order], ids
+
+
+def _unique_rows_numpy(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Reference of :func:`_unique_rows`: one lexsort over all rows."""
     order = np.lexsort(rows.T[::-1])
     sr = rows[order]
     new = np.empty(len(sr), bool)
