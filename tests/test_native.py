@@ -162,3 +162,23 @@ def test_vertex_merge_and_areas_match_numpy():
     assert np.array_equal(v1, v2) and np.array_equal(i1, i2)
     faces = rng.integers(0, len(v1), (400, 3))
     assert np.array_equal(_double_areas(v1, faces), _double_areas_numpy(v1, faces))
+
+
+def test_topology_matches_the_sorting_path(monkeypatch):
+    """Edges, their numbering, counts, manifold pairs and suspect edges: hashing == sorting,
+    on a mesh with open edges, a non-manifold edge and faces wound the wrong way."""
+    from rotoprint.mesh import _Topology
+
+    tri = np.concatenate([torus_mesh(3.0, 1.0, 24, 12).triangles, box_triangles((1, 1, 1), (10, 0, 0))[:-1]])
+    tri[5] = tri[5][::-1]  # an orientation conflict
+    tri = np.concatenate([tri, tri[7:8] + [0, 0, 0.5]])
+    from rotoprint.mesh import Mesh
+
+    mesh = Mesh.from_triangles(tri, orient="keep")
+    fast = _Topology(mesh.faces, len(mesh.vertices))
+    monkeypatch.setattr(accel, "native", None)
+    ref = _Topology(mesh.faces, len(mesh.vertices))
+    for f in ("edges", "face_edges", "edge_face_count", "forward", "pair_faces", "pair_same_direction",
+              "suspect_edges", "shell"):
+        assert np.array_equal(getattr(fast, f), getattr(ref, f)), f
+    assert fast.orientation_conflicts == ref.orientation_conflicts > 0 and fast.n_shells == ref.n_shells

@@ -676,7 +676,73 @@ native_double_areas(PyObject *self, PyObject *args)
     Py_RETURN_NONE;
 }
 
+static PyObject *
+native_merge_keys(PyObject *self, PyObject *args)
+{
+    /* merge_keys(keys (M) int64, first (M) int64 out, ids (M) int64 out) -> U: as merge_rows
+     * for single int64 keys. */
+    Py_buffer K, FIRST, IDS;
+    if (!PyArg_ParseTuple(args, "y*w*w*", &K, &FIRST, &IDS)) return NULL;
+    Py_ssize_t m = K.len / (Py_ssize_t)sizeof(int64_t);
+    const int64_t *keys = (const int64_t *)K.buf;
+    int64_t *first = (int64_t *)FIRST.buf, *ids = (int64_t *)IDS.buf;
+    size_t cap = 16;
+    while (cap < (size_t)m * 2) cap <<= 1;
+    int64_t *table = (int64_t *)malloc(cap * sizeof(int64_t));
+    if (table == NULL) {
+        PyBuffer_Release(&K); PyBuffer_Release(&FIRST); PyBuffer_Release(&IDS);
+        return PyErr_NoMemory();
+    }
+    int64_t u = 0;
+    Py_BEGIN_ALLOW_THREADS
+    memset(table, 0xff, cap * sizeof(int64_t));
+    for (Py_ssize_t i = 0; i < m; i++) {
+        size_t slot = (size_t)mix64((uint64_t)keys[i]) & (cap - 1);
+        for (;;) {
+            int64_t id = table[slot];
+            if (id < 0) { table[slot] = u; first[u] = i; ids[i] = u++; break; }
+            if (keys[first[id]] == keys[i]) { ids[i] = id; break; }
+            slot = (slot + 1) & (cap - 1);
+        }
+    }
+    Py_END_ALLOW_THREADS
+    free(table);
+    PyBuffer_Release(&K); PyBuffer_Release(&FIRST); PyBuffer_Release(&IDS);
+    return PyLong_FromLongLong((long long)u);
+}
+
+static PyObject *
+native_first_two(PyObject *self, PyObject *args)
+{
+    /* first_two(ids (M) int64 in [0, n), n, a (n) int64 out, b (n) int64 out): the positions of
+     * the first and second occurrence of every id (-1 where there is none). */
+    Py_buffer IDS, A, B;
+    long long n;
+    if (!PyArg_ParseTuple(args, "y*Lw*w*", &IDS, &n, &A, &B)) return NULL;
+    Py_ssize_t m = IDS.len / (Py_ssize_t)sizeof(int64_t);
+    const int64_t *ids = (const int64_t *)IDS.buf;
+    int64_t *a = (int64_t *)A.buf, *b = (int64_t *)B.buf;
+    int bad = 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (long long e = 0; e < n; e++) { a[e] = -1; b[e] = -1; }
+    for (Py_ssize_t i = 0; i < m; i++) {
+        int64_t e = ids[i];
+        if (e < 0 || e >= n) { bad = 1; break; }
+        if (a[e] < 0) a[e] = i;
+        else if (b[e] < 0) b[e] = i;
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&IDS); PyBuffer_Release(&A); PyBuffer_Release(&B);
+    if (bad) {
+        PyErr_SetString(PyExc_IndexError, "id out of range");
+        return NULL;
+    }
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
+    {"merge_keys", native_merge_keys, METH_VARARGS, "merge_keys(keys, first, ids) -> number of distinct keys"},
+    {"first_two", native_first_two, METH_VARARGS, "first_two(ids, n, a, b)"},
     {"merge_rows", native_merge_rows, METH_VARARGS, "merge_rows(rows, first, inverse) -> number of distinct rows"},
     {"double_areas", native_double_areas, METH_VARARGS, "double_areas(V, F, out)"},
     {"shell_labels", native_shell_labels, METH_VARARGS, "shell_labels(face_edges, n_edges, labels) -> n_shells"},

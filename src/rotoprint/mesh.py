@@ -229,19 +229,43 @@ class _Topology:
         lo = np.minimum(a, b)
         hi = np.maximum(a, b)
         key = lo * np.int64(n_vertices) + hi
-        uniq, inverse, counts = _unique_inverse(key.ravel())
+        del lo, hi
+        from ._accel import native
+
+        self.forward = (a < b)  # (F, 3): side k runs from the lower to the higher vertex index
+        fwd = self.forward.ravel()
+        if native is not None:
+            # Edges by hashing (only the distinct keys sorted), the sides of every edge in one
+            # pass: the same edges, numbering and pairs as the sorting path below (tested).
+            flat = np.ascontiguousarray(key.ravel())
+            first_pos = np.empty(flat.shape[0], np.int64)
+            inverse = np.empty(flat.shape[0], np.int64)
+            n_e = native.merge_keys(flat, first_pos, inverse)
+            uniq = flat[first_pos[:n_e]]
+            del first_pos, flat
+            order = np.argsort(uniq)
+            uniq = uniq[order]
+            rank = np.empty(n_e, np.int64)
+            rank[order] = np.arange(n_e)
+            np.take(rank, inverse, out=inverse)
+            del rank, order
+            counts = np.bincount(inverse, minlength=n_e)
+            s1, s2 = np.empty(n_e, np.int64), np.empty(n_e, np.int64)
+            native.first_two(inverse, n_e, s1, s2)
+            pair_edges = np.flatnonzero(counts == 2)
+            s1, s2 = s1[pair_edges], s2[pair_edges]
+        else:
+            uniq, inverse, counts = _unique_inverse(key.ravel())
+            # Manifold pairs: sides of two faces on one edge used exactly twice.
+            order = np.argsort(inverse, kind="stable")
+            e_sorted = inverse[order]
+            first = np.flatnonzero((e_sorted[:-1] == e_sorted[1:]) & (counts[e_sorted[:-1]] == 2))
+            s1, s2 = order[first], order[first + 1]
+            pair_edges = e_sorted[first]
         self.edges = np.stack([uniq // n_vertices, uniq % n_vertices], axis=1)
         self.face_edges = inverse.reshape(-1, 3)
         self.edge_face_count = counts
-        self.forward = (a < b)  # (F, 3): side k runs from the lower to the higher vertex index
         self.boundary_edge = self.edge_face_count == 1
-        n_f = faces.shape[0]
-        # Manifold pairs: sides of two faces on one edge used exactly twice.
-        order = np.argsort(self.face_edges.ravel())
-        e_sorted = self.face_edges.ravel()[order]
-        first = np.flatnonzero((e_sorted[:-1] == e_sorted[1:]) & (self.edge_face_count[e_sorted[:-1]] == 2))
-        s1, s2 = order[first], order[first + 1]
-        fwd = self.forward.ravel()
         self.pair_faces = np.stack([s1 // 3, s2 // 3], axis=1)
         self.pair_same_direction = fwd[s1] == fwd[s2]
         self.orientation_conflicts = int(np.count_nonzero(self.pair_same_direction))
@@ -249,8 +273,7 @@ class _Topology:
         # faces wound the same way (their chains do not link).
         suspect = self.edge_face_count != 2
         if self.orientation_conflicts:
-            bad = first[self.pair_same_direction]
-            suspect[e_sorted[bad]] = True
+            suspect[pair_edges[self.pair_same_direction]] = True
         self.suspect_edges = suspect
         # Shells: faces connected through any shared edge (manifold or not), numbered by
         # their lowest face index.
