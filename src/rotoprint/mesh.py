@@ -84,7 +84,10 @@ class Mesh:
 
         ``fill_holes``: fill the mesh's boundary loops (step 4b; only with ``orient="auto"``).
 
-        ``_owned``: the caller hands the array over, so it may be modified in place."""
+        ``_owned``: the caller hands the array over, so it may be modified in place (and
+        freed once the vertices are merged, when it comes inside a one-element list)."""
+        if _owned and isinstance(triangles, list) and len(triangles) == 1:
+            triangles = triangles.pop()
         tri = np.asarray(triangles, dtype=np.float64)
         if tri.ndim != 3 or tri.shape[1:] != (3, 3):
             raise MeshError(f"triangles must have shape (N, 3, 3), got {tri.shape}", path=source)
