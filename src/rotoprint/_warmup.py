@@ -13,6 +13,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -40,12 +41,25 @@ def _commands(tmp: Path) -> list[list[list[str]]]:
     return [a, b]
 
 
-def _run_group(cmds: list[list[str]], env: dict) -> subprocess.Popen:
-    script = ";".join(
-        f"rc = main({c!r}); rc and sys.exit(rc)" for c in cmds
-    )
+def _run_group(cmds: list[list[str]], env: dict) -> tuple[subprocess.Popen, threading.Thread]:
+    """Run ``cmds`` in one process; pass on only its compile lines (and, on failure, the rest)."""
+    script = ";".join(f"rc = main({c!r}); rc and sys.exit(rc)" for c in cmds)
     code = f"import sys; from rotoprint.cli.main import main; {script}"
-    return subprocess.Popen([sys.executable, "-c", code], env=env)
+    proc = subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, errors="replace")
+    other: list[str] = []
+
+    def relay() -> None:
+        for line in proc.stderr:
+            if line.startswith(("compiling jit kernel", "compiled ")):
+                print("  " + line.rstrip(), flush=True)
+            else:
+                other.append(line)
+
+    t = threading.Thread(target=relay, daemon=True)
+    t.start()
+    t.other = other  # type: ignore[attr-defined]
+    return proc, t
 
 
 def main() -> int:
@@ -53,9 +67,14 @@ def main() -> int:
     t0 = time.perf_counter()
     print("rotoprint: compiling the jit kernels once (cached for every later run)...", flush=True)
     with tempfile.TemporaryDirectory(prefix="rotoprint-warmup-") as tmp:
-        procs = [_run_group(g, env) for g in _commands(Path(tmp))]
-        codes = [p.wait() for p in procs]
+        runs = [_run_group(g, env) for g in _commands(Path(tmp))]
+        codes = [p.wait() for p, _ in runs]
+        for _, t in runs:
+            t.join()
     if any(codes):
+        for (_, t), c in zip(runs, codes):
+            if c:
+                sys.stderr.write("".join(t.other[-20:]))
         print(f"rotoprint: warm-up failed (exit codes {codes}); kernels will compile on first use", file=sys.stderr)
         return 1
     print(f"rotoprint: kernels ready in {time.perf_counter() - t0:.0f} s", flush=True)
