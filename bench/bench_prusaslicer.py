@@ -220,11 +220,6 @@ def run(quick: bool) -> list[dict]:
             ini = tmp / f"case{k}.ini"
             ini.write_text(prusa_profile(c.display, c.layer_height_mm))
             files[c.name] = (stl, ini)
-        # one untimed run of each first: the page cache holds the programs and the meshes
-        for c in cases:
-            stl, ini = files[c.name]
-            _one(c, "rotoprint", stl, ini, tmp, prusa, env)
-            _one(c, "prusaslicer", stl, ini, tmp, prusa, env)
         for _ in range(rounds):
             for c in cases:
                 stl, ini = files[c.name]
