@@ -173,12 +173,12 @@ def layer_areas_mm2(path: Path) -> tuple[np.ndarray, float]:
     return np.asarray(sums, np.float64) / 255.0 * px_area, px_area
 
 
-def exact_areas_mm2(mesh_path: Path, layer_height_mm: float, n_layers: int) -> np.ndarray:
+def exact_areas_mm2(mesh_path: Path, preset: str, layer_height_mm: float, n_layers: int) -> np.ndarray:
     """Exact area of the mesh's section at ``z_min + (i + 0.5) * layer_height`` (shoelace)."""
     from rotoprint import load_device, load_mesh, slice_mesh
 
     mesh = load_mesh(mesh_path)
-    job = slice_mesh(mesh, load_device("perfactory-sxga"), layer_height_mm=layer_height_mm)
+    job = slice_mesh(mesh, load_device(preset), layer_height_mm=layer_height_mm)
     z0 = float(mesh.bounds[0][2])
     out = np.zeros(n_layers)
     for i in range(n_layers):
@@ -188,10 +188,10 @@ def exact_areas_mm2(mesh_path: Path, layer_height_mm: float, n_layers: int) -> n
     return out
 
 
-def area_error(archive: Path, mesh_path: Path, layer_height_mm: float) -> tuple[float, int]:
+def area_error(archive: Path, mesh_path: Path, preset: str, layer_height_mm: float) -> tuple[float, int]:
     """Worst per-layer relative grey-sum area error (sections of at least 1 mm^2), layers."""
     got, _ = layer_areas_mm2(archive)
-    exact = exact_areas_mm2(mesh_path, layer_height_mm, len(got))
+    exact = exact_areas_mm2(mesh_path, preset, layer_height_mm, len(got))
     keep = exact >= 1.0
     if not keep.any():
         return float("nan"), len(got)
@@ -227,6 +227,10 @@ def run(quick: bool) -> list[dict]:
                     wall, rss, size = _one(c, tool, stl, ini, tmp, prusa, env)
                     results.setdefault((c.name, tool), []).append((wall, rss))
                     sizes[(c.name, tool)] = size
+        import json
+
+        print("timings (wall s, peak RSS MiB) per run:", json.dumps({f"{k[0]} | {k[1]}": v for k, v in results.items()}),
+              "archive bytes:", json.dumps({f"{k[0]} | {k[1]}": v for k, v in sizes.items()}), flush=True)
         rows = []
         for c in cases:
             stl, _ = files[c.name]
@@ -237,7 +241,7 @@ def run(quick: bool) -> list[dict]:
                 row[f"{tool} peak RSS MiB"] = statistics.median(r[1] for r in runs)
                 row[f"{tool} archive MB"] = sizes[(c.name, tool)] / 1e6
             for tool in ("rotoprint", "prusaslicer"):
-                err, n = area_error(_out_path(tmp, c, tool), stl, c.layer_height_mm)
+                err, n = area_error(_out_path(tmp, c, tool), stl, c.display.preset, c.layer_height_mm)
                 row[f"{tool} layers"] = n
                 row[f"{tool} worst area err"] = err
             row["wall ratio"] = row["rotoprint wall s"] / row["prusaslicer wall s"]
