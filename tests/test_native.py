@@ -182,3 +182,21 @@ def test_topology_matches_the_sorting_path(monkeypatch):
               "suspect_edges", "shell"):
         assert np.array_equal(getattr(fast, f), getattr(ref, f)), f
     assert fast.orientation_conflicts == ref.orientation_conflicts > 0 and fast.n_shells == ref.n_shells
+
+
+def test_fallbacks_without_the_extension(monkeypatch):
+    """Without the C extension the numba section kernel and Pillow's PNG give the same data."""
+    from rotoprint.io.images import png_bytes_window
+    from rotoprint.slicing._sections import FaceSweep, section
+
+    mesh = torus_mesh(6.0, 2.0, 60, 30)
+    faces = FaceSweep(mesh).faces_at(0.3)
+    fast = section(mesh, faces, 0.3)
+    win = np.random.default_rng(2).integers(0, 256, (20, 30), dtype=np.uint8)
+    png_fast = png_bytes_window(win, (50, 80), 10, 40, mirror_x=True, mirror_y=True)
+    monkeypatch.setattr(accel, "native", None)
+    slow = section(mesh, faces, 0.3)
+    for f in ("start", "end", "start_edge", "end_edge"):
+        assert np.array_equal(getattr(fast, f), getattr(slow, f)), f
+    png_slow = png_bytes_window(win, (50, 80), 10, 40, mirror_x=True, mirror_y=True)
+    assert png_slow != png_fast and np.array_equal(_decode(png_slow), _decode(png_fast))
