@@ -365,7 +365,8 @@ def load_mesh(
             f"{COORD_MM.text()} (check --units, --scale and --translate)",
             path=path,
         )
-    mesh = Mesh.from_triangles(tri, source=str(path), fill_holes=fill_holes, _owned=True)
+    box = [tri]  # handed over: freed inside once the vertices are merged (less peak memory)
     del tri
+    mesh = Mesh.from_triangles(box, source=str(path), fill_holes=fill_holes, _owned=True)
     release_free_memory()
     return mesh
