@@ -12,6 +12,7 @@ output, see :mod:`rotoprint.io.ownership`, or with ``force``)::
                                    ordered passes with their image files and SHA-256
     report.html                    self-contained report (no network)
     layers/layer_00000/MATERIAL-INK.png (+ .json sidecar; -s1, -s2 for several swathes)
+    machine/                       packed firing data, TIFF planes, program.json/.txt (docs/machine.md)
     overlays/layer_00000-MATERIAL.png   simulator overlays of a few layers
 """
 
@@ -123,7 +124,7 @@ def job_inputs(job: ResolvedJob) -> list[Path]:
 
 def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, int, int], None] | None = None,
               check: bool | None = None, report: bool = True, force: bool = False,
-              inputs: Iterable[str | Path] = ()) -> BuildResult:
+              inputs: Iterable[str | Path] = (), machine=None) -> BuildResult:
     """Run the whole pipeline for ``job`` and write ``out_dir``.
 
     Parameters
@@ -141,6 +142,9 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
     inputs : iterable of path
         Files the run read besides the job's own (:func:`job_inputs`): ``out_dir`` must not be
         or hold one.
+    machine : MachineOptions or False, optional
+        How ``machine/`` is written (:class:`rotoprint.machine.program.MachineOptions`; default
+        options when None); ``False``: no machine folder.
 
     Returns
     -------
@@ -173,6 +177,9 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
     with atomic_dir(out, kind="build", inputs=[*inputs, *job_inputs(job)], force=force) as tmp:
         (tmp / "layers").mkdir()
         (tmp / "overlays").mkdir()
+        from ..machine.program import machine_stage
+
+        mw = machine_stage(plan, tmp / "machine", machine)  # the machine folder, streamed layer by layer
         # printability of every part (exact cross-sections, Cartesian grid at the head's pitch)
         checks = []
         tc = time.perf_counter()
@@ -241,10 +248,14 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
                         p = simulate(pr, ref).printed
                         cov = p if cov is None else (cov & p)
                     printed_masks[m].append(cov)
+            if mw is not None:
+                step("machine", i, n)
+                mw.add_layer(sched, masks)
             layers_json.append({
                 "index": i, "z_bottom_mm": sched.z_bottom_mm, "z_top_mm": sched.z_top_mm, "time_s": sched.time_s,
                 "blocks": [b.to_json() for b in sched.blocks], "images": images,
             })
+        machine_totals = mw.close() if mw is not None else None
         timings["layers_s"] = time.perf_counter() - tl
         # simulator overlays of a few layers per material (coverage before density thinning)
         ts = time.perf_counter()
@@ -317,6 +328,7 @@ def run_build(job: ResolvedJob, out_dir: str | Path, *, on_step: Callable[[str, 
         "layers": n, "heads": len(plan.heads), "warnings": plan.warnings, "resistance": resistance,
         "printability_ok": all(c["ok"] for c in checks) if checks else None, "estimated_print_time_s": total_time_s,
         "timings_s": timings, "plan_sha256": hashlib.sha256(text.encode()).hexdigest(),
+        "machine": machine_totals,
     }
     return BuildResult(out_dir=final, report_path=final / "report.html", plan_path=final / "plan.json", summary=summary)
 
