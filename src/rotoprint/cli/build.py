@@ -62,7 +62,7 @@ def build_command(
     """Plan a multi-material job: print-ready images per layer, head and ink, the ordered passes,
     thickness and resistance estimates, printability, and a self-contained report.html."""
     from ..process import load_job
-    from ..process.build import run_build
+    from ..pipeline import run_build
 
     spec = load_job(job)
     with progress() as bar:

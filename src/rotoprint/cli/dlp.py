@@ -56,7 +56,7 @@ def dlp_command(
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
     from ..io.archives import JobInfo, format_from_path, job_dir_name
-    from ..io.dlpjob import write_dlp_job
+    from ..pipeline import RunOptions, write_dlp_job
     from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
 
@@ -105,7 +105,7 @@ def dlp_command(
     )
     with progress(quiet) as bar:
         task = bar.add_task(f"{mode} masks", total=info.mask_count)
-        summary = write_dlp_job(job, out, info, options, fmt=kind, workers=workers, scheduler=scheduler, resume=resume,
+        summary = write_dlp_job(job, out, info, options, fmt=kind, run=RunOptions(workers=workers, scheduler=scheduler, resume=resume),
                                 on_mask=lambda i: bar.advance(task))
     if not quiet:
         vol = summary.get("volume_mm3", 0.0)

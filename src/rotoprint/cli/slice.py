@@ -62,7 +62,7 @@ def slice_command(
     columns = nozzles, a sidecar layer_00000.json per layer and DIR/manifest.json.
     """
     from ..devices import load_device
-    from ..io.layers import write_layer_folder
+    from ..pipeline import RunOptions, write_layer_folder
     from ..slicing import slice_mesh
 
     setup_logging(verbose)
@@ -110,9 +110,7 @@ def slice_command(
             device_name=dev.name,
             device=dev.model_dump(mode="json"),
             options=options,
-            workers=workers,
-            scheduler=scheduler,
-            resume=resume,
+            run=RunOptions(workers=workers, scheduler=scheduler, resume=resume),
             on_layer=lambda i: bar.advance(task),
         )
     if not quiet:
@@ -145,7 +143,8 @@ def _check_rotary_options(*, tilt, radius, workers, scheduler, resume, fibre_ang
 def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, radius, angle, direction, ref_radius, max_swathes,
                   equalise, reference_images, fill, gap_radius, quiet, options, workers=1, scheduler=None, resume=False) -> None:
     from ..devices import InkjetDevice
-    from ..rotary.direct import slice_rotary, write_rotary_slices
+    from ..pipeline import RunOptions, write_rotary_slices
+    from ..rotary.direct import slice_rotary
 
     if not isinstance(dev, InkjetDevice):
         raise ConfigError(f"device {dev.name!r} is a projector; --rotary needs an inkjet device")
@@ -160,7 +159,7 @@ def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, rad
         task = bar.add_task("slicing (rotary)", total=len(job))
         manifest = write_rotary_slices(job, out, device_name=dev.name, options=opts, mesh_info=mesh_info,
                                        reference_images=reference_images, on_layer=lambda i: bar.advance(task),
-                                       workers=workers, scheduler=scheduler, resume=resume)
+                                       run=RunOptions(workers=workers, scheduler=scheduler, resume=resume))
     if not quiet:
         ds = manifest["density_spread"]
         console.print(
