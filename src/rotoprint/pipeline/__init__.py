@@ -2,9 +2,9 @@
 outputs. The packages below (slicing, rotary, masks, check, process, report, io) compute or
 read and write formats; this package runs them in order (see docs/architecture.md).
 
-- :mod:`.producer`: layers in threads, worker processes or on a Dask cluster, handed
+- :mod:`.producer`: layers in threads, worker processes or on a Dask cluster (through the
+  one bounded ordered window of futures, :mod:`rotoprint._window`), handed
   picklable "make the job" and "render layer i" callables (:class:`LayerSource`).
-- :mod:`.window`: the bounded, ordered window of futures.
 - :mod:`.tasks`: the three kinds of layer work (plain layers, DLP masks, rotary slices).
 - :mod:`.journal`: the one journalled, resumable writer.
 - :mod:`.outputs`: layer folders, DLP jobs, rotary slices.

@@ -4,7 +4,7 @@ It is handed a :class:`LayerSource`, two picklable callables and a key: ``make_j
 the job once per worker thread, ``render(job, i)`` turns layer ``i`` into a
 :class:`Rendered` (the layer's files as bytes). It knows nothing of what the layers are
 (slicing, masks, rotary: see :mod:`rotoprint.pipeline.tasks`). Results come back *in layer
-order* through a bounded window of layers in flight (:func:`rotoprint.pipeline.window.ordered`),
+order* through a bounded window of layers in flight (:func:`rotoprint._window.ordered`),
 so memory does not grow with the layer count, and the bytes are the same whichever way they
 were made.
 """
@@ -21,7 +21,7 @@ from multiprocessing import get_context
 from typing import Any
 
 from ..errors import ConfigError
-from .window import ordered
+from .._window import ordered
 
 __all__ = ["LayerSource", "Rendered", "RunOptions", "produce_layers", "render_one", "check_scheduler_address",
            "cpu_count", "DASK_CONNECT_TIMEOUT_S"]

@@ -1,5 +1,9 @@
 """One bounded, ordered window of futures: results in submission order, at most ``window``
-in flight, so memory does not grow with the number of items."""
+in flight, so memory does not grow with the number of items.
+
+Used by the layer producer (:mod:`rotoprint.pipeline.producer`) and by the archive writer's
+PNG encoding threads (:mod:`rotoprint.io.archives`); it imports nothing of rotoprint, so both
+layers can use it."""
 
 from __future__ import annotations
 
