@@ -42,7 +42,7 @@ def test_identical_bytes_1_and_2_workers(job, tmp_path):
     _write(job, a, workers=1)
     _write(job, b, workers=2)
     fa, fb = folder_bytes(a), folder_bytes(b)
-    assert len(fa) == len(job) + 1 and fa == fb
+    assert len(fa) == len(job) + 2 and fa == fb
 
 
 def test_identical_bytes_on_a_dask_local_cluster(job, tmp_path):
@@ -225,7 +225,7 @@ def test_rotary_slices_identical_bytes_with_workers_and_resumable(run_cli, torus
         code, _, err = run_cli(*base, "-o", outs[name], *extra)
         assert code == 0, err
     a, b = folder_bytes(outs["w1"]), folder_bytes(outs["w2"])
-    assert len(a) == 8 * 3 + 1  # per layer: print image, sidecar, reference image; and the manifest
+    assert len(a) == 8 * 3 + 2  # per layer: print image, sidecar, reference image; the manifest and our marker
     assert a == b
     # interrupt a run after a few layers, then resume it
     from rotoprint.io import resumable

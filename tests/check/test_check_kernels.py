@@ -22,6 +22,8 @@ from rotoprint.slicing._fill import fill_numpy
 from rotoprint.slicing.fibres import _affine
 from rotoprint.testing import box_triangles
 
+import _reference_kernels as R  # noqa: E402 - beside this file (tests/check)
+
 SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "meshes"
 
 
@@ -54,12 +56,12 @@ def test_section_runs_equal_the_slicers_image(piece_mesh):
     for job in _jobs(piece_mesh):
         for i in range(len(job)):
             layer, seg = job.layer_and_segments(i)
-            rs, r0, r1 = K.section_runs(seg.start, seg.end, job._to_uv, job.grid.height, job.grid.width, job.fill == "evenodd")
-            assert np.array_equal(K.runs_to_image(rs, r0, r1, job.grid.height, job.grid.width), layer.image)
+            rs, r0, r1 = K.section_runs(seg.start, seg.end, job.fill_affine, job.grid.height, job.grid.width, job.fill == "evenodd")
+            assert np.array_equal(R.runs_to_image(rs, r0, r1, job.grid.height, job.grid.width), layer.image)
             # and against the independent numpy fill (the slicer's image shares the jit bucketing)
-            a, b = _affine(job._to_uv, seg.start), _affine(job._to_uv, seg.end)
+            a, b = _affine(job.fill_affine, seg.start), _affine(job.fill_affine, seg.end)
             ref = fill_numpy(a[:, 0], a[:, 1], b[:, 0], b[:, 1], job.grid.height, job.grid.width, job.fill)
-            assert np.array_equal(K.runs_to_image(rs, r0, r1, job.grid.height, job.grid.width), ref)
+            assert np.array_equal(R.runs_to_image(rs, r0, r1, job.grid.height, job.grid.width), ref)
             want = _runs_of(layer.image)
             assert all(np.array_equal(a, b) for a, b in zip((rs, r0, r1), want))  # maximal runs
             n += 1
@@ -140,8 +142,8 @@ def test_sample_widths_measure_what_the_check_uses(piece_mesh, chained, simplifi
         sx, sy, ex, ey, _, js, je = K.split_at_crossings(sx, sy, ex, ey, cell, 1e-5)
         comp, nc = K.chain_components(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
         keep, nx, ny = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)
-        rx, ry, rux, ruy, rsid, rln = K.boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing)
-        rw, rg = K.cast_rays(rx, ry, rux, ruy, rsid, sx, sy, ex, ey, keep, cap, 1e-9, cell)
+        rx, ry, rux, ruy, rsid, rln = R.boundary_samples(sx, sy, ex, ey, nx, ny, keep, spacing)
+        rw, rg = R.cast_rays(rx, ry, rux, ruy, rsid, sx, sy, ex, ey, keep, cap, 1e-9, cell)
         if chained:
             succ = K.chain_successors(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
             bx, by, ux, uy, ln, w, g = K.sample_widths_chained(sx, sy, ex, ey, nx, ny, keep, spacing, cap, 1e-9, cell, need_w, need_g, succ)
@@ -176,7 +178,7 @@ def test_group_chords_match_canvas_labelling(seed):
     r0 = int(np.floor(min(ar.min(), br.min()) + 0.5)) - pad
     c1 = int(np.floor(max(ac.max(), bc.max()) + 0.5)) + pad + 1
     r1 = int(np.floor(max(ar.max(), br.max()) + 0.5)) + pad + 1
-    g, ng = K.group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow)
+    g, ng = R.group_chords(ac, ar, bc, br, c0, r0, r1 - r0, c1 - c0, grow)
     canvas = np.zeros((r1 - r0, c1 - c0), np.uint8)
     K.paint_chords(ac - c0, ar - r0, bc - c0, br - r0, canvas, 1)
     canvas = ndimage.binary_dilation(canvas, structure=np.ones((3, 3), bool), iterations=grow)
@@ -206,12 +208,12 @@ def test_check_layer_equals_widths_on_the_image_and_islands(piece_mesh):
             below = i > 0
             # widths well above a pixel so that the raster tests have candidates
             rest = (spacing, 8 * p, 1e-9, 3 * p, 3 * p, 1.5 * p, 1.5 * p, 3 * p, p2m, m2p, p)
-            got = K.check_layer(seg.start, seg.end, seg.start, seg.end, job._to_uv, g.height, g.width, evenodd, *prev, below, cell, 1e-5, 1e-7, *rest)
-            rs, r0, r1, st, isl = K.layer_islands(seg.start, seg.end, job._to_uv, g.height, g.width, evenodd, *prev, below)
+            got = K.check_layer((seg.start, seg.end), (seg.start, seg.end), prev, below, K.LayerParams(job.fill_affine, g.height, g.width, evenodd, cell, 1e-5, 1e-7, *rest))
+            rs, r0, r1, st, isl = R.layer_islands(seg.start, seg.end, job.fill_affine, g.height, g.width, evenodd, *prev, below)
             for a, b in zip(got[7:], (rs, r0, r1, st, isl)):
                 assert np.array_equal(a, b)
             if len(seg):
-                want = K.layer_widths(seg.start, seg.end, layer.image, cell, 1e-5, evenodd, 1e-7, *rest)
+                want = R.layer_widths(seg.start, seg.end, layer.image, cell, 1e-5, evenodd, 1e-7, *rest)
                 assert np.array_equal(got[0], want[0])
                 assert got[1] == want[1] and got[2] == want[2]
                 for a, b in zip(got[3:7], want[3:7]):
@@ -223,7 +225,7 @@ def test_check_layer_equals_widths_on_the_image_and_islands(piece_mesh):
                     c = np.flatnonzero(np.isfinite(width))
                     if c.size:
                         args_c = (S[0][c], S[1][c], sgn * S[2][c], sgn * S[3][c], width[c])
-                        ref = K.chord_presence(*args_c, layer.image, want_px, p2m, m2p, p)
+                        ref = R.chord_presence(*args_c, layer.image, want_px, p2m, m2p, p)
                         new = K.chord_presence_runs(*args_c, rs, r0, r1, g.height, g.width, want_px, p2m, m2p, p)
                         assert np.array_equal(ref, new)
             prev = (rs, r0, r1)
@@ -260,17 +262,17 @@ def test_chain_successors_and_runs_against_plain(piece_mesh):
         assert np.array_equal(succ, _successors_plain(sx, sy, ex, ey, js, je))
         comp, nc = K.chain_components(sx, sy, ex, ey, js, je, K._keys(sx, sy), K._keys(ex, ey))
         keep, _, _ = K.classify_segments(sx, sy, ex, ey, comp, nc, False, 1e-7)
-        run, ptr, mem = K._chain_runs(sx, sy, ex, ey, keep, succ, K._RUN_MIN_LEN_MM)
+        run, ptr, mem = K._chain_runs(sx, sy, ex, ey, keep, succ, K.chains._RUN_MIN_LEN_MM)
         assert np.array_equal(np.sort(mem), np.flatnonzero(keep)) and np.all(run[~keep] == -1)
         L = np.hypot(ex - sx, ey - sy)
         for r in range(ptr.size - 1):
             m = mem[ptr[r] : ptr[r + 1]]
-            assert np.all(run[m] == r) and 1 <= m.size <= K._RUN_MAX
+            assert np.all(run[m] == r) and 1 <= m.size <= K.chains._RUN_MAX
             assert np.all(succ[m[:-1]] == m[1:])
             if m.size > 1:
-                assert np.all(L[m] >= K._RUN_MIN_LEN_MM)
+                assert np.all(L[m] >= K.chains._RUN_MIN_LEN_MM)
                 t = np.stack([(ex - sx)[m], (ey - sy)[m]], 1) / L[m, None]
-                assert np.all(t @ t[0] >= K._RUN_COS - 1e-12)
+                assert np.all(t @ t[0] >= K.chains._RUN_COS - 1e-12)
 
 
 def _circle(cx, cy, r, n=720, phase=0.0):
@@ -298,7 +300,7 @@ def test_split_by_runs_equals_the_grid(piece_mesh):
     cases += [(crossing, 0.01), (crossing, 0.035), (coincide, 0.01)]
     for (sx, sy, ex, ey), cell in cases:
         a = K.split_at_crossings(sx, sy, ex, ey, cell, 1e-5)
-        b = K.split_at_crossings_grid(sx, sy, ex, ey, cell, 1e-5)
+        b = R.split_at_crossings_grid(sx, sy, ex, ey, cell, 1e-5)
         assert all(np.array_equal(x, y) for x, y in zip(a, b))
     # the crossing circles were cut, the near one flagged
     ox0, _, _, _, par, js, je = K.split_at_crossings(*crossing, 0.01, 1e-5)
@@ -319,7 +321,7 @@ def test_near_segments_in_different_cells_are_compared():
         s = np.concatenate([np.stack([xs[:-1], np.zeros(300)], 1), [[xb - 2.5e-6, 0.5], [xb + 2.5e-6, 0.499]]])
         e = np.concatenate([np.stack([xs[1:], np.zeros(300)], 1), [[xb - 2.5e-6, 0.499], [xb + 2.5e-6, 0.5]]])
         args = tuple(np.ascontiguousarray(a) for a in (s[:, 0], s[:, 1], e[:, 0], e[:, 1]))
-        for fn in (K.split_at_crossings, K.split_at_crossings_grid):
+        for fn in (K.split_at_crossings, R.split_at_crossings_grid):
             _, _, _, _, par, js, je = fn(*args, cell, 1e-5)
             pair = par >= 300
             assert pair.sum() == 2 and not js[pair].any() and not je[pair].any()

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rotoprint.check import check_layers, check_printability
-from rotoprint.check.core import _RESOLUTION_PX
+from rotoprint.check.options import RESOLUTION_PX as _RESOLUTION_PX
 from rotoprint.devices import load_device
 from rotoprint.mesh import Mesh
 from rotoprint.pieces import Feature, feature_test_piece

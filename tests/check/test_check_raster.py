@@ -142,8 +142,8 @@ def test_raster_test_limit_covers_every_wall_that_can_vanish(device_name):
     rectangle (width across, one pixel either side along) holds a pixel centre, at any angle
     and offset, as soon as it is one (larger) pitch wide; narrower, it can miss them all. On
     an all-material image every chord of 1.0 pitch finds material, and some of 0.95 do not."""
-    from rotoprint.check import _kernels as K
-    from rotoprint.check.core import _RASTER_TEST_PX
+    import _reference_kernels as R
+    from rotoprint.check.options import RASTER_TEST_PX as _RASTER_TEST_PX
 
     dev = load_device(device_name)
     job = slice_mesh(box_mesh((2.0, 2.0, 0.2)), dev, layer_height_mm=0.1)
@@ -159,6 +159,6 @@ def test_raster_test_limit_covers_every_wall_that_can_vanish(device_name):
     m2p, p2m = np.ascontiguousarray(g.model_to_pixel), np.ascontiguousarray(g.pixel_to_model)
     for f, all_found in ((1.0, True), (0.95, False)):
         # the 0.05-pitch margin to 1.1 leaves room for a centre strictly inside the wall
-        got = K.chord_presence(bx, by, ux, uy, np.full(n, f * p), img, 255, p2m, m2p, p)
+        got = R.chord_presence(bx, by, ux, uy, np.full(n, f * p), img, 255, p2m, m2p, p)
         assert got.all() == all_found, (f, int((~got).sum()))
     assert _RASTER_TEST_PX >= 1.05

@@ -10,7 +10,7 @@ import shapely
 
 from rotoprint.check import _kernels as K
 from rotoprint.check import check_printability
-from rotoprint.check.core import resolution_for
+from rotoprint.check.options import resolution_for
 from rotoprint.devices import load_device
 from rotoprint.errors import ConfigError
 from rotoprint.mesh import Mesh

@@ -89,7 +89,7 @@ def test_folders_roundtrip(tmp_path, fmt):
     names = [f"{i:05d}.png" if fmt == "perfactory" else f"mask_{i:05d}.png" for i in range(len(a))]
     assert a.mask_names == names
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        names + ["manifest.json"] + (["build.cfg", "job.txt"] if fmt == "perfactory" else [])
+        names + ["manifest.json", "rotoprint-output.json"] + (["build.cfg", "job.txt"] if fmt == "perfactory" else [])
     )
     assert [m["layer"] for m in a.manifest["masks"]] == [i // 2 for i in range(len(a))]
     assert [m["copy"] for m in a.manifest["masks"]] == [i % 2 for i in range(len(a))]

@@ -1,7 +1,7 @@
 """Enclosed cavities (resin traps): empty space shut in on every side by the part.
 
 The empty space of each layer is taken as runs per pixel row (the complement of the layer's
-material runs, see :func:`rotoprint.check._kernels.fill_runs`), joined within the layer by
+material runs, see :func:`rotoprint.check._kernels.runs.fill_runs`), joined within the layer by
 4-neighbours (the dual of the 8-neighbours material islands use, so that empty space never
 leaks through a diagonal between two material pixels) and to the layer below where the same
 pixel is empty in both. A connected body of empty space is **open** when it reaches the edge
@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ._kernels import _find, _union
+from ._kernels.unionfind import _relabel, _union
 
 
 @njit(cache=True, nogil=True)
@@ -112,15 +112,7 @@ def cavity_step(rs, r0, r1, W, ps, p0, p1, pcomp, bodies, layer):  # pragma: no 
             while t < qe and e0[t] < e1[k]:
                 _union(parent, k, t)
                 t += 1
-    comp = np.full(n, -1, np.int64)
-    root_c = np.full(n, -1, np.int64)
-    nc = 0
-    for k in range(n):
-        r = _find(parent, k)
-        if root_c[r] < 0:
-            root_c[r] = nc
-            nc += 1
-        comp[k] = root_c[r]
+    comp, nc = _relabel(parent, np.zeros(0, np.bool_))
     # groups: the layer's components (0..nc-1) and the bodies below (nc..nc+nb-1) joined
     gp = np.arange(nc + nb)
     if nb > 0:
@@ -134,15 +126,7 @@ def cavity_step(rs, r0, r1, W, ps, p0, p1, pcomp, bodies, layer):  # pragma: no 
                 while t < qe and p0[t] < e1[k]:
                     _union(gp, comp[k], nc + pcomp[t])
                     t += 1
-    grp = np.full(nc + nb, -1, np.int64)
-    root_g = np.full(nc + nb, -1, np.int64)
-    ng = 0
-    for v in range(nc + nb):
-        r = _find(gp, v)
-        if root_g[r] < 0:
-            root_g[r] = ng
-            ng += 1
-        grp[v] = root_g[r]
+    grp, ng = _relabel(gp, np.zeros(0, np.bool_))
     agg = np.empty((10, ng))
     for g in range(ng):
         agg[_FIRST, g] = np.inf

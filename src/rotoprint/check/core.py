@@ -36,9 +36,13 @@ from ..errors import ConfigError
 from ..mesh import Mesh
 from . import _kernels as K
 from ._cavities import CavityTracker
-from .limits import default_minimum_mm, device_limits
+from .limits import device_limits
+from .options import EXPOSURE_TEST_PX, RASTER_TEST_PX, CheckOptions, CheckSettings, resolution_for
 
-__all__ = ["KINDS", "Finding", "LayerCheck", "CheckReport", "check_layers", "check_printability", "compare_orientations", "join_regions"]
+__all__ = [
+    "KINDS", "Finding", "LayerCheck", "CheckReport", "CheckOptions", "check_layers", "check_printability", "compare_orientations", "join_regions",
+    "resolution_for",
+]
 
 log = logging.getLogger(__name__)
 
@@ -52,22 +56,16 @@ _NEAR_MM = 1e-5
 #: Rays ignore hits nearer than this (mm): the segment a sample lies on, and touching ends.
 _RAY_TMIN_MM = 1e-9
 #: Smallest side of the cells (in pixels) in which rays look for the other side of a wall or gap
-#: (cells grow where segments are sparse, see ``_kernels._cell_size``).
+#: (cells grow where segments are sparse, see ``_kernels.grid._cell_size``).
 _CELL_PX = 0.5
 #: Samples along the boundary at most this many pixels apart.
 _SPACING_PX = 0.5
 #: Chords of one kind closer than this many pixels are reported as one finding.
 _GROUP_PX = 1
-#: Walls and gaps narrower than this many pixels are tested against the raster. A chord's
-#: test rectangle (the width across, one pixel either side along) holds a pixel centre at any
-#: angle and offset once it is one pitch wide (tests/check/test_check_raster.py shows it), so a
-#: wall 1.1 pixels wide cannot vanish nor a gap that wide close: 2 pixels measured for nothing.
-_RASTER_TEST_PX = 1.1
-#: Walls and gaps narrower than this many pixels are tested against the exposure.
-_EXPOSURE_TEST_PX = 3.0
-#: Default resolution: widths are measured on the section simplified to this fraction of the
-#: smaller pixel pitch (``resolution_mm``; 0 measures on the section as sliced).
-_RESOLUTION_PX = 0.01
+#: Walls and gaps narrower than these many pixels are tested against the raster and the
+#: exposure (:mod:`.options`).
+_RASTER_TEST_PX = RASTER_TEST_PX
+_EXPOSURE_TEST_PX = EXPOSURE_TEST_PX
 
 
 @dataclass(frozen=True)
@@ -312,19 +310,7 @@ class CheckReport:
         }
 
 
-# ----------------------------------------------------------------------------- validation
-
-
-def _positive(name: str, value, *, allow_none: bool = True) -> float | None:
-    if value is None and allow_none:
-        return None
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} must be a positive number of mm, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ConfigError(f"{name} must be a positive number of mm, got {value!r}")
-    return v
+# ----------------------------------------------------------------------------- helpers
 
 
 def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -335,12 +321,12 @@ def _affine_apply(m: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarr
 
 
 class _LayerChecker:
-    """Everything fixed for a job: thresholds (the settings ``st`` of :func:`_settings`),
+    """Everything fixed for a job: thresholds (the :class:`~.options.CheckSettings` ``st``),
     affines, sampling."""
 
-    def __init__(self, job, st: dict, grey_fn) -> None:
+    def __init__(self, job, st: CheckSettings, grey_fn) -> None:
         g = job.grid
-        min_wall_mm, min_gap_mm = st["min_wall_mm"], st["min_gap_mm"]
+        min_wall_mm, min_gap_mm = st.min_wall_mm, st.min_gap_mm
         self.job = job
         self.grid = g
         self.m2p = np.ascontiguousarray(g.model_to_pixel)
@@ -349,11 +335,11 @@ class _LayerChecker:
         self.spacing = _SPACING_PX * min(g.pitch_x_mm, g.pitch_y_mm)
         self.min_wall = min_wall_mm
         self.min_gap = min_gap_mm
-        self.cap = st["measured_up_to_mm"]
+        self.cap = st.measured_up_to_mm
         self.grey_fn = grey_fn
-        self.thr = st["cure_threshold"]
-        self.islands = st["islands"]
-        self.cavities = CavityTracker(g.width, g.height) if st["cavities"] else None
+        self.thr = st.cure_threshold
+        self.islands = st.islands
+        self.cavities = CavityTracker(g.width, g.height) if st.cavities else None
         self.evenodd = job.fill == "evenodd"
         # widths the findings need exactly (the smallest one is measured up to the cap)
         lim = _RASTER_TEST_PX * self.pmax
@@ -363,10 +349,14 @@ class _LayerChecker:
         self.need_gap = max(min_gap_mm, lim)
         self.cell = _CELL_PX * min(g.pitch_x_mm, g.pitch_y_mm)
         # the slicer's own model-to-pixel affine (its fill's crossings are recomputed as runs)
-        self.uv = np.ascontiguousarray(getattr(job, "_to_uv", g.model_to_pixel), dtype=np.float64)
+        uv = np.ascontiguousarray(job.fill_affine, dtype=np.float64)
+        self.params = K.LayerParams(
+            uv, g.height, g.width, self.evenodd, self.cell, _NEAR_MM, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
+            self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
+        )
         self._no_runs = (np.zeros(g.height + 1, np.int64), np.zeros(0, np.int64), np.zeros(0, np.int64))
         self.prev_runs: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None
-        self.resolution = float(st["resolution_mm"])
+        self.resolution = float(st.resolution_mm)
         self._pos = np.full(0, -1, np.int32)  # edge -> segment buffer of simplify_section
         # canvas of emit_groups (all zeros between calls): the grid with a margin for chords
         # that reach past it
@@ -396,21 +386,20 @@ class _LayerChecker:
         # one call: the layer's runs of material (equal to the slicer's image, which the
         # check does not need), widths and selections, raster tests on the runs, islands
         ws, we = self._simplified(seg)
-        S, iw, ig, thin, narrow, vanished, closed, rs, r0, r1, ist, isl = K.check_layer(
-            seg.start, seg.end, ws, we, self.uv, g.height, g.width, self.evenodd, *prev, below,
-            self.cell, _NEAR_MM, _SIDE_EPS_MM, self.spacing, self.cap, _RAY_TMIN_MM,
-            self.need_wall, self.need_gap, self.min_wall, self.min_gap, _RASTER_TEST_PX * self.pmax, self.p2m, self.m2p, self.pmax,
-        )
+        res = K.check_layer((seg.start, seg.end), (ws, we), prev, below, self.params)
+        rs, r0, r1 = res.rs, res.r0, res.r1
         if self.islands:
             self.prev_runs = (rs, r0, r1)
         image = lambda: job._fill(seg)  # noqa: E731 - the slicer's image, made when read
         thin_w = narrow_g = None
         if len(seg):
-            bx, by, ux, uy, ln, wall, gap = S
-            thin_w = self._extreme(iw, wall, bx, by, ux, uy, +1.0, index, z)
-            narrow_g = self._extreme(ig, gap, bx, by, ux, uy, -1.0, index, z)
+            bx, by, ux, uy, ln, wall, gap = res.samples
+            thin_w = self._extreme(res.thinnest, wall, bx, by, ux, uy, +1.0, index, z)
+            narrow_g = self._extreme(res.narrowest, gap, bx, by, ux, uy, -1.0, index, z)
             # widths against the thresholds, then against the raster
-            for kind, idx, width, sgn in (("thin_wall", thin, wall, 1.0), ("narrow_gap", narrow, gap, -1.0), ("vanished_wall", vanished, wall, 1.0), ("closed_gap", closed, gap, -1.0)):
+            for kind, idx, width, sgn in (
+                ("thin_wall", res.thin, wall, 1.0), ("narrow_gap", res.narrow, gap, -1.0), ("vanished_wall", res.vanished, wall, 1.0), ("closed_gap", res.closed, gap, -1.0)
+            ):
                 if idx.size:
                     self._emit(kind, idx, width, sgn, bx, by, ux, uy, ln, index, z, findings, chords)
             # widths against the exposure
@@ -440,8 +429,8 @@ class _LayerChecker:
             if boxes:
                 chords["cavity"] = np.array(boxes, np.float64)
         island_mask = None
-        if self.islands and ist.shape[1]:
-            island_mask = self._islands(ist, isl, rs, r0, r1, index, z, findings)
+        if self.islands and res.islands.shape[1]:
+            island_mask = self._islands(res.islands, res.island_of_run, rs, r0, r1, index, z, findings)
         return LayerCheck(index, z, image, findings, chords, island_mask, thin_w, narrow_g)
 
     # -- helpers
@@ -567,86 +556,24 @@ def _as_job(job_or_mesh, device, *, layer_height_mm, fibre_angle_deg, slice_opti
     raise ConfigError(f"expected a Mesh or a SliceJob, got {type(job_or_mesh).__name__}")
 
 
-def resolution_for(device, resolution_mm: float | None) -> float:
-    """The resolution (mm) widths are measured at on ``device``: ``resolution_mm`` checked
-    (a finite number from 0 to a quarter of the smaller pixel pitch), or by default 1/100 of
-    that pitch. Raises :class:`~rotoprint.errors.ConfigError` naming the option."""
-    pmin = min(device.pitch_x_mm, device.pitch_y_mm)
-    if resolution_mm is None:
-        return _RESOLUTION_PX * pmin
-    try:
-        res = float(resolution_mm)
-    except (TypeError, ValueError):
-        raise ConfigError(f"resolution must be a number of mm >= 0, got {resolution_mm!r}") from None
-    if not (math.isfinite(res) and 0.0 <= res <= 0.25 * pmin):
-        raise ConfigError(f"resolution must be from 0 (the section as sliced) to a quarter pixel ({0.25 * pmin:.6g} mm), got {resolution_mm!r}")
-    return res
-
-
-def _settings(device, *, min_wall_mm, min_gap_mm, mask_fn, mask_name, cure_threshold, islands, measure_up_to_mm, resolution_mm=None, cavities=True):
-    default, source = default_minimum_mm(device)
-    wall = _positive("min_wall_mm", min_wall_mm)
-    gap = _positive("min_gap_mm", min_gap_mm)
-    thr = None
-    if mask_fn is not None:
-        if cure_threshold is None:
-            cure_threshold = device.projector.cure_threshold if device.kind == "projector" else 0.5
-        thr = float(cure_threshold)
-        if not (math.isfinite(thr) and 0.0 < thr <= 1.0):
-            raise ConfigError(f"cure threshold must be in (0, 1], got {cure_threshold!r}")
-    elif cure_threshold is not None:
-        raise ConfigError("a cure threshold needs an exposure model (mask_fn)")
-    if not isinstance(islands, bool):
-        raise ConfigError(f"islands must be True or False, got {islands!r}")
-    if not isinstance(cavities, bool):
-        raise ConfigError(f"cavities must be True or False, got {cavities!r}")
-    w = default if wall is None else wall
-    g = default if gap is None else gap
-    pmax = max(device.pitch_x_mm, device.pitch_y_mm)
-    cap = _positive("measure_up_to_mm", measure_up_to_mm)
-    cap = max(4.0 * max(w, g), 8.0 * pmax) if cap is None else max(cap, w, g, _RASTER_TEST_PX * pmax, _EXPOSURE_TEST_PX * pmax)
-    res = resolution_for(device, resolution_mm)
-    return {
-        "min_wall_mm": w,
-        "min_gap_mm": g,
-        "min_wall_source": source if wall is None else "given",
-        "min_gap_source": source if gap is None else "given",
-        "exposure_model": mask_name if mask_fn is not None else None,
-        "cure_threshold": thr,
-        "islands": islands,
-        "cavities": cavities,
-        "measured_up_to_mm": cap,
-        "resolution_mm": res,
-    }
-
-
 def check_layers(
     job_or_mesh,
     device,
+    options: CheckOptions | None = None,
     *,
-    min_wall_mm: float | None = None,
-    min_gap_mm: float | None = None,
     layer_height_mm: float | None = None,
     fibre_angle_deg: float | None = None,
-    mask_fn: Callable[[np.ndarray], np.ndarray] | None = None,
-    cure_threshold: float | None = None,
-    islands: bool = True,
-    measure_up_to_mm: float | None = None,
-    resolution_mm: float | None = None,
-    cavities: bool = True,
     slice_options: dict | None = None,
+    **settings,
 ) -> Iterator[LayerCheck]:
     """Check layer after layer; yields one :class:`LayerCheck` each (see
     :func:`check_printability` for the parameters). Memory does not grow with the layers."""
+    opts = CheckOptions.of(options, settings)
     job = _as_job(job_or_mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=fibre_angle_deg, slice_options=slice_options or {})
-    st = _settings(
-        device, min_wall_mm=min_wall_mm, min_gap_mm=min_gap_mm, mask_fn=mask_fn, mask_name="", cure_threshold=cure_threshold,
-        islands=islands, measure_up_to_mm=measure_up_to_mm, resolution_mm=resolution_mm, cavities=cavities,
-    )
-    yield from _iter(job, st, mask_fn)
+    yield from _iter(job, opts.resolve(device), opts.mask_fn)
 
 
-def _iter(job, st, mask_fn) -> Iterator[LayerCheck]:
+def _iter(job, st: CheckSettings, mask_fn) -> Iterator[LayerCheck]:
     grey_fn = None if mask_fn is None else (lambda i, img: mask_fn(img))
     checker = _LayerChecker(job, st, grey_fn)
     for i in range(len(job)):
@@ -656,22 +583,13 @@ def _iter(job, st, mask_fn) -> Iterator[LayerCheck]:
 def check_printability(
     job_or_mesh,
     device,
+    options: CheckOptions | None = None,
     *,
-    min_wall_mm: float | None = None,
-    min_gap_mm: float | None = None,
     layer_height_mm: float | None = None,
     fibre_angle_deg: float | None = None,
-    mask_fn: Callable[[np.ndarray], np.ndarray] | None = None,
-    mask_name: str = "custom",
-    cure_threshold: float | None = None,
-    islands: bool = True,
-    measure_up_to_mm: float | None = None,
-    resolution_mm: float | None = None,
-    cavities: bool = True,
     slice_options: dict | None = None,
-    tilt_deg: float | None = None,
-    radius_mm: float | None = None,
     on_layer: Callable[[LayerCheck], None] | None = None,
+    **settings,
 ) -> CheckReport:
     """Check a part for walls and gaps below the device's minimum, features the raster loses,
     unsupported islands and (with an exposure model) features that do not cure.
@@ -681,36 +599,17 @@ def check_printability(
     job_or_mesh : SliceJob or Mesh
         A sliced job, or a mesh to slice for ``device`` at ``layer_height_mm``.
     device : InkjetDevice or ProjectorDevice
-    min_wall_mm, min_gap_mm : float, optional
-        Thresholds; default :func:`~rotoprint.check.limits.default_minimum_mm` (the pitch, or
-        an inkjet's drop diameter when larger).
+    options : CheckOptions, optional
+        What to check (thresholds, exposure model, islands, cavities, resolution, rotary
+        limits); default :class:`~rotoprint.check.options.CheckOptions` ``()``.
     layer_height_mm, fibre_angle_deg : float, optional
         Slicing of a mesh (see :func:`rotoprint.slicing.slice_mesh`); ``slice_options`` passes
         the others (``fill``, ``offset_mm``, ``gap_radius_mm``, ...).
-    mask_fn : callable, optional
-        Exposure model: ``(H, W) uint8`` binary image to the ``(H, W) uint8`` grey mask the
-        projector shows. Without it no exposure check is made.
-    mask_name : str
-        Its name, for the report.
-    cure_threshold : float, optional
-        Fraction of full exposure a pixel needs to cure; default the projector's (0.5).
-    islands : bool
-        Look for regions with nothing below them.
-    measure_up_to_mm : float, optional
-        Widths are measured up to this; the thinnest wall and gap are reported when below it.
-        Default ``max(4 * threshold, 8 pixels)``.
-    resolution_mm : float, optional
-        Widths are measured on the section with its chains simplified to this deviation (a
-        dropped joint is at most this far from the chord replacing it); measured widths are
-        then within twice this of the section's. Default 1/100 of the smaller pixel pitch;
-        0 measures on the section as sliced (slower on finely tessellated parts).
-    cavities : bool
-        Look for empty space the part shuts in on every side (resin traps): reported as
-        ``cavity`` findings at the layer that closes them over.
-    tilt_deg, radius_mm : float, optional
-        Inkjet on the rotary platform: adds the track figures to ``limits``.
     on_layer : callable, optional
         Called with every :class:`LayerCheck` (e.g. to write overlays).
+    **settings
+        Fields of :class:`~rotoprint.check.options.CheckOptions` by name (``min_wall_mm=...``,
+        ``islands=False``, ...), replacing those of ``options``.
 
     Returns
     -------
@@ -727,24 +626,22 @@ def check_printability(
     """
     if on_layer is not None and not callable(on_layer):
         raise ConfigError("on_layer must be callable")
+    opts = CheckOptions.of(options, settings)
     job = _as_job(job_or_mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=fibre_angle_deg, slice_options=slice_options or {})
-    st = _settings(
-        device, min_wall_mm=min_wall_mm, min_gap_mm=min_gap_mm, mask_fn=mask_fn, mask_name=mask_name,
-        cure_threshold=cure_threshold, islands=islands, measure_up_to_mm=measure_up_to_mm, resolution_mm=resolution_mm,
-        cavities=cavities,
-    )
-    st["layer_height_mm"] = float(job.plan.layer_height_mm)
-    st["fibre_angle_deg"] = fibre_angle_deg
-    st["fill"] = job.fill
+    st = opts.resolve(device)
+    report_settings = st.to_json()
+    report_settings["layer_height_mm"] = float(job.plan.layer_height_mm)
+    report_settings["fibre_angle_deg"] = fibre_angle_deg
+    report_settings["fill"] = job.fill
     limits = device_limits(
         device,
-        mask_fn=mask_fn if device.kind == "projector" else None,
-        cure_threshold=st["cure_threshold"],
-        tilt_deg=tilt_deg,
-        radius_mm=radius_mm,
+        mask_fn=opts.mask_fn if device.kind == "projector" else None,
+        cure_threshold=st.cure_threshold,
+        tilt_deg=opts.tilt_deg,
+        radius_mm=opts.radius_mm,
     )
-    rep = CheckReport(device=device.name, settings=st, grid=job.grid.to_json(), n_layers=len(job), limits=limits)
-    for lc in _iter(job, st, mask_fn):
+    rep = CheckReport(device=device.name, settings=report_settings, grid=job.grid.to_json(), n_layers=len(job), limits=limits)
+    for lc in _iter(job, st, opts.mask_fn):
         if lc.findings:
             rep.findings.extend(lc.findings)
             rep.layers_with_findings.append(lc.index)
@@ -761,13 +658,16 @@ def check_printability(
 def compare_orientations(
     mesh: Mesh,
     device,
+    options: CheckOptions | None = None,
     *,
     angles_deg: Sequence[float],
     layer_height_mm: float,
-    **options,
+    slice_options: dict | None = None,
+    **settings,
 ) -> dict:
     """Check ``mesh`` at every fibre angle (the part rotated in the device plane) and say which
-    loses least.
+    loses least (``options``, ``slice_options`` and ``settings`` as for
+    :func:`check_printability`).
 
     The loss is the boundary length (mm) of walls that vanish, gaps that close and (with an
     exposure model) walls that do not cure and gaps that do: the problems the raster's
@@ -782,9 +682,10 @@ def compare_orientations(
     angles = [float(a) for a in angles_deg]
     if not angles or not all(math.isfinite(a) for a in angles):
         raise ConfigError(f"angles must be finite numbers of degrees, got {list(angles_deg)!r}")
+    opts = CheckOptions.of(options, settings)
     rows = []
     for a in angles:
-        rep = check_printability(mesh, device, layer_height_mm=layer_height_mm, fibre_angle_deg=a, **options)
+        rep = check_printability(mesh, device, opts, layer_height_mm=layer_height_mm, fibre_angle_deg=a, slice_options=slice_options)
         j = rep.to_json()
         rows.append(
             {

@@ -27,6 +27,13 @@ DeviceOpt = Annotated[str, typer.Option("--device", "-d", help="Preset name (omn
 LayerHeightOpt = Annotated[float, typer.Option("--layer-height", help="Layer height, mm.")]
 UnitsOpt = Annotated[str, typer.Option("--units", help="Units of the mesh file: mm, cm, m, um, inch.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print the result as JSON on stdout.")]
+ForceOpt = Annotated[bool, typer.Option("--force", help="Replace an existing output even if it is not provably an earlier rotoprint output.")]
+
+
+def device_input(device: str) -> Path | None:
+    """The device file named by ``--device`` (None for a preset name): an input the output must not replace."""
+    p = Path(device)
+    return p if p.suffix.lower() == ".toml" or p.exists() else None
 
 
 def parse_triple(text: str | None, name: str, default: tuple[float, float, float]) -> tuple[float, float, float]:

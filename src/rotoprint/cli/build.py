@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from ._common import JsonOpt, console, out_console, print_json, progress, styled
+from ._common import ForceOpt, JsonOpt, console, out_console, print_json, progress, styled
 
 EXIT_SHORT = 3
 
@@ -54,16 +54,20 @@ def report_summary(res, *, label: str = "") -> None:
 
 def build_command(
     job: Annotated[Path, typer.Argument(help="Job file (.toml): parts, materials, printer, placement.")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (replaced only if it holds an earlier plan.json).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (replaced only if provably an earlier rotoprint output, or with --force).")],
     no_check: Annotated[bool, typer.Option("--no-check", help="Skip the printability check.")] = False,
     no_report: Annotated[bool, typer.Option("--no-report", help="Do not write report.html.")] = False,
     json_out: JsonOpt = False,
+    force: ForceOpt = False,
 ) -> int:
     """Plan a multi-material job: print-ready images per layer, head and ink, the ordered passes,
     thickness and resistance estimates, printability, and a self-contained report.html."""
     from ..process import load_job
+    from ..io.atomic import check_output_path
     from ..pipeline import run_build
+    from ..pipeline.build import job_inputs
 
+    check_output_path(out, is_dir=True, inputs=[job], force=force)  # before the job is read
     spec = load_job(job)
     with progress() as bar:
         tasks = {}
@@ -73,7 +77,8 @@ def build_command(
                 tasks[stage] = bar.add_task(stage, total=total)
             bar.update(tasks[stage], completed=done)
 
-        res = run_build(spec, out, on_step=on_step, check=False if no_check else None, report=not no_report)
+        res = run_build(spec, out, on_step=on_step, check=False if no_check else None, report=not no_report, force=force,
+                        inputs=[job, *job_inputs(spec)])
     if json_out:
         print_json({"out": str(res.out_dir), "report": str(res.report_path) if not no_report else None,
                     "plan": str(res.plan_path), **res.summary})

@@ -20,12 +20,14 @@ from ..errors import ConfigError
 from ._common import (
     styled,
     DeviceOpt,
+    ForceOpt,
     JsonOpt,
     RotateOpt,
     ScaleOpt,
     FillHolesOpt,
     TranslateOpt,
     UnitsOpt,
+    device_input,
     load_mesh_from_options,
     out_console,
     parse_pair,
@@ -154,7 +156,7 @@ def check_command(
     layer_height: Annotated[float | None, typer.Option("--layer-height", help="Layer height, mm (needed with MESH).")] = None,
     min_wall: Annotated[float | None, typer.Option("--min-wall", help="Thinnest wall that prints, mm. Default: the device pitch, or an inkjet's drop diameter if larger.")] = None,
     min_gap: Annotated[float | None, typer.Option("--min-gap", help="Narrowest gap that stays open, mm. Default as --min-wall.")] = None,
-    out: Annotated[Path | None, typer.Option("--out", "-o", help="Output folder: report.json and overlays/layer_NNNNN.png (created; replaced only if it holds an earlier report.json).")] = None,
+    out: Annotated[Path | None, typer.Option("--out", "-o", help="Output folder: report.json and overlays/layer_NNNNN.png (created; replaced only if provably an earlier rotoprint output, or with --force).")] = None,
     json_out: JsonOpt = False,
     fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X.")] = None,
     orientations: Annotated[str | None, typer.Option("--orientations", help="'A:B:STEP' degrees: check every fibre angle and say which loses least.")] = None,
@@ -177,14 +179,19 @@ def check_command(
     translate: TranslateOpt = None,
     fill_holes: FillHolesOpt = True,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
+    force: ForceOpt = False,
 ) -> None:
     """Check MESH for walls and gaps below the device's minimum, features lost to the raster,
     islands and (--mask) features that do not cure. Exit 0: nothing falls short; 3: something
     does (after writing the report); 2: bad input."""
-    from ..check import check_printability, compare_orientations, device_limits, mask_model, overlay_image
-    from ..check.core import resolution_for
+    from ..check import CheckOptions, check_printability, compare_orientations, device_limits, mask_model, overlay_image
+    from ..check.options import resolution_for
     from ..devices import load_device
-    from ..io.atomic import atomic_dir, atomic_file
+    from ..io.atomic import atomic_dir, atomic_file, check_output_path
+
+    inputs = [mesh, device_input(device)]
+    if out is not None:
+        check_output_path(out, is_dir=True, inputs=inputs, force=force)  # before anything is read
 
     # -------- every option is validated before anything is read or written
     dev = load_device(device, **({"dpi_y": dpi_y} if dpi_y is not None else {}))
@@ -225,7 +232,7 @@ def check_command(
         raise ConfigError("--layer-height is needed to check a mesh")
     m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     slice_options = {"fill": fill, "offset_mm": parse_pair(offset, "--offset"), "gap_radius_mm": gap_radius}
-    options = dict(
+    options = CheckOptions(
         min_wall_mm=min_wall,
         min_gap_mm=min_gap,
         mask_fn=mask_fn,
@@ -234,7 +241,7 @@ def check_command(
         islands=islands,
         resolution_mm=resolution,
         cavities=cavities,
-        slice_options=slice_options,
+        **rot_kw,
     )
 
     def run(folder: Path | None):
@@ -256,13 +263,12 @@ def check_command(
             task = bar.add_task("checking", total=len(job))
             if folder is not None:
                 (folder / "overlays").mkdir()
-            opts = {k: v for k, v in options.items() if k != "slice_options"}
-            rep = check_printability(job, dev, on_layer=on_layer, **opts, **rot_kw)
+            rep = check_printability(job, dev, options, on_layer=on_layer)
             rep.settings["fibre_angle_deg"] = fibre_angle
             orient = None
             if angles is not None:
                 task2 = bar.add_task("orientations", total=len(angles))
-                orient = compare_orientations(m, dev, angles_deg=angles, layer_height_mm=layer_height, **options)
+                orient = compare_orientations(m, dev, options, angles_deg=angles, layer_height_mm=layer_height, slice_options=slice_options)
                 bar.advance(task2, len(angles))
         data = rep.to_json()
         data["mesh"] = str(mesh)
@@ -276,7 +282,7 @@ def check_command(
         return rep, data, orient, written
 
     if out is not None:
-        with atomic_dir(out, owned_marker=REPORT_NAME) as tmp:
+        with atomic_dir(out, kind="check-report", inputs=inputs, force=force) as tmp:
             rep, data, orient, written = run(tmp)
     else:
         rep, data, orient, written = run(None)

@@ -11,6 +11,7 @@ import typer
 from ..errors import ConfigError
 from ._common import (
     DeviceOpt,
+    ForceOpt,
     LayerHeightOpt,
     RotateOpt,
     ScaleOpt,
@@ -18,6 +19,7 @@ from ._common import (
     TranslateOpt,
     UnitsOpt,
     console,
+    device_input,
     load_mesh_from_options,
     parse_pair,
     progress,
@@ -52,6 +54,7 @@ def dlp_command(
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified masks, make the rest.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log what happens (resume, estimates) on stderr.")] = False,
+    force: ForceOpt = False,
 ) -> None:
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
@@ -60,8 +63,12 @@ def dlp_command(
     from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
 
+    from ..io.atomic import check_output_path
+
     setup_logging(verbose)
     kind = format_from_path(out, fmt)
+    inputs = [mesh, device_input(device)]
+    check_output_path(out, is_dir=kind not in ("sl1", "sl1s"), inputs=inputs, force=force)  # before any work
     overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
     dev = load_device(device, **overrides)
     if not isinstance(dev, ProjectorDevice):
@@ -105,8 +112,8 @@ def dlp_command(
     )
     with progress(quiet) as bar:
         task = bar.add_task(f"{mode} masks", total=info.mask_count)
-        summary = write_dlp_job(job, out, info, options, fmt=kind, run=RunOptions(workers=workers, scheduler=scheduler, resume=resume),
-                                on_mask=lambda i: bar.advance(task))
+        summary = write_dlp_job(job, out, info, options, fmt=kind, on_mask=lambda i: bar.advance(task),
+                                run=RunOptions(workers=workers, scheduler=scheduler, resume=resume, force=force, inputs=tuple(inputs)))
     if not quiet:
         vol = summary.get("volume_mm3", 0.0)
         console.print(

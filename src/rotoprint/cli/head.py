@@ -9,7 +9,7 @@ import typer
 from rich.table import Table
 
 from ..errors import ConfigError
-from ._common import DeviceOpt, JsonOpt, console, out_console, print_json
+from ._common import DeviceOpt, ForceOpt, JsonOpt, console, device_input, out_console, print_json
 
 
 def parse_tilt_range(text: str) -> list[float]:
@@ -34,11 +34,16 @@ def head_command(
     radius: Annotated[float, typer.Option("--radius", help="Pivot radius cx for the exact figures, mm.")] = 60.0,
     plot: Annotated[Path | None, typer.Option("--plot", help="Write the paper's Figure 5 (a), (b) to this .png/.svg/.pdf.")] = None,
     json_out: JsonOpt = False,
+    force: ForceOpt = False,
 ) -> None:
     """Per tilt: cx_T, projected swathe ps_p, dpi_xp, radial pitch, largest track gap, single-row bands, max tilt."""
     from ..devices import InkjetDevice, load_device
     from ..rotary.head import head_figures, max_tilt_deg
 
+    if plot is not None:
+        from ..io.atomic import check_output_path
+
+        check_output_path(plot, is_dir=False, inputs=[device_input(device)], force=force)  # before any work
     dev = load_device(device)
     if not isinstance(dev, InkjetDevice):
         raise ConfigError(f"device {dev.name!r} is a projector; 'head' needs an inkjet device")
@@ -50,7 +55,7 @@ def head_command(
     if plot is not None:
         from ..rotary.plots import figure5, save_figure
 
-        save_figure(figure5(dev.head, pivot_radius_mm=radius, title=dev.name), plot)
+        save_figure(figure5(dev.head, pivot_radius_mm=radius, title=dev.name), plot, force=force, inputs=[device_input(device)])
     if json_out:
         print_json({"device": dev.name, "source": dev.source, "nominal": list(dev.nominal), "head": dev.head.model_dump(mode="json"),
                     "max_tilt_deg": tmax, "tilts": [f.to_json() for f in figs]})

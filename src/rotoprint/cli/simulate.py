@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 
 from ..errors import ConfigError, InputFileError
-from ._common import JsonOpt, console, out_console, print_json
+from ._common import ForceOpt, JsonOpt, console, out_console, print_json
 
 
 def parse_dead(text: str | None) -> tuple[int, ...]:
@@ -31,16 +31,20 @@ def simulate_command(
     seed: Annotated[int, typer.Option("--seed", help="Seed of the jitter.")] = 0,
     scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.")] = 2,
     json_out: JsonOpt = False,
+    force: ForceOpt = False,
 ) -> None:
     """IoU, area ratio, mean/max placement error, uncovered design area, drops outside the design."""
-    from ..io.atomic import atomic_file
+    from ..io.atomic import check_output_path, write_owned_file
     from ..io.images import read_grey_image
     from ..rotary.files import read_print
     from ..rotary.simulate import render_overlay, simulate
 
     if out.suffix.lower() != ".png":
         raise ConfigError(f"--out must end in .png, got {out.name!r}")
+    check_output_path(out, is_dir=False, inputs=[print_file, design], force=force)  # before anything is read
     pr, side, sp = read_print(print_file)
+    inputs = [print_file, sp, design, *(sp.parent / s.get("file", "") for s in side.get("swathes", []) if isinstance(s, dict))]
+    check_output_path(out, is_dir=False, inputs=inputs, force=force)
     dinfo = side.get("design", {})
     if design is None:
         cand = Path(dinfo.get("path", ""))
@@ -51,6 +55,8 @@ def simulate_command(
         if hashlib.sha256(cand.read_bytes()).hexdigest() != dinfo.get("sha256"):
             raise InputFileError(f"the design {cand} changed since the transform; give --design IMAGE", path=sp)
         design = cand
+        inputs.append(design)
+        check_output_path(out, is_dir=False, inputs=inputs, force=force)
     img = read_grey_image(design)
     if dinfo.get("invert"):
         img = 255 - img
@@ -61,8 +67,7 @@ def simulate_command(
 
     buf = io.BytesIO()
     Image.fromarray(overlay, mode="RGB").save(buf, format="PNG", compress_level=3)
-    with atomic_file(out) as fh:
-        fh.write(buf.getvalue())
+    write_owned_file(out, buf.getvalue(), kind="simulate-overlay", inputs=inputs, force=force)
     r = sim.report.to_json()
     r["method"] = pr.method
     r["tilt_deg"] = pr.tilt_deg

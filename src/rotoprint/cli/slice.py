@@ -24,13 +24,14 @@ from ._common import (
     progress,
     setup_logging,
 )
+from ._common import ForceOpt, device_input
 
 
 def slice_command(
     mesh: Annotated[Path, typer.Argument(help="Mesh file: STL, OBJ, PLY, 3MF, OFF, GLB.")],
     device: DeviceOpt,
     layer_height: LayerHeightOpt,
-    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created; replaced only if it holds an earlier manifest).")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created; replaced only if provably an earlier rotoprint output, or with --force).")],
     fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X. Default: the device's own direction.")] = None,
     fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero (overlapping shells union) or evenodd.")] = "nonzero",
     offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
@@ -55,6 +56,7 @@ def slice_command(
     max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.")] = None,
     equalise: Annotated[bool, typer.Option("--equalise", help="--rotary: thin inner tracks so drops per unit area are uniform.")] = False,
     reference_images: Annotated[bool, typer.Option("--reference-images", help="--rotary: also write each layer's Cartesian cross-section (for 'rotoprint simulate').")] = False,
+    force: ForceOpt = False,
 ) -> None:
     """Slice MESH into DIR/layer_00000.png ... (255 = material) and DIR/manifest.json.
 
@@ -65,7 +67,11 @@ def slice_command(
     from ..pipeline import RunOptions, write_layer_folder
     from ..slicing import slice_mesh
 
+    from ..io.atomic import check_output_path
+
     setup_logging(verbose)
+    inputs = [mesh, device_input(device)]
+    check_output_path(out, is_dir=True, inputs=inputs, force=force)  # before any work
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,
@@ -75,7 +81,7 @@ def slice_command(
     dev = load_device(device, **overrides)
     m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     if rotary:
-        _slice_rotary(m, mesh, dev, out, layer_height=layer_height, tilt=tilt, radius=radius, angle=angle, direction=direction,
+        _slice_rotary(m, mesh, dev, out, force=force, inputs=inputs, layer_height=layer_height, tilt=tilt, radius=radius, angle=angle, direction=direction,
                       ref_radius=ref_radius, max_swathes=max_swathes, equalise=equalise, reference_images=reference_images,
                       fill=fill, gap_radius=gap_radius, quiet=quiet, workers=workers, scheduler=scheduler, resume=resume,
                       options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate,
@@ -110,7 +116,7 @@ def slice_command(
             device_name=dev.name,
             device=dev.model_dump(mode="json"),
             options=options,
-            run=RunOptions(workers=workers, scheduler=scheduler, resume=resume),
+            run=RunOptions(workers=workers, scheduler=scheduler, resume=resume, force=force, inputs=tuple(inputs)),
             on_layer=lambda i: bar.advance(task),
         )
     if not quiet:
@@ -141,7 +147,8 @@ def _check_rotary_options(*, tilt, radius, workers, scheduler, resume, fibre_ang
 
 
 def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, radius, angle, direction, ref_radius, max_swathes,
-                  equalise, reference_images, fill, gap_radius, quiet, options, workers=1, scheduler=None, resume=False) -> None:
+                  equalise, reference_images, fill, gap_radius, quiet, options, workers=1, scheduler=None, resume=False,
+                  force=False, inputs=()) -> None:
     from ..devices import InkjetDevice
     from ..pipeline import RunOptions, write_rotary_slices
     from ..rotary.direct import slice_rotary
@@ -159,7 +166,8 @@ def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, rad
         task = bar.add_task("slicing (rotary)", total=len(job))
         manifest = write_rotary_slices(job, out, device_name=dev.name, options=opts, mesh_info=mesh_info,
                                        reference_images=reference_images, on_layer=lambda i: bar.advance(task),
-                                       run=RunOptions(workers=workers, scheduler=scheduler, resume=resume))
+                                       run=RunOptions(workers=workers, scheduler=scheduler, resume=resume, force=force,
+                                                      inputs=tuple(inputs)))
     if not quiet:
         ds = manifest["density_spread"]
         console.print(

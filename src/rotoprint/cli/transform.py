@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 
 from ..errors import ConfigError
-from ._common import DeviceOpt, JsonOpt, console, print_json
+from ._common import DeviceOpt, ForceOpt, JsonOpt, console, device_input, print_json
 
 METHODS = ("exact", "paper")
 
@@ -30,17 +30,21 @@ def transform_command(
     invert: Annotated[bool, typer.Option("--invert", help="Dark pixels are ink (e.g. black shapes on white).")] = False,
     json_out: JsonOpt = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No summary.")] = False,
+    force: ForceOpt = False,
 ) -> None:
     """Make IMAGE print-ready: rows = firing index, columns = nozzles, plus a sidecar JSON."""
     from ..devices import InkjetDevice, load_device
     from ..io.images import read_grey_image
-    from ..rotary.files import write_print
+    from ..io.atomic import check_output_path
+    from ..rotary.files import print_paths, write_print
     from ..rotary.placement import Placement
 
     if method not in METHODS:
         raise ConfigError(f"--method must be one of {', '.join(METHODS)}; got {method!r}")
     if out.suffix.lower() != ".png":
         raise ConfigError(f"--out must end in .png, got {out.name!r}")
+    inputs = [image, device_input(device)]
+    check_output_path(out, is_dir=False, inputs=inputs, force=force, also=print_paths(out)[1:])  # before any work
     dev = load_device(device)
     if not isinstance(dev, InkjetDevice):
         raise ConfigError(f"device {dev.name!r} is a projector; 'transform' needs an inkjet device")
@@ -68,7 +72,7 @@ def transform_command(
         "invert": invert,
         "design_dpi": dpi,
     }
-    side = write_print(pr, out, device_name=dev.name, design=info)
+    side = write_print(pr, out, device_name=dev.name, design=info, force=force, inputs=inputs)
     if json_out:
         print_json(side)
     elif not quiet:

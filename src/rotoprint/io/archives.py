@@ -18,6 +18,8 @@ structure ERM aims at). The folder formats keep both masks of a slice at one hei
 
 from __future__ import annotations
 
+import contextlib
+
 import datetime
 import hashlib
 import io
@@ -33,7 +35,8 @@ from PIL import Image
 
 from .. import __version__
 from ..errors import ConfigError, ImageError, InputFileError
-from .atomic import MANIFEST_NAME, atomic_dir, atomic_file
+from .atomic import MANIFEST_NAME, OutputClaim, kill_point
+from .ownership import zip_marker
 from .images import png_bytes
 
 __all__ = [
@@ -266,6 +269,7 @@ def write_job(
     compress_level: int = 3,
     on_mask: Callable[[int], None] | None = None,
     encode_workers: int | None = None,
+    force: bool = False,
 ) -> dict:
     """Write the masks of a job to ``path``; returns a summary (the manifest for folders).
 
@@ -281,19 +285,30 @@ def write_job(
     encode_workers : int, optional
         Threads encoding PNGs while the next masks are made (default: 1 on a multi-core
         machine, else 0 = encode inline). The output is the same either way.
+    force : bool
+        Replace an existing ``path`` even if it is not provably ours (see
+        :mod:`rotoprint.io.ownership`: an archive of ours carries our marker in its comment).
     """
     fmt = format_from_path(path, fmt)
     workers = _default_workers() if encode_workers is None else int(encode_workers)
     items = _encoded(masks, info, compress_level, workers)
-    return write_encoded(path, items, info, fmt=fmt, on_mask=on_mask)
+    return write_encoded(path, items, info, fmt=fmt, on_mask=on_mask, force=force)
 
 
 def write_encoded(path: str | Path, items: Iterable[_Encoded], info: JobInfo, *, fmt: str,
-                  on_mask: Callable[[int], None] | None = None) -> dict:
-    """Write already-encoded masks (in projection order) as ``fmt``; see :func:`write_job`."""
-    if fmt in ("sl1", "sl1s"):
-        return _write_sl1(Path(path), items, info, fmt, on_mask)
-    return _write_folder(Path(path), items, info, fmt, on_mask)
+                  on_mask: Callable[[int], None] | None = None, claim: OutputClaim | None = None,
+                  force: bool = False) -> dict:
+    """Write already-encoded masks (in projection order) as ``fmt``; see :func:`write_job`.
+
+    ``claim`` is the entered :class:`~rotoprint.io.atomic.OutputClaim` of ``path`` when the
+    caller holds it already (else one is taken here, with ``force``).
+    """
+    is_dir = fmt not in ("sl1", "sl1s")
+    ctx = contextlib.nullcontext(claim) if claim is not None else OutputClaim(path, is_dir=is_dir, kind=f"dlp-{fmt}", force=force)
+    with ctx as c:
+        if not is_dir:
+            return _write_sl1(Path(path), items, info, fmt, on_mask, c)
+        return _write_folder(Path(path), items, info, fmt, on_mask, c)
 
 
 def _zinfo(name: str) -> zipfile.ZipInfo:
@@ -314,17 +329,18 @@ def creation_time() -> datetime.datetime:
     return datetime.datetime.now(datetime.timezone.utc)
 
 
-def _write_sl1(path, items, info: JobInfo, fmt, on_mask) -> dict:
+def _write_sl1(path, items, info: JobInfo, fmt, on_mask, claim: OutputClaim) -> dict:
     job_dir = job_dir_name(path)
     n_out = info.mask_count
     thickness = info.layer_height_mm / info.copies
     stats = _Stats(info, thickness)
     names: list[str] = []
-    with atomic_file(path, "wb") as fh, zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+    with open(claim.part, "wb") as fh, zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
         for m in items:
             name = f"{job_dir}{m.number:05d}.png"
             zf.writestr(_zinfo(name), m.png, compress_type=zipfile.ZIP_STORED)
             names.append(name)
+            kill_point(f"archive-{len(names)}")
             stats.add_sum(m.plain_sum)
             stats.add_footprint(m.footprint)
             if on_mask is not None:
@@ -375,6 +391,8 @@ def _write_sl1(path, items, info: JobInfo, fmt, on_mask) -> dict:
         }
         zf.writestr(_zinfo("config.ini"), _ini(config), compress_type=zipfile.ZIP_DEFLATED)
         zf.writestr(_zinfo("prusaslicer.ini"), _ini(prusa), compress_type=zipfile.ZIP_DEFLATED)
+        zip_marker(zf, f"dlp-{fmt}")
+    claim.install()
     return {"format": fmt, "path": str(path), "masks": n_out, "config": config, "prusaslicer": prusa, "volume_mm3": stats.volume_mm3}
 
 
@@ -382,87 +400,89 @@ def mask_filename(number: int, fmt: str) -> str:
     return f"{number:05d}.png" if fmt == "perfactory" else f"mask_{number:05d}.png"
 
 
-def _write_folder(path, items, info: JobInfo, fmt, on_mask) -> dict:
+def _write_folder(path, items, info: JobInfo, fmt, on_mask, claim: OutputClaim) -> dict:
     stats = _Stats(info, info.layer_height_mm / info.copies)
     entries = []
-    with atomic_dir(path) as tmp:
-        for m in items:
-            name = mask_filename(m.number, fmt)
-            data = m.png
-            (tmp / name).write_bytes(data)
-            area = stats.add_sum(m.plain_sum)
-            stats.add_footprint(m.footprint)
-            entries.append(
-                {
-                    "index": m.number,
-                    "file": name,
-                    "layer": m.layer,
-                    "copy": m.copy,
-                    "z_mm": m.z_mm,
-                    "exposed_area_mm2": area,
-                    "sha256": hashlib.sha256(data).hexdigest(),
-                }
-            )
-            if on_mask is not None:
-                on_mask(m.number)
-        if len(entries) != info.mask_count:
-            raise ConfigError(f"expected {info.mask_count} masks, got {len(entries)}")
-        inverted = bool(info.options.get("invert", False))
-        manifest = {
-            "rotoprint_version": __version__,
-            "kind": "dlp-masks" if fmt == "png" else "perfactory-job",
-            "source": info.source,
-            "mesh": info.mesh,
-            "device_name": info.device_name,
-            "device": info.device,
-            "options": info.options,
-            "layer_height_mm": info.layer_height_mm,
-            "masks_per_layer": info.copies,
-            "grid": info.grid,
-            "image": {
-                "format": "png",
-                "mode": "L",
-                "expose": 0 if inverted else 255,
-                "masked": 255 if inverted else 0,
-                "grey": info.options.get("mode", "binary") != "binary" or bool(info.options.get("first_layers", 0)),
-                "mirror_x": info.mirror_x,
-                "mirror_y": info.mirror_y,
-            },
-            "exposure_s": info.exposure_s,
-            "first_exposure_s": info.first_exposure_s,
-            "first_exposure_layers": info.first_exposure_layers,
-            "volume_mm3": stats.volume_mm3,
-            "layer_count": info.layer_count,
-            "mask_count": len(entries),
-            "masks": entries,
-        }
-        if fmt == "perfactory":
-            cfg = {
-                "job": info.job_name,
-                "masks": len(entries),
-                "layers": info.layer_count,
-                "masks_per_layer": info.copies,
-                "erm": int(info.copies == 2),
-                "layer_thickness_mm": _fmt(info.layer_height_mm),
-                "pixels_x": info.width_px,
-                "pixels_y": info.height_px,
-                "pixel_size_x_mm": _fmt(info.pixel_x_mm),
-                "pixel_size_y_mm": _fmt(info.pixel_y_mm),
-                "exposure_s": _fmt(info.exposure_s),
-                "first_exposure_s": _fmt(info.first_exposure_s),
-                "first_exposure_layers": info.first_exposure_layers,
-                "mask_files": "00000.png ... in projection order",
+    claim.part.mkdir()
+    tmp = claim.part
+    for m in items:
+        name = mask_filename(m.number, fmt)
+        data = m.png
+        (tmp / name).write_bytes(data)
+        area = stats.add_sum(m.plain_sum)
+        stats.add_footprint(m.footprint)
+        entries.append(
+            {
+                "index": m.number,
+                "file": name,
+                "layer": m.layer,
+                "copy": m.copy,
+                "z_mm": m.z_mm,
+                "exposed_area_mm2": area,
+                "sha256": hashlib.sha256(data).hexdigest(),
             }
-            (tmp / PERFACTORY_CFG).write_bytes(b"[build]\n" + _ini(cfg))
-            opts = ", ".join(f"{k}={v}" for k, v in info.options.items())
-            (tmp / PERFACTORY_TXT).write_text(
-                f"rotoprint {__version__} Perfactory-style job '{info.job_name}'\n"
-                f"source: {info.source}\ndevice: {info.device_name}\noptions: {opts}\n"
-                f"{info.layer_count} layers x {info.copies} mask(s), {info.width_px} x {info.height_px} px\n"
-                f"material volume: {stats.volume_mm3:.3f} mm^3\n",
-                encoding="utf-8",
-            )
-        (tmp / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+        )
+        if on_mask is not None:
+            on_mask(m.number)
+    if len(entries) != info.mask_count:
+        raise ConfigError(f"expected {info.mask_count} masks, got {len(entries)}")
+    inverted = bool(info.options.get("invert", False))
+    manifest = {
+        "rotoprint_version": __version__,
+        "kind": "dlp-masks" if fmt == "png" else "perfactory-job",
+        "source": info.source,
+        "mesh": info.mesh,
+        "device_name": info.device_name,
+        "device": info.device,
+        "options": info.options,
+        "layer_height_mm": info.layer_height_mm,
+        "masks_per_layer": info.copies,
+        "grid": info.grid,
+        "image": {
+            "format": "png",
+            "mode": "L",
+            "expose": 0 if inverted else 255,
+            "masked": 255 if inverted else 0,
+            "grey": info.options.get("mode", "binary") != "binary" or bool(info.options.get("first_layers", 0)),
+            "mirror_x": info.mirror_x,
+            "mirror_y": info.mirror_y,
+        },
+        "exposure_s": info.exposure_s,
+        "first_exposure_s": info.first_exposure_s,
+        "first_exposure_layers": info.first_exposure_layers,
+        "volume_mm3": stats.volume_mm3,
+        "layer_count": info.layer_count,
+        "mask_count": len(entries),
+        "masks": entries,
+    }
+    if fmt == "perfactory":
+        cfg = {
+            "job": info.job_name,
+            "masks": len(entries),
+            "layers": info.layer_count,
+            "masks_per_layer": info.copies,
+            "erm": int(info.copies == 2),
+            "layer_thickness_mm": _fmt(info.layer_height_mm),
+            "pixels_x": info.width_px,
+            "pixels_y": info.height_px,
+            "pixel_size_x_mm": _fmt(info.pixel_x_mm),
+            "pixel_size_y_mm": _fmt(info.pixel_y_mm),
+            "exposure_s": _fmt(info.exposure_s),
+            "first_exposure_s": _fmt(info.first_exposure_s),
+            "first_exposure_layers": info.first_exposure_layers,
+            "mask_files": "00000.png ... in projection order",
+        }
+        (tmp / PERFACTORY_CFG).write_bytes(b"[build]\n" + _ini(cfg))
+        opts = ", ".join(f"{k}={v}" for k, v in info.options.items())
+        (tmp / PERFACTORY_TXT).write_text(
+            f"rotoprint {__version__} Perfactory-style job '{info.job_name}'\n"
+            f"source: {info.source}\ndevice: {info.device_name}\noptions: {opts}\n"
+            f"{info.layer_count} layers x {info.copies} mask(s), {info.width_px} x {info.height_px} px\n"
+            f"material volume: {stats.volume_mm3:.3f} mm^3\n",
+            encoding="utf-8",
+        )
+    (tmp / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    claim.install()
     return manifest
 
 

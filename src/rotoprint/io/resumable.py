@@ -18,7 +18,7 @@ from pathlib import Path
 
 from .._resources import available_memory_bytes, format_bytes
 from ..errors import InputFileError, ResourceError
-from .atomic import check_output_target, replace_with
+from .atomic import OutputClaim, check_output_path, disk_full, kill_point
 
 __all__ = ["PartialOutput", "check_target", "check_resources", "partial_path"]
 
@@ -42,8 +42,8 @@ def partial_path(out: str | Path) -> Path:
     return out.parent / f"{out.name}.partial"
 
 
-def check_target(out: Path, *, is_dir: bool) -> None:
-    """Refuse targets we must not replace (see :func:`rotoprint.io.atomic.check_output_target`).
+def check_target(out: Path, *, is_dir: bool, inputs=(), force: bool = False) -> None:
+    """Refuse targets we must not replace (see :func:`rotoprint.io.atomic.check_output_path`).
 
     Parameters
     ----------
@@ -51,14 +51,18 @@ def check_target(out: Path, *, is_dir: bool) -> None:
         The output file or folder.
     is_dir : bool
         Whether the output is a folder.
+    inputs : iterable of path
+        Files the run reads: the output must not be or hold one.
+    force : bool
+        Replace an existing output even if it is not provably ours.
 
     Raises
     ------
     InputFileError
-        The parent folder does not exist, a file is where a folder goes (or the reverse), or
-        the folder is not empty and holds no ``manifest.json``.
+        The parent folder does not exist, a file is where a folder goes (or the reverse), the
+        output is or holds an input, or it exists and is not provably ours (without ``force``).
     """
-    check_output_target(out, is_dir=is_dir)
+    check_output_path(out, is_dir=is_dir, inputs=inputs, force=force)
 
 
 def check_resources(*, n_layers: int, bytes_per_layer: float, copies_on_disk: int, per_process_bytes: int,
@@ -165,12 +169,24 @@ class PartialOutput:
 
     def record(self, index: int, files: dict[str, bytes], **payload) -> dict:
         """Write a layer's files, then journal them; returns the journal record."""
-        for name, data in files.items():
-            (self.dir / name).write_bytes(data)
         rec = {"index": index, "files": list(files), "sha256s": [hashlib.sha256(d).hexdigest() for d in files.values()], **payload}
-        self._journal.write(json.dumps(rec) + "\n")
-        self._journal.flush()
+        where = self.dir / JOURNAL
+        try:
+            for name, data in files.items():
+                where = self.dir / name
+                where.write_bytes(data)
+            where = self.dir / JOURNAL
+            self._journal.write(json.dumps(rec) + "\n")
+            self._journal.flush()
+        except OSError as exc:
+            full = disk_full(exc, where)
+            if full is None:
+                raise
+            self.discard()
+            self.done = {}
+            raise full from None
         self.done[index] = rec
+        kill_point(f"layer-{index}")
         return rec
 
     def close(self) -> None:
@@ -178,12 +194,18 @@ class PartialOutput:
             self._journal.close()
             self._journal = None
 
-    def finish_as_folder(self) -> None:
-        """Drop the journal and rename the partial folder onto the output (replacing an
-        earlier output of ours)."""
+    def finish_as_folder(self, claim: OutputClaim) -> None:
+        """Drop the journal, mark the folder as ours and put it in place of the output
+        (replacing an earlier output of ours; crash-safe, see :class:`OutputClaim`).
+
+        Parameters
+        ----------
+        claim : OutputClaim
+            The entered claim of ``self.out`` (its lock is held).
+        """
         self.close()
         (self.dir / JOURNAL).unlink()
-        replace_with(self.dir, self.out)
+        claim.install(self.dir)
 
     def __enter__(self) -> PartialOutput:
         return self

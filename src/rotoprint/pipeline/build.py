@@ -3,7 +3,10 @@ resistance -> report. Each stage reports its progress (``on_step(stage, done, to
 its time (``timings_s``).
 
 Output folder (written under a temporary name and renamed when complete; nothing partial is
-left on error; an existing folder is replaced only when it holds an earlier ``plan.json``)::
+left on error; an existing folder is replaced only when it is provably an earlier rotoprint
+output, see :mod:`rotoprint.io.ownership`, or with ``force``)::
+
+    rotoprint-output.json          the ownership marker: every file written, with its SHA-256
 
     plan.json                      format "rotoprint-build-plan": heads, materials, estimates,
                                    warnings, printability, resistance, and per layer the
@@ -20,7 +23,7 @@ import hashlib
 import json
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -29,7 +32,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import RotoprintError
 
-__all__ = ["BuildResult", "run_build", "STAGES", "PLAN_FORMAT", "stage_plan", "stage_check", "stage_layers",
+__all__ = ["BuildResult", "run_build", "job_inputs", "STAGES", "PLAN_FORMAT", "stage_plan", "stage_check", "stage_layers",
            "stage_simulate", "stage_resistance", "stage_report"]
 
 PLAN_FORMAT = "rotoprint-build-plan"
@@ -96,15 +99,15 @@ def stage_check(job, plan, tmp: Path, step: Step) -> list[dict]:
     """Printability of every part (exact cross-sections, Cartesian grid at the head's pitch);
     an overlay of each part's worst layer into ``tmp/overlays``. Returns the ``printability``
     entries of ``plan.json``."""
-    from ..check import check_layers, check_printability
+    from ..check import CheckOptions, check_layers, check_printability
     from ..check.overlay import overlay_image
 
     sp = job.spec
     checks = []
     for j, part in enumerate(sp.parts):
         step("check", j, len(sp.parts))
-        rep = check_printability(plan.meshes[part.name], plan.device, layer_height_mm=sp.job.layer_height_mm,
-                                 tilt_deg=plan.heads[0].tilt_deg, radius_mm=sp.placement.inner_radius_mm)
+        opts = CheckOptions(tilt_deg=plan.heads[0].tilt_deg, radius_mm=sp.placement.inner_radius_mm)
+        rep = check_printability(plan.meshes[part.name], plan.device, opts, layer_height_mm=sp.job.layer_height_mm)
         worst_layer = rep.findings[0].layer if rep.findings else None
         entry = {"part": part.name, "material": part.material, "ok": rep.ok, "counts": rep.counts(),
                  "lengths_mm": rep.lengths_mm(), "thinnest_wall": rep.thinnest_wall,
@@ -274,8 +277,25 @@ def _interdigitated(job) -> dict:
 
 
 # ---------------------------------------------------------------------- the run
+def job_inputs(job) -> list[Path]:
+    """The files a job reads (mesh files, its materials file, a device file), absolute.
+
+    Parameters
+    ----------
+    job : ResolvedJob
+
+    Returns
+    -------
+    list of Path
+    """
+    base = job.base_dir
+    names = [p.mesh for p in job.spec.parts if p.mesh is not None]
+    names += [n for n in (job.spec.job.materials_file, getattr(getattr(job.spec, "printer", None), "device", None)) if n]
+    return [Path(n) if Path(n).is_absolute() else base / n for n in names]
+
+
 def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: bool | None = None,
-              report: bool = True) -> BuildResult:
+              report: bool = True, force: bool = False, inputs: Iterable[str | Path] = ()) -> BuildResult:
     """Run the stages of :data:`STAGES` for ``job`` and write ``out_dir``.
 
     Parameters
@@ -288,6 +308,11 @@ def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: b
         Run the printability check on every part (default: the job's ``process.check``).
     report : bool
         Write ``report.html``.
+    force : bool
+        Replace an existing ``out_dir`` even if it is not provably ours.
+    inputs : iterable of path
+        Files the run read besides the job's own (:func:`job_inputs`): ``out_dir`` must not be
+        or hold one.
 
     Returns
     -------
@@ -306,7 +331,7 @@ def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: b
     do_check = job.spec.process.check if check is None else bool(check)
     out = Path(out_dir)
     final = out.resolve()
-    with atomic_dir(out, owned_marker="plan.json") as tmp:
+    with atomic_dir(out, kind="build", inputs=[*inputs, *job_inputs(job)], force=force) as tmp:
         (tmp / "layers").mkdir()
         (tmp / "overlays").mkdir()
         with _timed(timings, "check_s"):

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.atomic import MANIFEST_NAME, check_output_target
+from ..io.atomic import MANIFEST_NAME, OutputClaim, disk_full
 from .journal import LayerPlan, write_journalled
 from .producer import RunOptions
 from .tasks import MaskLayer, MeshJob, PlainLayer, RotaryLayer, layer_source
@@ -41,7 +41,7 @@ def write_layer_folder(job, out_dir: str | Path, *, device_name: str, device: di
     options : dict
         Written as they are into the manifest.
     run : RunOptions, optional
-        Workers, Dask scheduler, resume (default: this process, afresh).
+        Workers, Dask scheduler, resume, force, inputs (default: this process, afresh).
     on_layer : callable, optional
         Called with the index of every layer once it is made (resumed ones included).
 
@@ -53,9 +53,9 @@ def write_layer_folder(job, out_dir: str | Path, *, device_name: str, device: di
     Raises
     ------
     InputFileError
-        ``out_dir`` must not be written or replaced (missing parent folder, a file, or a
-        non-empty folder without ``manifest.json``), or ``<out_dir>.partial`` exists without
-        a journal.
+        ``out_dir`` must not be written or replaced (missing parent folder, a file, an input,
+        or a folder not provably ours, see :mod:`rotoprint.io.ownership`), another run is
+        writing it, or ``<out_dir>.partial`` exists without a journal.
     ResourceError
         The run would need more disk or memory than is available (checked before any layer is
         written).
@@ -63,17 +63,18 @@ def write_layer_folder(job, out_dir: str | Path, *, device_name: str, device: di
     from ..io.layers import layer_folder_manifest
 
     out = Path(out_dir)
-    check_output_target(out, is_dir=True)
-    mj = MeshJob.of(job)
-    plan = LayerPlan(layer_source(mj, PlainLayer()), len(job), job.grid.width * job.grid.height, mj.nbytes)
+    run = run or RunOptions()
+    with OutputClaim(out, is_dir=True, kind="cartesian-layers", inputs=run.inputs, force=run.force) as claim:
+        mj = MeshJob.of(job)
+        plan = LayerPlan(layer_source(mj, PlainLayer()), len(job), job.grid.width * job.grid.height, mj.nbytes)
 
-    def finish(partial) -> dict:
-        manifest = layer_folder_manifest(job, partial.done, device_name=device_name, device=device, options=options)
-        (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-        partial.finish_as_folder()
-        return manifest
+        def finish(partial) -> dict:
+            manifest = layer_folder_manifest(job, partial.done, device_name=device_name, device=device, options=options)
+            (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+            partial.finish_as_folder(claim)
+            return manifest
 
-    return write_journalled(out, plan, run or RunOptions(), finish=finish, on_layer=on_layer)
+        return write_journalled(out, plan, run, finish=finish, on_layer=on_layer)
 
 
 def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None, run: RunOptions | None = None,
@@ -96,7 +97,7 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
     fmt : {'auto', 'sl1', 'sl1s', 'png', 'perfactory'}, optional
         Default: from the suffix of ``out`` (see :func:`~rotoprint.io.archives.format_from_path`).
     run : RunOptions, optional
-        Workers, Dask scheduler, resume (default: this process, afresh).
+        Workers, Dask scheduler, resume, force, inputs (default: this process, afresh).
     on_mask : callable, optional
         Called with the number of every mask once it is made (resumed ones included).
 
@@ -111,8 +112,8 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
         Unknown ``fmt`` or a suffix it cannot be told from.
     InputFileError
         ``out`` must not be written or replaced (missing parent folder, a file where a folder
-        goes or the reverse, a non-empty folder that is not ours), or ``<out>.partial``
-        exists without a journal.
+        goes or the reverse, an input, anything not provably ours), another run is writing
+        it, or ``<out>.partial`` exists without a journal.
     ResourceError
         The run would need more disk or memory than is available (checked before any mask is
         written).
@@ -124,44 +125,50 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
 
     fmt = format_from_path(out, fmt)
     out = Path(out)
-    check_output_target(out, is_dir=fmt not in ("sl1", "sl1s"))
-    mj = MeshJob.of(job)
-    px = job.grid.width * job.grid.height
-    plan = LayerPlan(layer_source(mj, MaskLayer(options.to_json())), len(job), px, mj.nbytes, copies_on_disk=2)
-    copies = options.copies
-    footprint = np.zeros((job.grid.height, job.grid.width), np.uint8)
+    run = run or RunOptions()
+    with OutputClaim(out, is_dir=fmt not in ("sl1", "sl1s"), kind=f"dlp-{fmt}", inputs=run.inputs, force=run.force) as claim:
+        mj = MeshJob.of(job)
+        px = job.grid.width * job.grid.height
+        plan = LayerPlan(layer_source(mj, MaskLayer(options.to_json())), len(job), px, mj.nbytes, copies_on_disk=2)
+        copies = options.copies
+        footprint = np.zeros((job.grid.height, job.grid.width), np.uint8)
 
-    def on_resumed(i: int, rec: dict, folder: Path) -> None:  # resumed layers: footprints from their files
-        for name in rec["files"]:
-            with Image.open(folder / name) as im:
-                np.maximum(footprint, plain_from_image(np.asarray(im.convert("L")), options), out=footprint)
+        def on_resumed(i: int, rec: dict, folder: Path) -> None:  # resumed layers: footprints from their files
+            for name in rec["files"]:
+                with Image.open(folder / name) as im:
+                    np.maximum(footprint, plain_from_image(np.asarray(im.convert("L")), options), out=footprint)
 
-    def on_result(res) -> None:
-        if res.extra is not None:
-            r0, c0, a = res.extra
-            view = footprint[r0 : r0 + a.shape[0], c0 : c0 + a.shape[1]]
-            np.maximum(view, a, out=view)
+        def on_result(res) -> None:
+            if res.extra is not None:
+                r0, c0, a = res.extra
+                view = footprint[r0 : r0 + a.shape[0], c0 : c0 + a.shape[1]]
+                np.maximum(view, a, out=view)
 
-    def on_layer(i: int) -> None:
-        if on_mask is not None:
-            for c in range(copies):
-                on_mask(i * copies + c)
+        def on_layer(i: int) -> None:
+            if on_mask is not None:
+                for c in range(copies):
+                    on_mask(i * copies + c)
 
-    def finish(partial) -> dict:
-        def items() -> Iterator[_Encoded]:
-            for i in range(len(job)):
-                rec = partial.done[i]
-                z = float(job.plan.z_slice_mm[i])
-                for c, (name, s) in enumerate(zip(rec["files"], rec["plain_sums"], strict=True)):
-                    fp = (0, 0, footprint) if (i == 0 and c == 0) else None
-                    yield _Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp)
+        def finish(partial) -> dict:
+            def items() -> Iterator[_Encoded]:
+                for i in range(len(job)):
+                    rec = partial.done[i]
+                    z = float(job.plan.z_slice_mm[i])
+                    for c, (name, s) in enumerate(zip(rec["files"], rec["plain_sums"], strict=True)):
+                        fp = (0, 0, footprint) if (i == 0 and c == 0) else None
+                        yield _Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp)
 
-        summary = write_encoded(out, items(), info, fmt=fmt)
-        partial.discard()
-        return summary
+            try:
+                summary = write_encoded(out, items(), info, fmt=fmt, claim=claim)
+            except OSError as exc:
+                if disk_full(exc, out) is not None:
+                    partial.discard()  # a full disk: free what the run took (the claim names the file)
+                raise
+            partial.discard()
+            return summary
 
-    return write_journalled(out, plan, run or RunOptions(), finish=finish, on_layer=on_layer, on_result=on_result,
-                            on_resumed=on_resumed)
+        return write_journalled(out, plan, run, finish=finish, on_layer=on_layer, on_result=on_result,
+                                on_resumed=on_resumed)
 
 
 def write_rotary_slices(job, out_dir: str | Path, *, device_name: str, options: dict, mesh_info: dict | None = None,
@@ -185,7 +192,8 @@ def write_rotary_slices(job, out_dir: str | Path, *, device_name: str, options: 
         From :func:`rotoprint.rotary.slice_rotary`; each layer prints as ``(F_j, N) uint8``
         swathe images.
     out_dir : str or Path
-        The output folder; replaced only if it holds an earlier rotoprint output.
+        The output folder; replaced only if it is provably an earlier rotoprint output (or
+        with ``run.force``).
     device_name : str
         Recorded in the sidecars and the manifest.
     options : dict
@@ -195,7 +203,7 @@ def write_rotary_slices(job, out_dir: str | Path, *, device_name: str, options: 
     reference_images : bool
         Also write each layer's Cartesian design image (``(H, W) uint8``, 255 = inside).
     run : RunOptions, optional
-        Workers, Dask scheduler, resume (default: this process, afresh).
+        Workers, Dask scheduler, resume, force, inputs (default: this process, afresh).
     on_layer : callable, optional
         Called with each finished layer's index (progress).
 
@@ -207,24 +215,26 @@ def write_rotary_slices(job, out_dir: str | Path, *, device_name: str, options: 
     Raises
     ------
     InputFileError
-        The output folder holds something that is not an earlier rotoprint output, or cannot
-        be written.
+        The output folder holds something that is not provably an earlier rotoprint output
+        (see :mod:`rotoprint.io.ownership`), is or holds an input, is in use by another run,
+        or cannot be written.
     ResourceError
         Not enough disk space or memory for the run (checked before anything is written).
     """
     from ..rotary.direct import rotary_manifest
 
     out = Path(out_dir)
-    check_output_target(out, is_dir=True)
-    mj = MeshJob.of(job.slice_job, rotary_options=job.rotary_options)
-    px = sum(job.head.nozzles * t.firings for t in job.tracks)
-    plan = LayerPlan(layer_source(mj, RotaryLayer(device_name, bool(reference_images))), len(job), px, mj.nbytes)
+    run = run or RunOptions()
+    with OutputClaim(out, is_dir=True, kind="rotary-slices", inputs=run.inputs, force=run.force) as claim:
+        mj = MeshJob.of(job.slice_job, rotary_options=job.rotary_options)
+        px = sum(job.head.nozzles * t.firings for t in job.tracks)
+        plan = LayerPlan(layer_source(mj, RotaryLayer(device_name, bool(reference_images))), len(job), px, mj.nbytes)
 
-    def finish(partial) -> dict:
-        entries = [partial.done[i]["entry"] for i in range(len(job))]
-        manifest = rotary_manifest(job, entries, device_name=device_name, options=options, mesh_info=mesh_info)
-        (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-        partial.finish_as_folder()
-        return manifest
+        def finish(partial) -> dict:
+            entries = [partial.done[i]["entry"] for i in range(len(job))]
+            manifest = rotary_manifest(job, entries, device_name=device_name, options=options, mesh_info=mesh_info)
+            (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+            partial.finish_as_folder(claim)
+            return manifest
 
-    return write_journalled(out, plan, run or RunOptions(), finish=finish, on_layer=on_layer)
+        return write_journalled(out, plan, run, finish=finish, on_layer=on_layer)

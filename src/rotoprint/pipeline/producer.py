@@ -44,11 +44,18 @@ class RunOptions:
         layers on instead (the ``rotoprint[dask]`` extra).
     resume : bool
         Keep the verified layers of an earlier run of the same job (journalled outputs).
+    force : bool
+        Replace an existing output even if it is not provably ours (see
+        :mod:`rotoprint.io.ownership`).
+    inputs : tuple of path
+        Files the run read (the mesh, a device file): the output must not be or hold one.
     """
 
     workers: int = 1
     scheduler: str | None = None
     resume: bool = False
+    force: bool = False
+    inputs: tuple = ()
 
     def __post_init__(self) -> None:
         if self.workers < 1:

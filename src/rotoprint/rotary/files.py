@@ -7,7 +7,7 @@ images have been encoded, so an error leaves nothing behind.
 
 from __future__ import annotations
 
-import contextlib
+import glob
 import hashlib
 import json
 import math
@@ -21,7 +21,8 @@ from ..devices.models import InkjetHead
 from pydantic import ValidationError
 
 from ..errors import ImageError, InputFileError, RotoprintError
-from ..io.atomic import atomic_file
+from ..io.atomic import check_output_path, write_owned_file
+from ..io.ownership import mark_json, mark_png
 from ..io.images import png_bytes
 from .head import check_tilt
 from .placement import Placement
@@ -54,16 +55,36 @@ def print_files(pr: RotaryPrint, png_name: str, *, device_name: str = "", design
     """The files of a print as bytes, ``{name: bytes}`` (swathe PNGs, then the sidecar JSON
     named like ``png_name`` with ``.json``), and the sidecar dict."""
     files = swathe_filenames(Path(png_name), len(pr.swathes))
-    blobs = [png_bytes(levels_to_png(s.levels, pr.head.grey_levels)) for s in pr.swathes]
+    blobs = [mark_png(png_bytes(levels_to_png(s.levels, pr.head.grey_levels)), "rotary-print") for s in pr.swathes]
     side = pr.to_json(files=[f.name for f in files], device_name=device_name, design=design)
     for d, b in zip(side["swathes"], blobs):
         d["sha256"] = hashlib.sha256(b).hexdigest()
     out = {f.name: b for f, b in zip(files, blobs)}
+    side = mark_json(side)
     out[Path(png_name).with_suffix(".json").name] = (json.dumps(side, indent=2) + "\n").encode("utf-8")
     return out, side
 
 
-def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", design: dict | None = None) -> dict:
+def print_paths(out_png: str | Path) -> list[Path]:
+    """Every file a print written to ``out_png`` may take: the PNG, its sidecar, and any
+    existing swathe images ``STEM-sN.png`` beside it (all are checked before a write).
+
+    Parameters
+    ----------
+    out_png : str or Path
+
+    Returns
+    -------
+    list of Path
+    """
+    out_png = Path(out_png)
+    parent = out_png.parent if str(out_png.parent) else Path(".")
+    found = sorted(p for p in parent.glob(f"{glob.escape(out_png.stem)}-s*.png") if re.fullmatch(r"-s[0-9]+", p.stem[len(out_png.stem):]))
+    return [out_png, out_png.with_suffix(".json"), *found]
+
+
+def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", design: dict | None = None,
+                force: bool = False, inputs=()) -> dict:
     """Write the swathe images and the sidecar; returns the sidecar dict.
 
     Parameters
@@ -76,6 +97,11 @@ def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", 
         Recorded in the sidecar as ``device``.
     design : dict, optional
         Extra fields for the sidecar's ``design`` table (beside ``kind``).
+    force : bool
+        Replace existing files even if they are not provably ours (each file we write carries
+        our marker, see :mod:`rotoprint.io.ownership`).
+    inputs : iterable of path
+        Files the run read (the design, a device file): no output may be one.
 
     Returns
     -------
@@ -85,15 +111,17 @@ def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", 
     Raises
     ------
     InputFileError
-        ``out_png`` does not end in ``.png``, or its folder does not exist.
+        ``out_png`` does not end in ``.png``, its folder does not exist, an output file is an
+        input, or one exists and is not provably ours (without ``force``).
     """
     out_png = Path(out_png)
     if out_png.suffix.lower() != ".png":
         raise InputFileError("output must be a .png file", path=out_png)
     blobs, side = print_files(pr, out_png.name, device_name=device_name, design=design)
-    with contextlib.ExitStack() as stack:
-        for name, data in blobs.items():
-            stack.enter_context(atomic_file(out_png.parent / name)).write(data)
+    paths = [out_png.parent / name for name in blobs]
+    check_output_path(out_png, is_dir=False, inputs=inputs, force=force, also=[*print_paths(out_png)[1:], *paths])
+    for path, data in zip(paths, blobs.values(), strict=True):
+        write_owned_file(path, data, kind="rotary-print", inputs=inputs, force=force, marked=True)
     return side
 
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..devices.models import InkjetHead
 from ..errors import ConfigError
-from ..io.atomic import atomic_file
+from ..io.atomic import check_output_path, write_owned_file
 from ..errors import RotoprintError
 from .head import head_figures, max_tilt_deg, paper_figures
 
@@ -82,7 +82,7 @@ def figure5(head: InkjetHead, *, pivot_radius_mm: float = 60.0, step_deg: float 
     return fig
 
 
-def save_figure(fig, path: str | Path) -> None:
+def save_figure(fig, path: str | Path, *, force: bool = False, inputs=()) -> None:
     """Save a figure atomically; the format follows the suffix (png, svg, pdf).
 
     Parameters
@@ -90,19 +90,25 @@ def save_figure(fig, path: str | Path) -> None:
     fig : matplotlib.figure.Figure
         Rendered at 150 dpi.
     path : str or Path
+        Written with our marker (PNG, SVG); an existing file there is replaced only if it is
+        ours (a PDF never is) or with ``force``.
+    force : bool
+    inputs : iterable of path
+        Files the run read: ``path`` must not be one.
 
     Raises
     ------
     ConfigError
         The suffix is not ``.png``, ``.svg`` or ``.pdf``.
     InputFileError
-        The folder of ``path`` does not exist.
+        The folder of ``path`` does not exist, ``path`` is an input, or it exists and is not
+        provably ours (without ``force``).
     """
     path = Path(path)
     fmt = path.suffix.lower().lstrip(".")
     if fmt not in ("png", "svg", "pdf"):
         raise ConfigError(f"plot file must end in .png, .svg or .pdf, got {path.name!r}")
+    check_output_path(path, is_dir=False, inputs=inputs, force=force)
     buf = io.BytesIO()
     fig.savefig(buf, format=fmt, dpi=150)
-    with atomic_file(path) as fh:
-        fh.write(buf.getvalue())
+    write_owned_file(path, buf.getvalue(), kind="figure", inputs=inputs, force=force)

@@ -91,6 +91,11 @@ class SliceJob:
     def __len__(self) -> int:
         return len(self.plan)
 
+    @property
+    def fill_affine(self) -> np.ndarray:
+        """``(2, 3) float64``: model XY (mm) to the fill's ``(u, v)`` (u: column along a scanned row, v: row)."""
+        return self._to_uv
+
     def segments(self, index: int) -> tuple[Segments, GapReport]:
         """The closed cross-section of layer ``index`` in model XY (mm), and its gap report."""
         return self.segments_at(float(self.plan.z_slice_mm[index]))

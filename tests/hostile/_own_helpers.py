@@ -1,0 +1,35 @@
+"""Helpers of the hostile-input tests: a snapshot of a folder tree, the one-line-error check."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+
+def tree(root: Path) -> dict[str, bytes | None]:
+    """Every path under ``root`` (relative, POSIX), hidden ones too: file bytes, None for folders."""
+    root = Path(root)
+    out: dict[str, bytes | None] = {}
+    for dirpath, dirnames, filenames in os.walk(root):
+        for d in dirnames:
+            out[(Path(dirpath) / d).relative_to(root).as_posix()] = None
+        for f in filenames:
+            p = Path(dirpath) / f
+            out[p.relative_to(root).as_posix()] = p.read_bytes()
+    return out
+
+
+def one_line_error(code: int, err: str, *fragments: str) -> str:
+    """Assert exit 2, exactly one line on stderr, no traceback, each fragment in it; returns the line."""
+    assert code == 2, err
+    lines = [ln for ln in err.strip().splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    for f in fragments:
+        assert f in lines[0], lines[0]
+    return lines[0]
+
+
+def strays(root: Path) -> list[str]:
+    """Paths a run may leave behind by mistake: ``*.partial``, ``*.old``, ``*.part``, ``*.lock``."""
+    return sorted(p for p in tree(root) if p.endswith((".partial", ".old", ".part", ".lock")))
