@@ -162,7 +162,7 @@ def test_orchestration_is_above_the_domain_packages_and_io():
 
 #: Modules over the limit whose split is on its way in another branch: the test reports them
 #: as expected failures, with the reason, until the split lands (then delete the entry).
-SPLIT_PENDING = {"rotoprint.check._kernels": "2,632 lines: split into check/_kernels/ one module per algorithm (kernels branch, issue 13)"}
+SPLIT_PENDING: dict[str, str] = {}
 
 
 @pytest.mark.parametrize("mod", [pytest.param(m, marks=pytest.mark.xfail(reason=SPLIT_PENDING[m], strict=False))
