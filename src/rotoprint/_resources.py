@@ -9,7 +9,29 @@ from .errors import RasterTooLargeError
 
 
 def available_memory_bytes() -> int:
-    """Memory available to new allocations, from /proc/meminfo, else physical memory."""
+    """Memory available to new allocations: /proc/meminfo's MemAvailable (else free physical
+    memory), and no more than this process's address-space limit (``ulimit -v``) leaves."""
+    free = _system_available_bytes()
+    room = _address_space_room_bytes()
+    return free if room is None else max(0, min(free, room))
+
+
+def _address_space_room_bytes() -> int | None:
+    """``RLIMIT_AS`` minus the address space already mapped; None without a limit."""
+    try:
+        import resource
+
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+        if soft == resource.RLIM_INFINITY or soft < 0:
+            return None
+        with open("/proc/self/statm", encoding="ascii") as fh:
+            mapped = int(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        return soft - mapped
+    except (ImportError, OSError, ValueError):  # pragma: no cover - non-Linux
+        return None
+
+
+def _system_available_bytes() -> int:
     try:
         with open("/proc/meminfo", encoding="ascii") as fh:
             for line in fh:

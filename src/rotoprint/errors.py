@@ -19,6 +19,7 @@ __all__ = [
     "RasterTooLargeError",
     "GeometryError",
     "ResourceError",
+    "CadError",
 ]
 
 
@@ -61,3 +62,8 @@ class RasterTooLargeError(RotoprintError, MemoryError):
 
 class ResourceError(RotoprintError, OSError):
     """A run would need more disk or memory than this machine has; refused before it starts."""
+
+
+class CadError(RotoprintError, ValueError):
+    """A 2-D CAD file (Gerber, Excellon, DXF, SVG) was read but its content cannot be used
+    (undefined aperture, self-intersecting region, unclosed contour, unit that is not a length)."""

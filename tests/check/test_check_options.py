@@ -27,7 +27,7 @@ def test_options_object_equals_keywords():
 
 
 def test_options_checked_when_made_and_frozen():
-    with pytest.raises(ConfigError, match="min_wall_mm must be a positive number of mm"):
+    with pytest.raises(ConfigError, match=r"min_wall_mm must be in \[0.0001, 100\] mm, got -1"):
         CheckOptions(min_wall_mm=-1)
     with pytest.raises(ConfigError, match="a cure threshold needs an exposure model"):
         CheckOptions(cure_threshold=0.5)

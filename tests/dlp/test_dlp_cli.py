@@ -67,16 +67,16 @@ def test_dlp_first_layer_offset(run_cli, stl, tmp_path):
         (["--mode", "blur"], "mode must be one of binary, coverage, smooth"),
         (["--device", "omnidot760"], "dlp needs a projector device"),
         (["--first-layer-offset", "50"], "--first-layers"),
-        (["--layer-height", "-1"], "layer height must be a positive"),
+        (["--layer-height", "-1"], "--layer-height must be in [0.0001, 100] mm, got -1"),
         (["--format", "ctb"], "format must be one of"),
         # the block is 3 x 2 mm: an inset above 1000 um would blank layer 0; 1e9 um is above the fixed maximum
         (["--first-layers", "2", "--first-layer-offset", "1001"], "--first-layer-offset of 1001 um is more than half the part's smallest footprint dimension (2 mm)"),
-        (["--first-layers", "2", "--first-layer-offset", "1e9"], "--first-layer-offset must be at most 2000 um, got 1e+09 um"),
+        (["--first-layers", "2", "--first-layer-offset", "1e9"], "--first-layer-offset must be in [0, 2000] um, got 1e+09"),
         (["--offset", "nan,0"], "--offset must be two finite numbers 'X,Y', got 'nan,0'"),
         (["--rotate", "nan,0,0"], "--rotate must be three finite numbers 'X,Y,Z', got 'nan,0,0'"),
-        (["--exposure", "nan"], "--exposure must be a finite number of seconds, got nan"),
-        (["--first-exposure", "inf"], "--first-exposure must be a finite number of seconds, got inf"),
-        (["--exposure", "4000"], "--exposure: Input should be less than or equal to 3600 (device preset perfactory-sxga)"),
+        (["--exposure", "nan"], "--exposure must be in [0.001, 3600] s, got nan"),
+        (["--first-exposure", "inf"], "--first-exposure must be in [0.001, 3600] s, got inf"),
+        (["--exposure", "4000"], "--exposure must be in [0.001, 3600] s, got 4000"),
     ],
 )
 def test_dlp_bad_options_exit_2(run_cli, stl, tmp_path, args, needle):

@@ -50,6 +50,10 @@ def test_build_cli_writes_plan_images_and_report(gas_build):
     assert plan["interdigitated"]["electrode"]["cell_constant_per_mm"] == pytest.approx(0.3 / (8.0 * 15))
     assert all(c["ok"] for c in plan["printability"])
     assert plan["overlays"] and all((out / o["file"]).exists() for o in plan["overlays"])
+    # the deposit model's film is the headline of every overlay (issue 14)
+    for o in plan["overlays"]:
+        f = o["deposit"]
+        assert 0 <= f["uncovered_fraction"] <= 1 and abs(f["volume_error_fraction"]) < 0.005 and f["footprint_um"] > 0
 
 
 def test_build_cli_layer_images_are_binary_drops(gas_build):
@@ -79,7 +83,7 @@ def test_build_demo_builds_the_coil_and_says_where_the_report_is(run_cli, tmp_pa
     [
         (lambda d: d["parts"][0].update(material="silvr"), "parts[0].material: unknown material 'silvr'"),
         (lambda d: d["job"].pop("layer_height_mm"), "job.layer_height_mm: Field required"),
-        (lambda d: d["job"].update(layer_height_mm=-1), "job.layer_height_mm: Input should be greater than 0"),
+        (lambda d: d["job"].update(layer_height_mm=-1), "job.layer_height_mm: Input should be greater than or equal to 0.0001"),
         (lambda d: d["printer"]["heads"].pop(1), "no head carries the ink 'calcium_chloride'"),
         (lambda d: d["parts"][1].update(priority=1), "parts[1].priority: 1 is also the priority of a 'plaster' part"),
         (lambda d: d["parts"][0].update(mesh="x.stl"), "parts[0]: give exactly one of"),

@@ -295,7 +295,7 @@ def _write_stl(path, tri):
         (["--tilt", "20"], "need --rotary"),
         (["--rotary", "--tilt", "86", "--radius", "40"], "maximum tilt"),
         (["--rotary", "--tilt", "0", "--radius", "-3"], "radius"),
-        (["--rotary", "--tilt", "0", "--radius", "40", "--max-swathes", "0"], "max_swathes"),
+        (["--rotary", "--tilt", "0", "--radius", "40", "--max-swathes", "0"], "max-swathes"),
         (["--rotary", "--tilt", "0", "--radius", "40", "--device", "perfactory-sxga"], "projector"),
     ],
 )

@@ -11,6 +11,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from ..errors import ConfigError
+from ..ranges import WIDTH_MM, Range, check_range
 from .limits import default_minimum_mm
 
 __all__ = ["CheckOptions", "CheckSettings", "resolution_for"]
@@ -27,16 +28,15 @@ EXPOSURE_TEST_PX = 3.0
 RESOLUTION_PX = 0.01
 
 
-def _positive(name: str, value, *, allow_none: bool = True) -> float | None:
+_CAP_MM = Range(0.0, 1000.0, "mm", lo_open=True)
+
+
+def _positive(name: str, value, *, allow_none: bool = True, rng: Range = WIDTH_MM) -> float | None:
+    """A width in ``rng`` (:mod:`rotoprint.ranges`): widths past it would overflow the pixel
+    counts of the ray kernels."""
     if value is None and allow_none:
         return None
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} must be a positive number of mm, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0):
-        raise ConfigError(f"{name} must be a positive number of mm, got {value!r}")
-    return v
+    return check_range(value, rng, name)
 
 
 def resolution_for(device, resolution_mm: float | None) -> float:
@@ -122,7 +122,7 @@ class CheckOptions:
             raise ConfigError(f"islands must be True or False, got {self.islands!r}")
         if not isinstance(self.cavities, bool):
             raise ConfigError(f"cavities must be True or False, got {self.cavities!r}")
-        _positive("measure_up_to_mm", self.measure_up_to_mm)
+        _positive("measure_up_to_mm", self.measure_up_to_mm, rng=_CAP_MM)
 
     @classmethod
     def of(cls, options: CheckOptions | None, given: dict) -> CheckOptions:
@@ -154,7 +154,7 @@ class CheckOptions:
         w = default if wall is None else wall
         g = default if gap is None else gap
         pmax = max(device.pitch_x_mm, device.pitch_y_mm)
-        cap = _positive("measure_up_to_mm", self.measure_up_to_mm)
+        cap = _positive("measure_up_to_mm", self.measure_up_to_mm, rng=_CAP_MM)
         cap = max(4.0 * max(w, g), 8.0 * pmax) if cap is None else max(cap, w, g, RASTER_TEST_PX * pmax, EXPOSURE_TEST_PX * pmax)
         return CheckSettings(
             min_wall_mm=w,

@@ -6,6 +6,7 @@ import json
 import math
 import logging
 import sys
+import unicodedata
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -14,17 +15,85 @@ from rich.console import Console
 from rich.text import Text
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
+from .. import ranges as R
 from ..errors import ConfigError
+from ..ranges import check_direction, check_range
+
+def escape_controls(text: str, *, keep_newlines: bool = False) -> str:
+    """``text`` with control characters shown, not sent: ESC as ``\\x1b``, DEL, C1 controls,
+    bidirectional and other format characters (U+202E ...) and lone surrogates (bytes of a
+    file name that are not UTF-8) as ``\\xNN`` / ``\\uNNNN``; a backslash stays as it is.
+
+    File names and other user strings reach the terminal through this, so a name holding
+    ``\\e[2J`` cannot clear the screen. ``keep_newlines`` keeps ``\\n`` and ``\\t`` (multi-line
+    reports); errors are one line, so there they are escaped too.
+    """
+    if text.isprintable():
+        return text
+    out = []
+    for ch in text:
+        if ch.isprintable() or (keep_newlines and ch in "\n\t"):
+            out.append(ch)
+        elif unicodedata.category(ch) == "Zs":  # a non-breaking or other space: harmless
+            out.append(ch)
+        else:
+            o = ord(ch)
+            out.append(f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}" if o < 0x10000 else f"\\U{o:08x}")
+    return "".join(out)
+
+
+class _SafeConsole(Console):
+    """A Console whose strings have their control characters escaped (see :func:`escape_controls`);
+    rich's own styling codes are added after, so colours still work."""
+
+    def render_str(self, text: str, **kwargs: Any) -> Text:
+        return super().render_str(escape_controls(text, keep_newlines=True), **kwargs)
+
 
 # No markup and no emoji codes: paths and option values are printed as they are (a "[" or
 # ":b:" in a file name must not be read as rich markup). Styles go through rich.text.Text.
-console = Console(stderr=True, highlight=False, markup=False, emoji=False)
-out_console = Console(highlight=False, markup=False, emoji=False)
+console = _SafeConsole(stderr=True, highlight=False, markup=False, emoji=False)
+out_console = _SafeConsole(highlight=False, markup=False, emoji=False)
 
 EXIT_BAD_INPUT = 2
 
 DeviceOpt = Annotated[str, typer.Option("--device", "-d", help="Preset name (omnidot760, perfactory-sxga) or a device .toml file.")]
-LayerHeightOpt = Annotated[float, typer.Option("--layer-height", help="Layer height, mm.")]
+
+
+def in_range(rng: R.Range):
+    """A typer option callback: the value checked against ``rng`` as it is parsed, the error
+    naming the option (``--min-wall must be in (0, 100] mm, got 1e+19``)."""
+
+    def _check(param: typer.CallbackParam, value):
+        if value is None:
+            return None
+        return check_range(value, rng, _opt_name(param))
+
+    return _check
+
+
+def direction_cb(param: typer.CallbackParam, value):
+    """Option callback: +1 or -1."""
+    return None if value is None else check_direction(value, _opt_name(param))
+
+
+def scale_cb(param: typer.CallbackParam, value):
+    """Option callback: a uniform scale whose magnitude is in :data:`rotoprint.ranges.SCALE`
+    (negative mirrors)."""
+    if value is None:
+        return None
+    name = _opt_name(param)
+    if not (isinstance(value, float) and math.isfinite(value) and abs(value) in R.SCALE):
+        raise ConfigError(f"{name} must be a number whose size is {R.SCALE.text()}, got {value:g}")
+    return value
+
+
+def _opt_name(param) -> str:
+    opts = [o for o in getattr(param, "opts", []) if o.startswith("--")]
+    return opts[0] if opts else str(getattr(param, "name", "option"))
+
+
+LayerHeightOpt = Annotated[float, typer.Option("--layer-height", help="Layer height, mm.", callback=in_range(R.LAYER_HEIGHT_MM))]
 UnitsOpt = Annotated[str, typer.Option("--units", help="Units of the mesh file: mm, cm, m, um, inch.")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print the result as JSON on stdout.")]
 ForceOpt = Annotated[bool, typer.Option("--force", help="Replace an existing output even if it is not provably an earlier rotoprint output.")]
@@ -36,8 +105,8 @@ def device_input(device: str) -> Path | None:
     return p if p.suffix.lower() == ".toml" or p.exists() else None
 
 
-def parse_triple(text: str | None, name: str, default: tuple[float, float, float]) -> tuple[float, float, float]:
-    """'X,Y,Z' into three floats, or a ConfigError naming the option."""
+def parse_triple(text: str | None, name: str, default: tuple[float, float, float], rng: R.Range | None = None) -> tuple[float, float, float]:
+    """'X,Y,Z' into three floats (each in ``rng`` if given), or a ConfigError naming the option."""
     if text is None:
         return default
     try:
@@ -46,10 +115,14 @@ def parse_triple(text: str | None, name: str, default: tuple[float, float, float
         raise ConfigError(f"{name} must be three numbers 'X,Y,Z', got {text!r}") from None
     if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
         raise ConfigError(f"{name} must be three finite numbers 'X,Y,Z', got {text!r}")
+    if rng is not None:
+        for axis, v in zip("XYZ", vals):
+            check_range(v, rng, f"{name} {axis}")
     return vals  # type: ignore[return-value]
 
 
-def parse_pair(text: str | None, name: str) -> tuple[float, float]:
+def parse_pair(text: str | None, name: str, rng: R.Range | None = R.COORD_MM) -> tuple[float, float]:
+    """'X,Y' into two floats (each in ``rng``), or a ConfigError naming the option."""
     if text is None:
         return (0.0, 0.0)
     try:
@@ -58,6 +131,9 @@ def parse_pair(text: str | None, name: str) -> tuple[float, float]:
         raise ConfigError(f"{name} must be two numbers 'X,Y', got {text!r}") from None
     if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
         raise ConfigError(f"{name} must be two finite numbers 'X,Y', got {text!r}")
+    if rng is not None:
+        for axis, v in zip("XY", vals):
+            check_range(v, rng, f"{name} {axis}")
     return vals  # type: ignore[return-value]
 
 
@@ -78,8 +154,18 @@ def progress(quiet: bool = False) -> Progress:
     )
 
 
+class _SafeFormatter(logging.Formatter):
+    """Log lines with control characters escaped (they hold file names)."""
+
+    def format(self, record: logging.LogRecord) -> str:
+        return escape_controls(super().format(record), keep_newlines=True)
+
+
 def setup_logging(verbose: bool) -> None:
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    for h in logging.getLogger().handlers:
+        if isinstance(h, logging.StreamHandler) and type(h.formatter) is logging.Formatter:
+            h.setFormatter(_SafeFormatter(h.formatter._fmt))
 
 
 def load_mesh_from_options(path: Path, units: str, scale: float, rotate: str | None, translate: str | None,
@@ -87,19 +173,20 @@ def load_mesh_from_options(path: Path, units: str, scale: float, rotate: str | N
     from ..io.mesh import load_mesh, make_transform
 
     T = make_transform(
-        translate_mm=parse_triple(translate, "--translate", (0.0, 0.0, 0.0)),
-        rotate_deg=parse_triple(rotate, "--rotate", (0.0, 0.0, 0.0)),
+        translate_mm=parse_triple(translate, "--translate", (0.0, 0.0, 0.0), R.COORD_MM),
+        rotate_deg=parse_triple(rotate, "--rotate", (0.0, 0.0, 0.0), R.ANGLE_DEG),
         scale=scale,
     )
     return load_mesh(path, units=units, transform=T, fill_holes=fill_holes)
 
 
-ScaleOpt = Annotated[float, typer.Option("--scale", help="Uniform scale applied after unit conversion.")]
+ScaleOpt = Annotated[float, typer.Option("--scale", help="Uniform scale applied after unit conversion (size 1e-6 to 1e6; negative mirrors).", callback=scale_cb)]
 RotateOpt = Annotated[str | None, typer.Option("--rotate", help="Rotation 'X,Y,Z' in degrees (applied X, then Y, then Z).")]
 FillHolesOpt = Annotated[bool, typer.Option("--fill-holes/--no-fill-holes", help="Fill the mesh's holes (closed loops of open edges) before slicing; open sheets stay open.")]
 TranslateOpt = Annotated[str | None, typer.Option("--translate", help="Translation 'X,Y,Z' in mm, applied last.")]
 
 
 def styled(*parts: str | tuple[str, str]) -> Text:
-    """A line of plain pieces and ``(text, style)`` pieces; nothing in it is read as markup."""
-    return Text.assemble(*parts)
+    """One line of plain pieces and ``(text, style)`` pieces; nothing in it is read as markup,
+    and control characters (newlines too) are escaped (:func:`escape_controls`)."""
+    return Text.assemble(*(escape_controls(p) if isinstance(p, str) else (escape_controls(p[0]), p[1]) for p in parts))

@@ -17,6 +17,9 @@ from rich.text import Text
 
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
+from .. import ranges as R
+from ..ranges import check_count, check_range
+from ._common import in_range
 from ._common import (
     styled,
     DeviceOpt,
@@ -49,7 +52,9 @@ def parse_orientations(text: str) -> list[float]:
         raise ConfigError(f"--orientations must be 'A:B:STEP' in degrees, got {text!r}") from None
     if not all(math.isfinite(v) for v in (a, b, step)) or step <= 0 or b < a:
         raise ConfigError(f"--orientations needs finite A <= B and STEP > 0, got {text!r}")
-    n = int(math.floor((b - a) / step + 1e-9)) + 1
+    check_range(a, R.ANGLE_DEG, "--orientations A")
+    check_range(b, R.ANGLE_DEG, "--orientations B")
+    n = check_count(math.floor((b - a) / step + 1e-9), "--orientations: the number of angles", _MAX_ANGLES) + 1
     if n > _MAX_ANGLES:
         raise ConfigError(f"--orientations gives {n} angles, more than {_MAX_ANGLES}")
     return [a + i * step for i in range(n)]
@@ -153,26 +158,26 @@ def _summary(rep, orient: dict | None, out: Path | None, n_overlays: int) -> Non
 def check_command(
     mesh: Annotated[Path | None, typer.Argument(help="Mesh file (STL, OBJ, PLY, 3MF, OFF, GLB). Without it: the device's limits only.")] = None,
     device: DeviceOpt = ...,  # type: ignore[assignment]
-    layer_height: Annotated[float | None, typer.Option("--layer-height", help="Layer height, mm (needed with MESH).")] = None,
-    min_wall: Annotated[float | None, typer.Option("--min-wall", help="Thinnest wall that prints, mm. Default: the device pitch, or an inkjet's drop diameter if larger.")] = None,
-    min_gap: Annotated[float | None, typer.Option("--min-gap", help="Narrowest gap that stays open, mm. Default as --min-wall.")] = None,
+    layer_height: Annotated[float | None, typer.Option("--layer-height", help="Layer height, mm (needed with MESH).", callback=in_range(R.LAYER_HEIGHT_MM))] = None,
+    min_wall: Annotated[float | None, typer.Option("--min-wall", help="Thinnest wall that prints, mm. Default: the device pitch, or an inkjet's drop diameter if larger.", callback=in_range(R.WIDTH_MM))] = None,
+    min_gap: Annotated[float | None, typer.Option("--min-gap", help="Narrowest gap that stays open, mm. Default as --min-wall.", callback=in_range(R.WIDTH_MM))] = None,
     out: Annotated[Path | None, typer.Option("--out", "-o", help="Output folder: report.json and overlays/layer_NNNNN.png (created; replaced only if provably an earlier rotoprint output, or with --force).")] = None,
     json_out: JsonOpt = False,
-    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X.")] = None,
+    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X.", callback=in_range(R.ANGLE_DEG))] = None,
     orientations: Annotated[str | None, typer.Option("--orientations", help="'A:B:STEP' degrees: check every fibre angle and say which loses least.")] = None,
     rotary: Annotated[bool, typer.Option("--rotary", help="Inkjet on the rotary platform: add the track figures (needs --tilt and --radius).")] = False,
-    tilt: Annotated[float | None, typer.Option("--tilt", help="Head tilt, degrees (with --rotary).")] = None,
-    radius: Annotated[float | None, typer.Option("--radius", help="Pivot radius of the head, mm (with --rotary).")] = None,
+    tilt: Annotated[float | None, typer.Option("--tilt", help="Head tilt, degrees (with --rotary).", callback=in_range(R.TILT_DEG))] = None,
+    radius: Annotated[float | None, typer.Option("--radius", help="Pivot radius of the head, mm (with --rotary).", callback=in_range(R.RADIUS_MM))] = None,
     mask: Annotated[str, typer.Option("--mask", help="Exposure model for DLP masks: none, binary or smooth (the paper's SMOOTH filter).")] = "none",
-    cure_threshold: Annotated[float | None, typer.Option("--cure-threshold", help="Fraction of full exposure that cures (with --mask). Default: the projector's.")] = None,
+    cure_threshold: Annotated[float | None, typer.Option("--cure-threshold", help="Fraction of full exposure that cures (with --mask). Default: the projector's.", callback=in_range(R.FRACTION))] = None,
     islands: Annotated[bool, typer.Option("--islands/--no-islands", help="Look for regions with nothing below them.")] = True,
     cavities: Annotated[bool, typer.Option("--cavities/--no-cavities", help="Look for empty space the part shuts in (resin traps).")] = True,
-    resolution: Annotated[float | None, typer.Option("--resolution", help="Measure widths on the section simplified to this deviation, mm (widths within twice it). Default: 1/100 pixel; 0: the section as sliced.")] = None,
-    max_overlays: Annotated[int, typer.Option("--max-overlays", help="Write at most this many overlay images (layers with problems, first first).")] = 200,
+    resolution: Annotated[float | None, typer.Option("--resolution", help="Measure widths on the section simplified to this deviation, mm (widths within twice it). Default: 1/100 pixel; 0: the section as sliced.", callback=in_range(R.RESOLUTION_MM))] = None,
+    max_overlays: Annotated[int, typer.Option("--max-overlays", help="Write at most this many overlay images (layers with problems, first first).", callback=in_range(R.COUNT))] = 200,
     fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero or evenodd.")] = "nonzero",
     offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
-    gap_radius: Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends closer than this, mm.")] = DEFAULT_GAP_RADIUS_MM,
-    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: print-direction density, dpi.")] = None,
+    gap_radius: Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends closer than this, mm.", callback=in_range(R.GAP_RADIUS_MM))] = DEFAULT_GAP_RADIUS_MM,
+    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: print-direction density, dpi.", callback=in_range(R.DPI))] = None,
     units: UnitsOpt = "mm",
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,

@@ -13,7 +13,7 @@ from ._common import console
 
 def demo(
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder for the demo.")] = Path("demo-output"),
-    example: Annotated[str, typer.Option("--example", help="coil-sensor or gas-sensor.")] = "coil-sensor",
+    example: Annotated[str, typer.Option("--example", help="coil-sensor, gas-sensor or cad-coil.")] = "coil-sensor",
 ) -> None:
     """Build the bundled coil sensor (plaster body, silver coil, epoxy cover): the job file is
     written to OUT/job/, the build (print-ready images, plan.json, report.html) to OUT/build/."""

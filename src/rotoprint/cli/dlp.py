@@ -9,6 +9,8 @@ from typing import Annotated
 import typer
 
 from ..errors import ConfigError
+from .. import ranges as R
+from ._common import in_range
 from ._common import (
     DeviceOpt,
     ForceOpt,
@@ -37,19 +39,19 @@ def dlp_command(
     invert: Annotated[bool, typer.Option("--invert", help="Black = expose.")] = False,
     mirror_x: Annotated[bool, typer.Option("--mirror-x", help="Flip masks left-right (besides the device's own setting).")] = False,
     mirror_y: Annotated[bool, typer.Option("--mirror-y", help="Flip masks top-bottom (besides the device's own setting).")] = False,
-    first_layers: Annotated[int, typer.Option("--first-layers", help="Layers over which the first-layer offset fades to zero.")] = 0,
-    first_layer_offset: Annotated[float, typer.Option("--first-layer-offset", help="Elephant-foot inset of layer 0, micrometres.")] = 0.0,
+    first_layers: Annotated[int, typer.Option("--first-layers", help="Layers over which the first-layer offset fades to zero.", callback=in_range(R.COUNT))] = 0,
+    first_layer_offset: Annotated[float, typer.Option("--first-layer-offset", help="Elephant-foot inset of layer 0, micrometres.", callback=in_range(R.OFFSET_UM))] = 0.0,
     fmt: Annotated[str, typer.Option("--format", help="auto (from --out), sl1, sl1s, png, perfactory.")] = "auto",
-    exposure: Annotated[float | None, typer.Option("--exposure", help="Exposure per layer, s (default: the device's).")] = None,
-    first_exposure: Annotated[float | None, typer.Option("--first-exposure", help="Exposure of the first layers, s (default: the device's).")] = None,
-    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Rotate the part so this model direction (deg from +X) runs along image rows.")] = None,
+    exposure: Annotated[float | None, typer.Option("--exposure", help="Exposure per layer, s (default: the device's).", callback=in_range(R.EXPOSURE_S))] = None,
+    first_exposure: Annotated[float | None, typer.Option("--first-exposure", help="Exposure of the first layers, s (default: the device's).", callback=in_range(R.EXPOSURE_S))] = None,
+    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Rotate the part so this model direction (deg from +X) runs along image rows.", callback=in_range(R.ANGLE_DEG))] = None,
     offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
     units: UnitsOpt = "mm",
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
     fill_holes: FillHolesOpt = True,
-    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
+    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.", callback=in_range(R.WORKERS))] = 1,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified masks, make the rest.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
@@ -58,7 +60,7 @@ def dlp_command(
 ) -> None:
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
-    from ..io.archives import JobInfo, format_from_path, job_dir_name
+    from ..io.archives import JobInfo, creation_time, format_from_path, job_dir_name
     from ..pipeline import RunOptions, write_dlp_job
     from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
@@ -66,9 +68,15 @@ def dlp_command(
     from ..io.atomic import check_output_path
 
     setup_logging(verbose)
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..pipeline.producer import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     kind = format_from_path(out, fmt)
     inputs = [mesh, device_input(device)]
     check_output_path(out, is_dir=kind not in ("sl1", "sl1s"), inputs=inputs, force=force)  # before any work
+    if kind in ("sl1", "sl1s"):
+        creation_time()  # a bad SOURCE_DATE_EPOCH is refused before any work
     overrides = {"exposure_s": exposure, "first_exposure_s": first_exposure}
     dev = load_device(device, **overrides)
     if not isinstance(dev, ProjectorDevice):

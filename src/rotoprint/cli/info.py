@@ -12,7 +12,7 @@ from ._common import FillHolesOpt, JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, U
 
 
 def info(
-    mesh: Annotated[Path, typer.Argument(help="Mesh file: STL (binary or ASCII), OBJ, PLY, 3MF, OFF, GLB.")],
+    mesh: Annotated[Path, typer.Argument(help="Mesh file: STL (binary or ASCII), OBJ, PLY, 3MF, OFF, GLB; or a layer: Gerber, Excellon, DXF, SVG.")],
     units: UnitsOpt = "mm",
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
@@ -20,7 +20,15 @@ def info(
     json_out: JsonOpt = False,
     fill_holes: FillHolesOpt = True,
 ) -> None:
-    """Triangles, bounds, shells, open edges, watertightness, volume, degenerate triangles."""
+    """Triangles, bounds, shells, open edges, watertightness, volume, degenerate triangles.
+
+    Gerber, Excellon, DXF and SVG layers: area, bounds, regions, holes, narrowest track and gap."""
+    from ..io.cad import is_cad_file
+
+    if is_cad_file(mesh):
+        from ._cad_info import cad_info
+
+        return cad_info(mesh, units=None if units == "mm" else units, json_out=json_out)
     m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     data = m.info()
     if json_out:

@@ -9,6 +9,8 @@ import typer
 
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
+from .. import ranges as R
+from ._common import direction_cb, in_range
 from ._common import (
     styled,
     DeviceOpt,
@@ -32,31 +34,32 @@ def slice_command(
     device: DeviceOpt,
     layer_height: LayerHeightOpt,
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (created; replaced only if provably an earlier rotoprint output, or with --force).")],
-    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X. Default: the device's own direction.")] = None,
+    fibre_angle: Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X. Default: the device's own direction.", callback=in_range(R.ANGLE_DEG))] = None,
     fill: Annotated[str, typer.Option("--fill", help="Fill rule: nonzero (overlapping shells union) or evenodd.")] = "nonzero",
     offset: Annotated[str | None, typer.Option("--offset", help="'X,Y' mm: the part's centre relative to the field centre.")] = None,
-    gap_radius: Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends of a section closer than this, mm.")] = DEFAULT_GAP_RADIUS_MM,
-    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: circumferential / print-direction density, dpi.")] = None,
+    gap_radius: Annotated[float, typer.Option("--gap-radius", help="Open meshes: join open ends of a section closer than this, mm.", callback=in_range(R.GAP_RADIUS_MM))] = DEFAULT_GAP_RADIUS_MM,
+    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: circumferential / print-direction density, dpi.", callback=in_range(R.DPI))] = None,
     units: UnitsOpt = "mm",
     scale: ScaleOpt = 1.0,
     rotate: RotateOpt = None,
     translate: TranslateOpt = None,
     fill_holes: FillHolesOpt = True,
-    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.")] = 1,
+    workers: Annotated[int, typer.Option("--workers", "-j", help="Layers in parallel in this many processes.", callback=in_range(R.WORKERS))] = 1,
     scheduler: Annotated[str | None, typer.Option("--scheduler", help="Address of a Dask distributed scheduler to run the layers on (rotoprint[dask]).")] = None,
     resume: Annotated[bool, typer.Option("--resume", help="Continue an interrupted run: keep its verified layers, make the rest.")] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress bar or summary.")] = False,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log what happens (resume, workers) on stderr.")] = False,
     rotary: Annotated[bool, typer.Option("--rotary", help="Direct rotary slicing: per-nozzle firing images straight from the mesh (inkjet heads).")] = False,
-    tilt: Annotated[float | None, typer.Option("--tilt", help="--rotary: head tilt, degrees (counter-clockwise positive).")] = None,
-    radius: Annotated[float | None, typer.Option("--radius", help="--rotary: radius of the part's inner edge (smallest model X), mm.")] = None,
-    angle: Annotated[float, typer.Option("--angle", help="--rotary: angle of the part's centre line on the platform, degrees.")] = 0.0,
-    direction: Annotated[int, typer.Option("--direction", help="--rotary: +1 platform turns counter-clockwise seen from above, -1 clockwise.")] = 1,
-    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="--rotary: reference radius of the clock, mm (default: each swathe's outermost track).")] = None,
-    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.")] = None,
+    tilt: Annotated[float | None, typer.Option("--tilt", help="--rotary: head tilt, degrees (counter-clockwise positive).", callback=in_range(R.TILT_DEG))] = None,
+    radius: Annotated[float | None, typer.Option("--radius", help="--rotary: radius of the part's inner edge (smallest model X), mm.", callback=in_range(R.RADIUS_MM))] = None,
+    angle: Annotated[float, typer.Option("--angle", help="--rotary: angle of the part's centre line on the platform, degrees.", callback=in_range(R.ANGLE_DEG))] = 0.0,
+    direction: Annotated[int, typer.Option("--direction", help="--rotary: +1 platform turns counter-clockwise seen from above, -1 clockwise.", callback=direction_cb)] = 1,
+    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="--rotary: reference radius of the clock, mm (default: each swathe's outermost track).", callback=in_range(R.RADIUS_MM))] = None,
+    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.", callback=in_range(R.SWATHES))] = None,
     equalise: Annotated[bool, typer.Option("--equalise", help="--rotary: thin inner tracks so drops per unit area are uniform.")] = False,
     reference_images: Annotated[bool, typer.Option("--reference-images", help="--rotary: also write each layer's Cartesian cross-section (for 'rotoprint simulate').")] = False,
     force: ForceOpt = False,
+    passes: Annotated[str, typer.Option("--passes", help="--rotary: interlaced passes N or 'auto' (at most 4); N > 1 writes DIR-p1/, DIR-p2/, ... and DIR-passes.json.")] = "1",
 ) -> None:
     """Slice MESH into DIR/layer_00000.png ... (255 = material) and DIR/manifest.json.
 
@@ -72,12 +75,16 @@ def slice_command(
     setup_logging(verbose)
     inputs = [mesh, device_input(device)]
     check_output_path(out, is_dir=True, inputs=inputs, force=force)  # before any work
+    if scheduler is not None:  # a malformed address or port is refused before any work
+        from ..pipeline.producer import check_scheduler_address
+
+        check_scheduler_address(scheduler)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,
                               fibre_angle=fibre_angle, offset=offset)
-    elif any(v is not None for v in (tilt, radius, ref_radius, max_swathes)) or equalise or reference_images or angle != 0.0 or direction != 1:
-        raise ConfigError("--tilt, --radius, --angle, --direction, --ref-radius, --max-swathes, --equalise and --reference-images need --rotary")
+    elif any(v is not None for v in (tilt, radius, ref_radius, max_swathes)) or equalise or reference_images or angle != 0.0 or direction != 1 or passes != "1":
+        raise ConfigError("--tilt, --radius, --angle, --direction, --ref-radius, --max-swathes, --equalise, --reference-images and --passes need --rotary")
     dev = load_device(device, **overrides)
     m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
     if rotary:
@@ -85,7 +92,7 @@ def slice_command(
                       ref_radius=ref_radius, max_swathes=max_swathes, equalise=equalise, reference_images=reference_images,
                       fill=fill, gap_radius=gap_radius, quiet=quiet, workers=workers, scheduler=scheduler, resume=resume,
                       options={"units": units, "scale": scale, "rotate_deg": rotate, "translate_mm": translate,
-                               "fill_holes": fill_holes})
+                               "fill_holes": fill_holes}, passes=passes)
         return
     job = slice_mesh(
         m,
@@ -148,13 +155,27 @@ def _check_rotary_options(*, tilt, radius, workers, scheduler, resume, fibre_ang
 
 def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, radius, angle, direction, ref_radius, max_swathes,
                   equalise, reference_images, fill, gap_radius, quiet, options, workers=1, scheduler=None, resume=False,
-                  force=False, inputs=()) -> None:
+                  force=False, inputs=(), passes="1") -> None:
     from ..devices import InkjetDevice
     from ..pipeline import RunOptions, write_rotary_slices
     from ..rotary.direct import slice_rotary
 
     if not isinstance(dev, InkjetDevice):
         raise ConfigError(f"device {dev.name!r} is a projector; --rotary needs an inkjet device")
+    if passes != "1":
+        from ..pipeline.passes import slice_rotary_passes
+
+        man = slice_rotary_passes(m, dev, out, passes=passes, layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius,
+                                  angle_deg=angle, direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes,
+                                  fill=fill, gap_radius_mm=gap_radius, reference_images=reference_images,
+                                  options={"equalise": equalise, **options}, mesh_path=mesh_path, equalise=equalise,
+                                  force=force, inputs=inputs)
+        if not quiet:
+            pp = man["pass_plan"]
+            console.print(f"{pp['passes']} interlaced pass(es), offsets {', '.join(f'{o * 1000:.1f}' for o in pp['offsets_mm'])} um, "
+                          f"largest track gap {pp['largest_gap_mm'] * 1000:.1f} um (one pass {pp['single_pass_largest_gap_mm'] * 1000:.1f} um), "
+                          f"clock {man['dpi_y']:.0f} dpi -> {', '.join(man['folders'])} ({out.name}-passes.json)")
+        return
     job = slice_rotary(m, dev, layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius, angle_deg=angle,
                        direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes, equalise=equalise,
                        fill=fill, gap_radius_mm=gap_radius)

@@ -9,7 +9,8 @@ from typing import Annotated
 import typer
 
 from ..errors import ConfigError
-from ._common import DeviceOpt, ForceOpt, JsonOpt, console, device_input, print_json
+from .. import ranges as R
+from ._common import DeviceOpt, ForceOpt, JsonOpt, console, device_input, direction_cb, in_range, print_json
 
 METHODS = ("exact", "paper")
 
@@ -17,17 +18,20 @@ METHODS = ("exact", "paper")
 def transform_command(
     image: Annotated[Path, typer.Argument(help="8-bit greyscale or monochrome design (PNG, BMP, TIFF...); non-zero = ink.")],
     device: DeviceOpt,
-    tilt: Annotated[float, typer.Option("--tilt", help="Head tilt, degrees (counter-clockwise positive).")],
-    radius: Annotated[float, typer.Option("--radius", help="Radius of the design's first column (inner edge), mm.")],
+    tilt: Annotated[float, typer.Option("--tilt", help="Head tilt, degrees (counter-clockwise positive).", callback=in_range(R.TILT_DEG))],
+    radius: Annotated[float, typer.Option("--radius", help="Radius of the design's first column (inner edge), mm.", callback=in_range(R.RADIUS_MM))],
     out: Annotated[Path, typer.Option("--out", "-o", help="PRINT.png (several swathes: PRINT-s1.png, ...) and sidecar PRINT.json.")],
     method: Annotated[str, typer.Option("--method", help="exact (sample where every drop lands) or paper (polar + linear, eqs 1-6).")] = "exact",
-    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Circumferential density at the reference radius (default: the head's).")] = None,
-    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="Reference radius of the clock, mm (default: each swathe's outermost track).")] = None,
-    design_dpi: Annotated[float | None, typer.Option("--design-dpi", help="The design's resolution, dpi (default: the head's native dpi).")] = None,
-    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="Refuse designs that need more radial swathes.")] = None,
-    angle: Annotated[float, typer.Option("--angle", help="Angle of the design's centre line on the platform, degrees.")] = 0.0,
-    direction: Annotated[int, typer.Option("--direction", help="+1: platform turns counter-clockwise seen from above; -1 clockwise.")] = 1,
+    dpi_y: Annotated[float | None, typer.Option("--dpi-y", help="Circumferential density at the reference radius (default: the head's).", callback=in_range(R.DPI))] = None,
+    ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="Reference radius of the clock, mm (default: each swathe's outermost track).", callback=in_range(R.RADIUS_MM))] = None,
+    design_dpi: Annotated[float | None, typer.Option("--design-dpi", help="The design's resolution, dpi (default: the head's native dpi).", callback=in_range(R.DPI))] = None,
+    max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="Refuse designs that need more radial swathes.", callback=in_range(R.SWATHES))] = None,
+    angle: Annotated[float, typer.Option("--angle", help="Angle of the design's centre line on the platform, degrees.", callback=in_range(R.ANGLE_DEG))] = 0.0,
+    direction: Annotated[int, typer.Option("--direction", help="+1: platform turns counter-clockwise seen from above; -1 clockwise.", callback=direction_cb)] = 1,
     invert: Annotated[bool, typer.Option("--invert", help="Dark pixels are ink (e.g. black shapes on white).")] = False,
+    passes: Annotated[str, typer.Option("--passes", help="Interlaced passes: N, or 'auto' (the planner's choice, at most 4); "
+                                        "N > 1 writes PRINT-p1.png ... and PRINT-passes.json.")] = "1",
+    equalise: Annotated[bool, typer.Option("--equalise", help="With --passes: thin dense tracks so every radius gets the same volume per area.")] = False,
     json_out: JsonOpt = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No summary.")] = False,
     force: ForceOpt = False,
@@ -37,6 +41,7 @@ def transform_command(
     from ..io.images import read_grey_image
     from ..io.atomic import check_output_path
     from ..rotary.files import print_paths, write_print
+    from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes
     from ..rotary.placement import Placement
 
     if method not in METHODS:
@@ -58,6 +63,30 @@ def transform_command(
     h, w = design.shape
     pl = Placement(w, h, 25.4 / dpi, 25.4 / dpi, inner_radius_mm=radius, angle_deg=angle)
     kw = dict(tilt_deg=tilt, dpi_y=dpi_y, ref_radius_mm=ref_radius, mount_angle_deg=0.0, direction=direction, max_swathes=max_swathes)
+    if passes != "1":
+        from ..rotary.interlace import transform_passes
+
+        if method != "exact":
+            raise ConfigError("--passes needs --method exact")
+        info = {"path": str(image.resolve()),
+                "sha256": hashlib.sha256(read_input_bytes(image, what="image file", limit_bytes=MAX_IMAGE_BYTES)).hexdigest(),
+                "invert": invert, "design_dpi": dpi}
+        manifest = transform_passes(design, head, pl, out, passes=passes, device_name=dev.name, design_info=info, equalise=equalise,
+                                    force=force, inputs=inputs, **kw)
+        if json_out:
+            print_json(manifest)
+        elif not quiet:
+            pp = manifest["pass_plan"]
+            console.print(
+                f"exact, {pp['passes']} interlaced pass(es), offsets {', '.join(f'{o * 1000:.1f}' for o in pp['offsets_mm'])} um: "
+                f"largest track gap {pp['largest_gap_mm'] * 1000:.1f} um (one pass: {pp['single_pass_largest_gap_mm'] * 1000:.1f} um), "
+                f"clock {pp['dpi_y']:.0f} dpi ({pp['along_track_mm'] * 1000:.1f} um along the track) for {pp['footprint_um']:.1f} um footprints"
+            )
+            for f in manifest["files"]:
+                console.print(f"  {f}")
+        return
+    if equalise:
+        raise ConfigError("--equalise needs --passes (N or auto)")
     if method == "exact":
         from ..rotary.exact import transform_exact
 
@@ -68,7 +97,7 @@ def transform_command(
         pr = transform_paper(design, head, pl, **kw)
     info = {
         "path": str(image.resolve()),
-        "sha256": hashlib.sha256(image.read_bytes()).hexdigest(),
+        "sha256": hashlib.sha256(read_input_bytes(image, what="image file", limit_bytes=MAX_IMAGE_BYTES)).hexdigest(),
         "invert": invert,
         "design_dpi": dpi,
     }

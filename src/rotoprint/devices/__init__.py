@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import tomllib
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -83,15 +82,13 @@ def load_device(spec: str | Path, **overrides: Any) -> InkjetDevice | ProjectorD
             raise InputFileError("no such device file", path=path)
         if path.is_dir():
             raise InputFileError("is a directory, expected a device .toml file", path=path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except UnicodeDecodeError:
-            raise DeviceError("device file is not UTF-8 text", path=path) from None
+        from ..io.inputs import MAX_TOML_BYTES, read_input_text
+
+        text = read_input_text(path, what="device file", limit_bytes=MAX_TOML_BYTES, error=DeviceError)
         origin = str(path)
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise DeviceError(f"not valid TOML: {exc}", path=origin) from None
+    from ..io.inputs import parse_toml
+
+    data = parse_toml(text, origin, what="device file", error=DeviceError)
     overrides = {k: v for k, v in overrides.items() if v is not None}
     if overrides and isinstance(data, dict):
         table = _check_overrides(data, overrides, origin)

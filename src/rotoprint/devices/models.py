@@ -5,12 +5,17 @@ Every device gives the slicer the same four things: the pixel pitch across colum
 its fibres run (``fibre_axis``: ``"x"`` fibres are image rows, ``"y"`` image columns). For an
 inkjet head a fibre is a nozzle's track: image columns are nozzles, one nozzle pitch apart,
 and rows are firings, ``25.4 / dpi_y`` apart.
+
+Numeric fields are bounded by the ranges of :mod:`rotoprint.ranges` (``dpi_y`` 1 to 100000,
+lengths up to 10 m, exposures up to an hour), so no device a file describes overflows a pixel
+count later.
 """
 
 from __future__ import annotations
 
 from typing import Annotated, Literal
 
+from .. import ranges as R
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 __all__ = ["InkjetHead", "InkjetDevice", "Projector", "ProjectorDevice", "Device"]
@@ -25,14 +30,17 @@ class InkjetHead(_Strict):
 
     nozzles: int = Field(gt=0, le=100_000)
     rows: int = Field(default=2, ge=1, le=16)
-    swathe_mm: float = Field(gt=0)
-    row_separation_mm: float = Field(ge=0)
-    dpi_y: float = Field(default=360.0, gt=0, le=100_000)
-    drop_volume_pl: float = Field(default=10.0, gt=0)
-    drop_diameter_um: float = Field(default=60.0, gt=0)
-    max_frequency_hz: float = Field(default=8000.0, gt=0)
+    swathe_mm: float = Field(gt=0, le=R.COORD_MM.hi)
+    row_separation_mm: float = Field(ge=0, le=R.COORD_MM.hi)
+    dpi_y: float = Field(default=360.0, ge=R.DPI.lo, le=R.DPI.hi)
+    drop_volume_pl: float = Field(default=10.0, gt=0, le=1e6)
+    drop_diameter_um: float = Field(default=60.0, ge=R.DROP_UM.lo, le=R.DROP_UM.hi)
+    #: footprint diameter on the substrate over the in-flight diameter (6 V / pi)^(1/3): an
+    #: ink/substrate figure used by the deposit model (rotary/deposit.py)
+    spread_factor: float = Field(default=2.0, gt=0, le=20)
+    max_frequency_hz: float = Field(default=8000.0, gt=0, le=1e7)
     grey_levels: int = Field(default=1, ge=1, le=255)
-    dead_nozzles: tuple[int, ...] = ()
+    dead_nozzles: tuple[int, ...] = Field(default=(), max_length=100_000)
 
     @field_validator("dead_nozzles")
     @classmethod
@@ -81,14 +89,14 @@ class InkjetDevice(_Strict):
 class Projector(_Strict):
     pixels_x: int = Field(gt=0, le=100_000)
     pixels_y: int = Field(gt=0, le=100_000)
-    width_mm: float = Field(gt=0)
-    height_mm: float = Field(gt=0)
+    width_mm: float = Field(gt=0, le=R.COORD_MM.hi)
+    height_mm: float = Field(gt=0, le=R.COORD_MM.hi)
     mirror_x: bool = False
     mirror_y: bool = False
     orientation: Literal["landscape", "portrait"] = "landscape"
     cure_threshold: float = Field(default=0.5, ge=0, le=1)
-    exposure_s: float = Field(default=8.0, gt=0, le=3600)
-    first_exposure_s: float = Field(default=35.0, gt=0, le=3600)
+    exposure_s: float = Field(default=8.0, ge=R.EXPOSURE_S.lo, le=R.EXPOSURE_S.hi)
+    first_exposure_s: float = Field(default=35.0, ge=R.EXPOSURE_S.lo, le=R.EXPOSURE_S.hi)
     first_exposure_layers: int = Field(default=10, ge=0, le=10_000)
     printer_model: str = "rotoprint"
 

@@ -34,10 +34,14 @@ import numpy as np
 from PIL import Image
 
 from .. import __version__
+from ..ranges import Range, check_range
 from ..errors import ConfigError, ImageError, InputFileError
 from .atomic import MANIFEST_NAME, OutputClaim, kill_point
 from .ownership import zip_marker
 from .images import png_bytes
+from .images import open_image
+from .inputs import (MAX_ARCHIVE_BYTES, MAX_IMAGE_BYTES, MAX_JSON_BYTES, parse_json, read_input_bytes,
+                     read_input_text, read_zip_members)
 
 __all__ = [
     "FORMATS",
@@ -316,6 +320,9 @@ def _zinfo(name: str) -> zipfile.ZipInfo:
     return zipfile.ZipInfo(name, date_time=(2020, 1, 1, 0, 0, 0))
 
 
+_EPOCH_S = Range(0, 253_402_300_799, integer=True)  # 1970 to the end of year 9999
+
+
 def creation_time() -> datetime.datetime:
     """Now, or ``SOURCE_DATE_EPOCH`` when set (reproducible outputs)."""
     import os
@@ -323,9 +330,11 @@ def creation_time() -> datetime.datetime:
     epoch = os.environ.get("SOURCE_DATE_EPOCH")
     if epoch is not None:
         try:
-            return datetime.datetime.fromtimestamp(int(epoch), datetime.timezone.utc)
+            secs = int(epoch)
         except ValueError:
             raise ConfigError(f"SOURCE_DATE_EPOCH must be whole seconds, got {epoch!r}") from None
+        secs = check_range(secs, _EPOCH_S, "SOURCE_DATE_EPOCH")
+        return datetime.datetime.fromtimestamp(secs, datetime.timezone.utc)
     return datetime.datetime.now(datetime.timezone.utc)
 
 
@@ -511,7 +520,7 @@ class ArchiveContents:
 
     def mask(self, i: int) -> np.ndarray:
         data = self._reader(self.mask_names[i])
-        with Image.open(io.BytesIO(data)) as im:
+        with open_image(data, self.path, f"mask {self.mask_names[i]}") as im:
             if im.mode != "L":
                 raise ImageError(f"mask {self.mask_names[i]} is mode {im.mode!r}, expected 'L' (8-bit grey)", path=self.path)
             return np.asarray(im).copy()
@@ -556,29 +565,39 @@ def read_job(path: str | Path) -> ArchiveContents:
         if not mpath.exists():
             raise InputFileError(f"folder holds no {MANIFEST_NAME}", path=path)
         try:
-            manifest = json.loads(mpath.read_text(encoding="utf-8"))
+            manifest = parse_json(read_input_bytes(mpath, what=MANIFEST_NAME, limit_bytes=MAX_JSON_BYTES),
+                                  mpath, what=MANIFEST_NAME)
             names = [str(m["file"]) for m in manifest["masks"]]
-        except (ValueError, KeyError, TypeError) as exc:  # JSONDecodeError is a ValueError
+        except (ValueError, KeyError, TypeError, RecursionError) as exc:  # JSONDecodeError is a ValueError
             raise InputFileError(f"{MANIFEST_NAME} is not a mask list ({type(exc).__name__}: {exc})", path=path) from None
+        except InputFileError as exc:
+            raise InputFileError(f"{MANIFEST_NAME} is not a mask list ({exc.problem})", path=path) from None
+        root = path.resolve()
         for n in names:
+            if not (path / n).resolve().is_relative_to(root):
+                raise InputFileError(f"mask {n!r} listed in the manifest is outside the folder", path=path)
             if not (path / n).is_file():
                 raise InputFileError(f"mask {n} listed in the manifest is missing", path=path)
         fmt = "perfactory" if manifest.get("kind") == "perfactory-job" else "png"
         cfg = {}
         if fmt == "perfactory":
-            cfg = _parse_ini((path / PERFACTORY_CFG).read_text(encoding="utf-8"), PERFACTORY_CFG, path)
-        return ArchiveContents(path, fmt, cfg, {}, manifest, names, {}, lambda n: (path / n).read_bytes())
-    try:
-        zf = zipfile.ZipFile(path)
-    except zipfile.BadZipFile:
-        raise InputFileError("not a zip archive (SL1 / SL1S expected)", path=path) from None
-    with zf:
-        members = {i.filename: zf.read(i.filename) for i in zf.infolist()}
+            cfg = _parse_ini(read_input_text(path / PERFACTORY_CFG, what=PERFACTORY_CFG, limit_bytes=MAX_JSON_BYTES),
+                             PERFACTORY_CFG, path)
+        return ArchiveContents(path, fmt, cfg, {}, manifest, names, {},
+                               lambda n: read_input_bytes(path / n, what="mask image", limit_bytes=MAX_IMAGE_BYTES))
+    data = read_input_bytes(path, what="SL1 archive", limit_bytes=MAX_ARCHIVE_BYTES)
+    if not zipfile.is_zipfile(io.BytesIO(data)):
+        raise InputFileError("not a zip archive (SL1 / SL1S expected)", path=path)
+    members = read_zip_members(data, path, what="SL1 archive")
+    del data
     for req in ("config.ini", "prusaslicer.ini"):
         if req not in members:
             raise InputFileError(f"archive has no {req}", path=path)
-    config = _parse_ini(members["config.ini"].decode("utf-8"), "config.ini", path)
-    prusa = _parse_ini(members["prusaslicer.ini"].decode("utf-8"), "prusaslicer.ini", path)
+    try:
+        config = _parse_ini(members["config.ini"].decode("utf-8"), "config.ini", path)
+        prusa = _parse_ini(members["prusaslicer.ini"].decode("utf-8"), "prusaslicer.ini", path)
+    except UnicodeDecodeError as exc:
+        raise InputFileError(f"archive ini member is not UTF-8 text (byte {exc.start})", path=path) from None
     missing = [k for k in CONFIG_KEYS if k not in config] + [k for k in PRUSASLICER_KEYS if k not in prusa]
     if missing:
         raise InputFileError(f"archive lacks keys: {', '.join(missing)}", path=path)
@@ -588,13 +607,17 @@ def read_job(path: str | Path) -> ArchiveContents:
     expect = [f"{job_dir}{i:05d}.png" for i in range(len(layers))]
     if layers != expect:
         raise InputFileError("layer names are not <jobDir>00000.png ... in sequence", path=path)
-    n_cfg = int(config["numFast"]) + int(config["numSlow"])
+    try:
+        n_cfg = int(config["numFast"]) + int(config["numSlow"])
+    except ValueError:
+        raise InputFileError(f"config.ini numFast / numSlow are not whole numbers: {config['numFast']!r}, "
+                             f"{config['numSlow']!r}", path=path) from None
     if n_cfg != len(layers):
         raise InputFileError(f"config.ini counts {n_cfg} layers (numFast + numSlow), the archive holds {len(layers)}", path=path)
     thumbs = {}
     for n, data in members.items():
         if n.startswith("thumbnail/") and n.endswith(".png"):
-            with Image.open(io.BytesIO(data)) as im:
+            with open_image(data, path, f"thumbnail {n}") as im:
                 thumbs[n] = im.size
     fmt = path.suffix.lower().lstrip(".") if path.suffix.lower() in (".sl1", ".sl1s") else "sl1"
     return ArchiveContents(path, fmt, config, prusa, {}, layers, thumbs, members.__getitem__)

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
+import re
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -11,7 +15,39 @@ from PIL import Image
 
 from ..errors import ImageError, InputFileError
 
-__all__ = ["png_bytes", "write_png", "read_grey_image"]
+__all__ = ["png_bytes", "write_png", "read_grey_image", "open_image"]
+
+
+@contextlib.contextmanager
+def open_image(data: bytes, path: str | Path, what: str = "image") -> Iterator[Image.Image]:
+    """Pillow's ``Image.open`` on bytes already read, with its decompression-bomb guard made an
+    :class:`ImageError` that names the file and the pixel count.
+
+    An image over ``PIL.Image.MAX_IMAGE_PIXELS`` (Pillow warns) or twice that (Pillow refuses)
+    is refused, before its pixels are decoded. Other failures to parse are an ImageError too.
+
+    Parameters
+    ----------
+    data : bytes
+    path : str or Path
+        For messages.
+    what : str
+        ``"design image"``, ``"mask"``, ...
+    """
+    limit = Image.MAX_IMAGE_PIXELS
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            im = Image.open(io.BytesIO(data))
+    except (Image.DecompressionBombError, Image.DecompressionBombWarning) as exc:
+        m = re.search(r"(\d+) pixels", str(exc))
+        size = m.group(1) if m else "too many"
+        raise ImageError(f"{what} has {size} pixels, more than the {limit} pixel limit against decompression bombs "
+                         f"(PIL.Image.MAX_IMAGE_PIXELS)", path=path) from None
+    except (OSError, SyntaxError, ValueError) as exc:
+        raise ImageError(f"not a readable {what}: {exc}", path=path) from None
+    with im:
+        yield im
 
 
 def png_bytes(image: np.ndarray, *, compress_level: int = 3) -> bytes:
@@ -87,11 +123,14 @@ def read_grey_image(path: str | Path) -> np.ndarray:
     ImageError
         Pillow cannot read it, or its mode is another (colour, 16-bit, with alpha, ...).
     """
+    from .inputs import MAX_IMAGE_BYTES, read_input_bytes
+
     path = Path(path)
     if not path.exists():
         raise InputFileError("no such image file", path=path)
+    data = read_input_bytes(path, what="image file", limit_bytes=MAX_IMAGE_BYTES)
     try:
-        with Image.open(path) as im:
+        with open_image(data, path) as im:
             im.load()
             mode = im.mode
             if mode in ("1", "L", "P") and not (mode == "P" and "transparency" in im.info):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import logging
 from pathlib import Path
 
@@ -9,7 +10,9 @@ import numpy as np
 
 from .._resources import release_free_memory
 from ..constants import UNITS_TO_MM
-from ..errors import ConfigError, InputFileError, MeshError
+from ..errors import ConfigError, MeshError, RotoprintError
+from ..ranges import COORD_MM
+from .inputs import MAX_MESH_BYTES, check_input_file, read_input_bytes, read_zip_members
 from ..mesh import Mesh
 from .stl import read_stl_bytes
 
@@ -72,13 +75,6 @@ def make_transform(
     return T
 
 
-def _check_path(path: Path) -> None:
-    if not path.exists():
-        raise InputFileError("no such file", path=path)
-    if path.is_dir():
-        raise InputFileError("is a directory, expected a mesh file", path=path)
-
-
 def load_triangles(path: str | Path) -> np.ndarray:
     """Read a mesh file into ``(N, 3, 3) float64`` triangles in the file's own units.
 
@@ -96,40 +92,133 @@ def load_triangles(path: str | Path) -> np.ndarray:
     Raises
     ------
     InputFileError
-        The file is missing, is a directory, or cannot be read (permission denied).
+        The file is missing, is not a regular file (directory, FIFO, device), is larger than
+        :data:`~rotoprint.io.inputs.MAX_MESH_BYTES`, or cannot be read (permission denied).
     MeshError
         Unsupported suffix, an empty non-STL file, a file trimesh cannot read or that holds
         no triangles, or an invalid STL.
     """
     path = Path(path)
-    _check_path(path)
+    check_input_file(path, what="mesh file", limit_bytes=MAX_MESH_BYTES)
     suffix = path.suffix.lower()
     if suffix not in SUPPORTED_SUFFIXES:
         raise MeshError(
             f"unsupported mesh format {suffix or '(no suffix)'!r}; expected one of {', '.join(SUPPORTED_SUFFIXES)}",
             path=path,
         )
+    data = read_input_bytes(path, what="mesh file", limit_bytes=MAX_MESH_BYTES)
+    if suffix == ".stl":
+        return read_stl_bytes(data, str(path))
+    if len(data) == 0:
+        raise MeshError("file is empty", path=path)
+    if suffix == ".ply":
+        check_ply_counts(data, path)
+    return _load_with_trimesh(path, data)
+
+
+#: Formats trimesh parses as text; their bytes are decoded here (see :func:`_text_for_trimesh`).
+_TEXT_SUFFIXES = (".obj", ".off", ".gltf")
+_PRINTABLE = bytes(b"\t\n\r\f\v" + bytes(range(32, 127)))
+
+
+def _text_for_trimesh(data: bytes, path: Path) -> bytes:
+    """A text mesh's bytes as UTF-8, or a MeshError for content that is not text.
+
+    UTF-8 is taken as it is. Other bytes are read as Latin-1 (every byte a character; the
+    numbers and keywords of OBJ / OFF are ASCII, so only comments and names can differ) when
+    the file is text: no NUL byte and at least 95 % printable ASCII or whitespace. Anything else
+    (binary garbage) is refused here rather than handed to trimesh's encoding guesser.
+    """
     try:
-        if suffix == ".stl":
-            data = path.read_bytes()
-            return read_stl_bytes(data, str(path))
-        if path.stat().st_size == 0:
-            raise MeshError("file is empty", path=path)
-        return _load_with_trimesh(path)
-    except PermissionError as exc:
-        raise InputFileError("permission denied", path=path) from exc
-    except IsADirectoryError as exc:  # pragma: no cover - raced
-        raise InputFileError("is a directory", path=path) from exc
+        data.decode("utf-8")
+        return data
+    except UnicodeDecodeError:
+        pass
+    kind = path.suffix.lower()[1:].upper()
+    sample = data[: 1 << 20]
+    printable = len(sample) - len(sample.translate(None, _PRINTABLE))
+    if b"\0" in sample or printable < 0.95 * len(sample):
+        raise MeshError(f"could not read as {kind}: binary data, not text "
+                        f"({100 * printable / len(sample):.0f} % printable characters)", path=path)
+    return data.decode("latin-1").encode("utf-8")
 
 
-def _load_with_trimesh(path: Path) -> np.ndarray:
+_PLY_SIZES = {"char": 1, "int8": 1, "uchar": 1, "uint8": 1, "short": 2, "int16": 2, "ushort": 2, "uint16": 2,
+              "int": 4, "int32": 4, "uint": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8}
+_PLY_MAX_HEADER = 64 * 1024
+
+
+def check_ply_counts(data: bytes, path: Path) -> None:
+    """Refuse a PLY whose header declares more elements than the file holds (a lying header).
+
+    ASCII: every element is one line, so the data lines must number at least the declared
+    total. Binary: each element takes at least its fixed-size properties plus, per list, the
+    count and three entries (a face has three corners or more), so the file must be at least
+    that long. Only the header is parsed here; trimesh reads the data.
+
+    Raises
+    ------
+    MeshError
+        No complete header, or a declared count the file cannot hold.
+    """
+    head = data[:_PLY_MAX_HEADER]
+    end = head.find(b"end_header")
+    if not head.startswith(b"ply") or end < 0:
+        return  # not a header we can read: trimesh says what is wrong
+    nl = head.find(b"\n", end)
+    body_at = (nl + 1) if nl >= 0 else len(head)
+    fmt, elements = "", []  # [name, count, min bytes per element]
+    for raw in head[:end].decode("ascii", "replace").splitlines():
+        w = raw.split()
+        if len(w) >= 2 and w[0] == "format":
+            fmt = w[1]
+        elif len(w) >= 3 and w[0] == "element":
+            try:
+                elements.append([w[1], int(w[2]), 0])
+            except ValueError:
+                raise MeshError(f"PLY header: element {w[1]} has count {w[2]!r}, not an integer", path=path) from None
+        elif len(w) >= 3 and w[0] == "property" and elements:
+            if w[1] == "list" and len(w) >= 5:
+                elements[-1][2] += _PLY_SIZES.get(w[2], 1) + 3 * _PLY_SIZES.get(w[3], 1)
+            else:
+                elements[-1][2] += _PLY_SIZES.get(w[1], 1)
+    for name, n, _ in elements:
+        if n < 0:
+            raise MeshError(f"PLY header declares {n} {name} elements", path=path)
+    total = sum(n for _, n, _ in elements)
+    if fmt == "ascii":
+        lines = sum(1 for ln in data[body_at:].splitlines() if ln.strip())
+        if lines < total:
+            desc = ", ".join(f"{n} {name}" for name, n, _ in elements)
+            raise MeshError(f"PLY header declares {desc} ({total} lines) but the file holds {lines} data lines", path=path)
+    elif fmt.startswith("binary"):
+        need = sum(n * b for _, n, b in elements)
+        have = len(data) - body_at
+        if have < need:
+            desc = ", ".join(f"{n} {name}" for name, n, _ in elements)
+            raise MeshError(f"PLY header declares {desc}, at least {need} bytes, but the file holds {have}", path=path)
+
+
+def _load_with_trimesh(path: Path, data: bytes) -> np.ndarray:
     import trimesh
 
+    suffix = path.suffix.lower()
+    kind = suffix[1:].upper()
+    if suffix in _TEXT_SUFFIXES:
+        data = _text_for_trimesh(data, path)
+    if suffix == ".3mf":
+        # trimesh inflates every member in memory: check each inflates within a bound first
+        read_zip_members(data, path, what="3MF file")
     try:
-        loaded = trimesh.load(str(path), force="mesh", process=False)
+        # From memory, with a resolver that reads referenced files (textures, .bin buffers,
+        # .mtl) through the same bounded reader and only from the mesh's own folder.
+        loaded = trimesh.load(file_obj=io.BytesIO(data), file_type=suffix[1:], force="mesh", process=False,
+                              resolver=_BoundedResolver(path))
+    except RotoprintError:
+        raise
     except Exception as exc:  # trimesh raises many kinds for bad files
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise MeshError(f"could not read as {path.suffix.lower()[1:].upper()}: {first}", path=path) from exc
+        raise MeshError(f"could not read as {kind}: {first}", path=path) from exc
     faces = getattr(loaded, "faces", None)
     vertices = getattr(loaded, "vertices", None)
     if faces is None or vertices is None or len(faces) == 0:
@@ -151,6 +240,31 @@ def _load_with_trimesh(path: Path) -> np.ndarray:
             path=path,
         )
     return v[f]
+
+
+class _BoundedResolver:
+    """A trimesh resolver: files a mesh refers to, read bounded, from its folder only."""
+
+    def __init__(self, mesh: Path, folder: Path | None = None) -> None:
+        self.mesh = mesh
+        self.parent = (folder or mesh.parent).resolve()
+
+    def get(self, name: str) -> bytes:
+        p = (self.parent / name).resolve()
+        if not p.is_relative_to(self.mesh.parent.resolve()):
+            raise MeshError(f"refers to {name!r}, which leads outside the mesh's folder (to {p})", path=self.mesh)
+        return read_input_bytes(p, what="file a mesh refers to", limit_bytes=MAX_MESH_BYTES)
+
+    __getitem__ = get
+
+    def namespaced(self, namespace: str) -> _BoundedResolver:
+        return _BoundedResolver(self.mesh, self.parent / namespace)
+
+    def keys(self):
+        return iter(())
+
+    def write(self, name, data):  # pragma: no cover - trimesh only writes when exporting
+        raise MeshError("refusing to write beside a mesh while reading it", path=self.mesh)
 
 
 def load_mesh(
@@ -205,6 +319,14 @@ def load_mesh(
             tri = tri @ T[:3, :3].T + T[:3, 3]
             if np.linalg.det(T[:3, :3]) < 0:  # a mirroring transform reverses every face
                 tri = tri[:, ::-1, :]
+    lo, hi = float(tri.min()), float(tri.max())
+    if not (lo >= COORD_MM.lo and hi <= COORD_MM.hi):
+        far = lo if -lo > hi else hi
+        raise MeshError(
+            f"a coordinate reaches {far:.3g} mm after units, scale and transform; parts must lie within "
+            f"{COORD_MM.text()} (check --units, --scale and --translate)",
+            path=path,
+        )
     mesh = Mesh.from_triangles(tri, source=str(path), fill_holes=fill_holes, _owned=True)
     del tri
     release_free_memory()

@@ -3,7 +3,10 @@
 After every layer a JSON line is appended to ``<out>.partial/journal.jsonl`` naming its files
 and their SHA-256. A later run of the *same* job (the journal's first line holds the job's
 fingerprint) with ``resume=True`` keeps every journalled layer whose files still have their
-checksums and makes only the rest; a run without ``resume`` starts afresh. The finished
+checksums and makes only the rest; a run without ``resume`` starts afresh. The journal is
+trusted only as far as it should be: it is read bounded, every file it names must be a regular
+file inside the ``.partial`` folder (else the journal is refused as corrupt) and have its
+checksum, and a record of the wrong shape counts as a layer not done. The finished
 output is put in place under its final name only when complete, so a killed run never leaves
 a half-written output there.
 """
@@ -19,11 +22,28 @@ from pathlib import Path
 from .._resources import available_memory_bytes, format_bytes
 from ..errors import InputFileError, ResourceError
 from .atomic import OutputClaim, check_output_path, disk_full, kill_point
+from .inputs import MAX_IMAGE_BYTES, MAX_JOURNAL_BYTES, read_input_bytes
 
 __all__ = ["PartialOutput", "check_target", "check_resources", "partial_path"]
 
 log = logging.getLogger(__name__)
 JOURNAL = "journal.jsonl"
+
+
+#: Largest layer file a resumed run re-reads to verify (a layer PNG, a mask, a swathe image).
+MAX_JOURNAL_LAYER_BYTES = MAX_IMAGE_BYTES
+
+
+def _well_formed(rec: object, n_layers: int) -> bool:
+    """A journal record with an int ``index`` in range and equal-length lists of str
+    ``files`` and hex ``sha256s``."""
+    if not isinstance(rec, dict):
+        return False
+    i, files, sums = rec.get("index"), rec.get("files"), rec.get("sha256s")
+    return (isinstance(i, int) and not isinstance(i, bool) and 0 <= i < n_layers
+            and isinstance(files, list) and isinstance(sums, list) and len(files) == len(sums) and len(files) > 0
+            and all(isinstance(f, str) and f for f in files)
+            and all(isinstance(h, str) and len(h) == 64 for h in sums))
 
 
 def partial_path(out: str | Path) -> Path:
@@ -135,27 +155,56 @@ class PartialOutput:
         self._journal = None
 
     def _verified(self) -> dict[int, dict]:
+        """The journalled layers whose files are intact (see the module doc for what is trusted).
+
+        The journal is read bounded (:data:`~rotoprint.io.inputs.MAX_JOURNAL_BYTES`). A record
+        whose ``index`` / ``files`` / ``sha256s`` are missing or of the wrong type is treated as
+        not done (the layer is made again: nothing is lost, and nothing outside the folder is
+        touched). A record naming a file outside this folder (``..``, an absolute path, a symlink
+        leading out) or a file that is not a regular file is a corrupt journal: refused.
+        """
         jpath = self.dir / JOURNAL
         if not jpath.exists():
             return {}
+        text = read_input_bytes(jpath, what="resume journal", limit_bytes=MAX_JOURNAL_BYTES).decode("utf-8", "replace")
+        lines = text.split("\n")
+        try:
+            head = json.loads(lines[0])
+        except (json.JSONDecodeError, RecursionError):
+            return {}
+        if not isinstance(head, dict) or head.get("fingerprint") != self.fingerprint:
+            return {}
+        root = self.dir.resolve()
         done: dict[int, dict] = {}
-        with open(jpath, encoding="utf-8") as fh:
+        for line in lines[1:]:
+            if not line.strip():
+                continue
             try:
-                if json.loads(fh.readline()).get("fingerprint") != self.fingerprint:
-                    return {}
-            except json.JSONDecodeError:
-                return {}
-            for line in fh:
-                try:
-                    rec = json.loads(line)
-                except json.JSONDecodeError:
-                    break  # a line cut by the crash: everything after it is made again
-                ok = all(
-                    (self.dir / f).exists() and hashlib.sha256((self.dir / f).read_bytes()).hexdigest() == h
-                    for f, h in zip(rec["files"], rec["sha256s"], strict=True)
-                )
-                if ok:
-                    done[int(rec["index"])] = rec
+                rec = json.loads(line)
+            except (json.JSONDecodeError, RecursionError):
+                break  # a line cut by the crash: everything after it is made again
+            if not _well_formed(rec, self.n_layers):
+                log.warning("resume journal %s: a record without a valid index, files and sha256s; its layer is made again",
+                            jpath)
+                continue
+            ok = True
+            for f, h in zip(rec["files"], rec["sha256s"], strict=True):
+                fp = self.dir / f
+                if Path(f).is_absolute() or not fp.resolve().is_relative_to(root) or fp.resolve() == root:
+                    raise InputFileError(f"corrupt resume journal: layer {rec['index']} names {f!r}, outside its folder; "
+                                         "run without --resume to start afresh", path=jpath)
+                if not fp.exists():
+                    ok = False
+                    break
+                if fp.is_symlink() or not fp.is_file():
+                    raise InputFileError(f"corrupt resume journal: layer {rec['index']} file {f!r} is not a regular file; "
+                                         "run without --resume to start afresh", path=jpath)
+                data = read_input_bytes(fp, what="layer file", limit_bytes=MAX_JOURNAL_LAYER_BYTES)
+                if hashlib.sha256(data).hexdigest() != h:
+                    ok = False
+                    break
+            if ok:
+                done[rec["index"]] = rec
         return done
 
     def open(self) -> None:

@@ -114,6 +114,9 @@ def stage_check(job, plan, tmp: Path, step: Step) -> list[dict]:
                  "narrowest_gap": rep.narrowest_gap, "limits": rep.limits,
                  "findings": [f.to_json() for f in rep.findings[:50]], "findings_total": len(rep.findings),
                  "overlay": None}
+        if part.name in plan.planar:  # a CAD layer: its exact narrowest track and gap against the head
+            entry["layer_exact"] = _layer_printability(plan.planar[part.name], rep.limits)
+            entry["ok"] = entry["ok"] and entry["layer_exact"]["ok"]
         if worst_layer is not None:
             for lc in check_layers(plan.meshes[part.name], plan.device, layer_height_mm=sp.job.layer_height_mm):
                 if lc.index == worst_layer:
@@ -124,6 +127,20 @@ def stage_check(job, plan, tmp: Path, step: Step) -> list[dict]:
         checks.append(entry)
     step("check", len(sp.parts), len(sp.parts))
     return checks
+
+
+def _layer_printability(placed, limits: dict) -> dict:
+    """A layer part's narrowest track and gap (exact polygon, edge-normal rays) against the
+    head's smallest wall and gap."""
+    info = placed.layer.info()
+    track, gap = info["narrowest_track_mm"], info["narrowest_gap_mm"]
+    wall_min, gap_min = limits.get("min_wall_mm"), limits.get("min_gap_mm")
+    track_ok = track is None or wall_min is None or track >= wall_min
+    gap_ok = gap is None or gap_min is None or gap >= gap_min
+    return {"narrowest_track_mm": track, "narrowest_track_at_mm": info["narrowest_track_at_mm"],
+            "narrowest_gap_mm": gap, "narrowest_gap_at_mm": info["narrowest_gap_at_mm"],
+            "min_wall_mm": wall_min, "min_gap_mm": gap_min, "track_ok": track_ok, "gap_ok": gap_ok,
+            "ok": bool(track_ok and gap_ok)}
 
 
 def stage_layers(job, plan, tmp: Path, step: Step) -> LayerOutputs:
@@ -200,6 +217,7 @@ def _simulate_layers(present: dict[str, list[int]], k: int) -> dict[str, list[in
 def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: Step) -> list[dict]:
     """Simulator overlays of a few layers per material (coverage before density thinning)
     into ``tmp/overlays``; returns their ``overlays`` entries."""
+    from ..rotary.deposit import deposit_film, ink_drops
     from ..rotary.simulate import render_overlay, simulate
 
     pick = _simulate_layers(present, job.spec.process.simulate_layers)
@@ -213,9 +231,11 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
             pr = plan.material_print(mname, plan.head(ink0), sections, i, thinned=False)
             ref = plan.reference_image(mname, sections).astype(np.uint8) * 255
             sim = simulate(pr, ref)
+            film = deposit_film(sim.inked, pr.placement, pr.head, [ink_drops(sim.drops, pr.head)]).films[0].to_json()
             name = f"overlays/layer_{i:05d}-{mname}.png"
             (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))
             overlays.append({"layer": i, "material": mname, "ink": ink0, "head": plan.head(ink0).name, "file": name,
+                             "deposit": {k: v for k, v in film.items() if k != "radial_bins"},
                              "iou": sim.report.iou, "uncovered_fraction": sim.report.uncovered_fraction,
                              "drops_outside": sim.report.drops_outside, "mean_error_um": sim.report.mean_error_um})
     step("simulate", total, total)

@@ -26,7 +26,7 @@ from .._window import ordered
 __all__ = ["LayerSource", "Rendered", "RunOptions", "produce_layers", "render_one", "check_scheduler_address",
            "cpu_count", "DASK_CONNECT_TIMEOUT_S"]
 
-#: Seconds to wait for a Dask scheduler before giving up.
+#: Seconds to wait for a Dask scheduler (connection and handshake) before giving up.
 DASK_CONNECT_TIMEOUT_S = 10.0
 
 
@@ -154,16 +154,24 @@ def produce_layers(source: LayerSource, indices: Iterable[int], run: RunOptions 
     window : int, optional
         Layers in flight at most (default ``4 * workers``, or 4 x the cluster's threads).
 
-    Yields
-    ------
-    Rendered
+    Returns
+    -------
+    iterator of Rendered
+        In the order of ``indices``. A Dask scheduler is reached (and refused with a
+        ConfigError) when this is called, before the first layer.
     """
     run = run or RunOptions()
     indices = list(indices)
     if run.scheduler is not None:
-        yield from _produce_dask(source, indices, run.scheduler, window)
-        return
-    if run.workers == 1 or len(indices) <= 1:
+        if indices:  # connect now, not at the first next(): a dead scheduler fails before any layer is kept
+            check_scheduler_address(run.scheduler)
+            _probe_scheduler(run.scheduler, DASK_CONNECT_TIMEOUT_S)
+        return _produce_dask(source, indices, run.scheduler, window)
+    return _produce_local(source, indices, run.workers, window)
+
+
+def _produce_local(source: LayerSource, indices: list[int], workers: int, window: int | None) -> Iterator[Rendered]:
+    if workers == 1 or len(indices) <= 1:
         threads = min(2, cpu_count())
         if threads == 1 or len(indices) <= 1:
             for i in indices:
@@ -173,8 +181,8 @@ def produce_layers(source: LayerSource, indices: Iterable[int], run: RunOptions 
             yield from ordered(lambda i: ex.submit(render_one, source, i), indices, window or 2 * threads)
         return
     ctx = get_context("spawn")  # no fork: the parent may hold threads (progress bars, BLAS)
-    with ProcessPoolExecutor(max_workers=run.workers, mp_context=ctx, initializer=_pool_init, initargs=(source,)) as ex:
-        yield from ordered(lambda i: ex.submit(_pool_render, i), indices, window or 4 * run.workers)
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_init, initargs=(source,)) as ex:
+        yield from ordered(lambda i: ex.submit(_pool_render, i), indices, window or 4 * workers)
 
 
 def check_scheduler_address(address: str) -> None:
@@ -184,8 +192,39 @@ def check_scheduler_address(address: str) -> None:
     ------
     ConfigError
     """
-    if not re.fullmatch(r"(tcp|tls|inproc|ws|wss)://[^\s:/]+:\d{1,5}|[^\s:/]+:\d{1,5}", address or ""):
+    m = re.fullmatch(r"(?:(?:tcp|tls|inproc|ws|wss)://)?[^\s:/]+:(\d{1,5})", address or "")
+    if not m:
         raise ConfigError(f"scheduler address must look like tcp://HOST:PORT, got {address!r}")
+    if not 1 <= int(m.group(1)) <= 65535:
+        raise ConfigError(f"scheduler address {address!r}: port {m.group(1)} is not a TCP port (1 to 65535)")
+
+
+def _probe_scheduler(address: str, timeout_s: float) -> None:
+    """Connect to the scheduler and complete Dask's handshake within ``timeout_s``.
+
+    ``distributed.Client`` bounds the TCP connect but not the handshake read after it, so a
+    server that accepts and never answers would block it forever; this refuses such an
+    address first, in bounded time.
+    """
+    import asyncio
+
+    try:
+        from distributed.comm import connect
+        from distributed.security import Security
+    except ImportError:
+        raise ConfigError("--scheduler needs Dask distributed: pip install 'rotoprint[dask]'") from None
+
+    async def handshake() -> None:
+        comm = await connect(address, timeout=timeout_s, **Security().get_connection_args("client"))
+        await comm.close()
+
+    try:
+        asyncio.run(asyncio.wait_for(handshake(), timeout_s))
+    except (asyncio.TimeoutError, TimeoutError):
+        raise ConfigError(f"the Dask scheduler at {address} did not answer within {timeout_s:g} s "
+                          "(is it a Dask scheduler?)") from None
+    except (OSError, ValueError, TypeError) as exc:
+        raise ConfigError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
 
 
 def _produce_dask(source: LayerSource, indices: list[int], address: str, window: int | None) -> Iterator[Rendered]:

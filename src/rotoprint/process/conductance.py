@@ -57,14 +57,19 @@ def terminal_mask(grid: Placement, part: PartPlacement, rect_mm) -> np.ndarray:
     grid : Placement
     part : PartPlacement
         See :func:`pixel_centres_model`.
-    rect_mm : (4,) float
-        ``(x0, y0, x1, y1)`` in the model frame, mm; the edges count as inside.
+    rect_mm : (4,) float or shapely Polygon
+        ``(x0, y0, x1, y1)`` in the model frame, mm; the edges count as inside. Or a pad's
+        polygon (a layer part's terminal): the pixels whose centre is inside it.
 
     Returns
     -------
     (H, W) bool ndarray
     """
     x, y = pixel_centres_model(grid, part)
+    if hasattr(rect_mm, "geom_type"):  # a pad polygon (layer parts): pixel centres inside it
+        import shapely
+
+        return shapely.contains_xy(rect_mm, x[None, :], y[:, None])
     x0, y0, x1, y1 = rect_mm
     return ((y >= y0) & (y <= y1))[:, None] & ((x >= x0) & (x <= x1))[None, :]
 
@@ -112,8 +117,7 @@ def resistance_from_masks(plan, spec, masks: list[np.ndarray], grid: Placement) 
     part_spec = plan.job.part(spec.part)
     material = part_spec.material
     mat = plan.job.materials[material]
-    terms = dict(part_spec.shape.terminals()) if part_spec.shape is not None else {}
-    terms.update(part_spec.terminals)
+    terms = plan.part_terminals(spec.part)
     t_um = thickness_map_um(plan, material, grid)
     layers = [m for m in masks if m.any()]
     total = np.zeros(grid.height_px * grid.width_px).reshape(grid.height_px, grid.width_px)

@@ -5,6 +5,8 @@
   gap) in the top of a plaster body (a mesh file), its pads rising through an epoxy cover.
   Priorities: silver 3 > epoxy 2 > plaster 1, so the coil displaces the plaster where they
   overlap and the pads stay open through the cover.
+- ``cad-coil``: the coil from electronics CAD (:mod:`.cad_examples`): a Gerber copper layer,
+  an Excellon drill file of two vias and a DXF body outline, each a planar layer part.
 - ``gas-sensor``: an interdigitated silver electrode (2 x 8 fingers, 0.3 mm wide, 0.3 mm
   gaps) on a plaster substrate, inside a polyamide well that holds the sensing film.
 """
@@ -182,15 +184,50 @@ EXAMPLES = {
 }
 
 
+def _cad_file(name: str):
+    def make() -> bytes:
+        from .cad_examples import cad_coil_files
+
+        return cad_coil_files()[name]
+
+    return make
+
+
+def _add_cad_example() -> None:
+    from .cad_examples import CAD_COIL_JOB
+
+    EXAMPLES["cad-coil"] = ("cad-coil.toml", CAD_COIL_JOB, {n: _cad_file(n) for n in
+                                                           ("coil-F_Cu.gbr", "coil-vias.drl", "coil-body.dxf")})
+
+
+_add_cad_example()
+
+
 def example_files(name: str) -> dict[str, bytes]:
     """The files of example ``name``: ``{file name: bytes}``, the meshes first, the job file last."""
     if name not in EXAMPLES:
         raise ConfigError(f"unknown example {name!r}; examples: {', '.join(EXAMPLES)}")
     job_name, text, meshes = EXAMPLES[name]
-    files = {fname: binary_stl_bytes(make()) for fname, make in meshes.items()}
+    files = {}
+    for fname, make in meshes.items():
+        data = make()
+        files[fname] = data if isinstance(data, bytes) else binary_stl_bytes(data)  # CAD files come as bytes
     files[job_name] = text.encode("utf-8")
     return files
 
+
+
+def _holds(p: Path, data: bytes) -> bool:
+    """Whether ``p`` is a regular file holding exactly ``data`` (read bounded: a FIFO or a
+    device is never read, it just does not hold the example)."""
+    from ..io.inputs import read_input_bytes
+
+    try:
+        if not p.is_file() or p.stat().st_size != len(data):
+            return False
+        return read_input_bytes(p, what="example file", limit_bytes=len(data)) == data
+    except (OSError, InputFileError):
+        return False
 
 def write_example(name: str, folder: str | Path, *, overwrite: bool = False) -> Path:
     """Write example ``name`` (job file and its meshes) into ``folder``; returns the job path.
@@ -232,7 +269,7 @@ def write_example(name: str, folder: str | Path, *, overwrite: bool = False) -> 
                                  f"{', ...' if len(others) > 3 else ''}); refusing to write the example there", path=folder)
         for fname, data in files.items():
             p = folder / fname
-            if p.is_dir() or (p.exists() and not overwrite and p.read_bytes() != data):
+            if p.is_dir() or (p.exists() and not overwrite and not _holds(p, data)):
                 raise InputFileError(f"differs from the {name} example (edited?); refusing to overwrite it", path=p)
     folder.mkdir(parents=True, exist_ok=True)
     # Every file is renamed into place only when all are written; the stack renames in reverse

@@ -7,7 +7,7 @@
     layer_height_mm = 0.02
 
     [printer]
-    device = "omnidot760"      # preset or device .toml
+    device = "omnidot760"      # preset or device .toml (relative: from the job file's folder)
     tilt_deg = 20.0
     equalise = true            # thin inner tracks: the same drops per mm2 at every radius
     [printer.clock]
@@ -26,6 +26,7 @@
     material = "plaster"
     priority = 1
     mesh = "body.stl"          # or: shape = { kind = "box", size_mm = [20, 20, 0.2] }
+                               # or: layer = { file = "coil-F_Cu.gbr", z_mm = [0.2, 0.24] } (docs/cad.md)
 
     [[resistance]]
     part = "coil"
@@ -38,13 +39,15 @@ file, and are :class:`~rotoprint.errors.ConfigError` (exit code 2 on the command
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
+from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from .. import ranges as R
 from ..errors import ConfigError, InputFileError
 from .materials import Material, MaterialLibrary, builtin_library, load_materials, validation_message
+from .cadparts import LayerFile
 from .shapes import Shape
 
 __all__ = ["JobSpec", "JobInfo", "PrinterSpec", "HeadSpec", "ClockSpec", "PlacementSpec", "PartSpec", "ResistanceSpec",
@@ -63,9 +66,15 @@ DPI_Y_RANGE = (25.0, 100_000.0)
 FREQUENCY_HZ_MAX = 1_000_000.0
 
 
+_Angle = Annotated[float, R.field(R.ANGLE_DEG)]
+_Coord = Annotated[float, R.field(R.COORD_MM)]
+_PRIORITY = R.Range(-1_000_000, 1_000_000, integer=True)
+_CYCLES = R.Range(1, 10_000, integer=True)  # cycles (passes) per layer
+
+
 class JobInfo(_Strict):
     name: str = "job"
-    layer_height_mm: float = Field(gt=0, le=10)
+    layer_height_mm: float = Field(ge=R.LAYER_HEIGHT_MM.lo, le=10)
     materials_file: str | None = None
     description: str = ""
 
@@ -94,8 +103,8 @@ class HeadSpec(_Strict):
 
     name: str = Field(min_length=1)
     ink: str = Field(min_length=1)
-    mount_angle_deg: float = 0.0
-    tilt_deg: float | None = None
+    mount_angle_deg: Annotated[float, R.field(R.ANGLE_DEG)] = 0.0
+    tilt_deg: Annotated[float, R.field(R.TILT_DEG)] | None = None
 
     @field_validator("mount_angle_deg")
     @classmethod
@@ -107,10 +116,10 @@ class HeadSpec(_Strict):
 
 class PrinterSpec(_Strict):
     device: str = "omnidot760"
-    tilt_deg: float = 0.0
+    tilt_deg: Annotated[float, R.field(R.TILT_DEG)] = 0.0
     direction: int = 1
     equalise: bool = True
-    max_swathes: int | None = Field(default=None, ge=1)
+    max_swathes: Annotated[int, R.field(R.SWATHES)] | None = None
     clock: ClockSpec = ClockSpec()
     heads: tuple[HeadSpec, ...] = Field(min_length=1)
 
@@ -135,30 +144,34 @@ class PlacementSpec(_Strict):
     """Where the assembly's footprint sits: its inner edge (smallest model X) at
     ``inner_radius_mm`` on the centre line at ``angle_deg`` (see ``docs/rotary.md``)."""
 
-    inner_radius_mm: float = Field(gt=0)
-    angle_deg: float = 0.0
+    inner_radius_mm: Annotated[float, R.field(R.RADIUS_MM)]
+    angle_deg: Annotated[float, R.field(R.ANGLE_DEG)] = 0.0
 
 
 class PartSpec(_Strict):
-    """A part: a mesh file or a built-in shape, made of one material.
+    """A part: a mesh file, a built-in shape or a CAD layer (:mod:`.cadparts`), of one material.
 
     Where parts of different materials overlap, the pixel (drop) belongs to the part with the
     highest ``priority``. ``cycles_per_layer`` overrides the planner's number of cycles."""
 
     name: str = Field(min_length=1)
     material: str = Field(min_length=1)
-    priority: int = 0
+    priority: Annotated[int, R.field(_PRIORITY)] = 0
     mesh: str | None = None
     shape: Shape | None = None
+    layer: LayerFile | None = None  # a Gerber/Excellon/DXF/SVG region between two heights (cadparts)
     units: str = "mm"
-    rotate_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    translate_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    terminals: dict[str, tuple[float, float, float, float]] = Field(default_factory=dict)
+    rotate_deg: tuple[_Angle, _Angle, _Angle] = (0.0, 0.0, 0.0)
+    translate_mm: tuple[_Coord, _Coord, _Coord] = (0.0, 0.0, 0.0)
+    terminals: dict[str, tuple[_Coord, _Coord, _Coord, _Coord]] = Field(default_factory=dict, max_length=10_000)
 
     @model_validator(mode="after")
     def _one_source(self) -> PartSpec:
-        if (self.mesh is None) == (self.shape is None):
-            raise ValueError("give exactly one of 'mesh' (a file) or 'shape' (a built-in shape)")
+        if sum(v is not None for v in (self.mesh, self.shape, self.layer)) != 1:
+            raise ValueError("give exactly one of 'mesh' (a file), 'shape' (a built-in shape) or 'layer' "
+                             "(a Gerber, Excellon, DXF or SVG layer)")
+        if self.layer is not None and "units" in self.model_fields_set:
+            raise ValueError("a layer part takes its units inside layer = { ..., units = ... }")
         for k, (x0, y0, x1, y1) in self.terminals.items():
             if not (x1 > x0 and y1 > y0):
                 raise ValueError(f"terminal {k!r} must be [x0, y0, x1, y1] with x1 > x0 and y1 > y0")
@@ -175,8 +188,8 @@ class ProcessSpec(_Strict):
     warning, and per-material overrides of the cycles per layer."""
 
     order: tuple[str, ...] | None = None
-    max_passes_per_layer: int = Field(default=200, ge=1)
-    cycles_per_layer: dict[str, int] = Field(default_factory=dict)
+    max_passes_per_layer: int = Field(default=200, ge=1, le=_CYCLES.hi)
+    cycles_per_layer: dict[str, Annotated[int, R.field(_CYCLES)]] = Field(default_factory=dict)
     check: bool = True
     simulate_layers: int = Field(default=4, ge=0, le=1000)
 
@@ -238,6 +251,21 @@ class ResolvedJob:
                 return p
         raise ConfigError(f"no part named {name!r}", path=self.source)
 
+    def resolve(self, path: str | Path) -> Path:
+        """A path named in the job: relative paths are taken from the job file's folder."""
+        p = Path(path)
+        return p if p.is_absolute() else self.base_dir / p
+
+    def device_spec(self) -> str:
+        """``printer.device`` for :func:`~rotoprint.devices.load_device`: a preset name as it
+        is, a device file resolved against the job file's folder (like meshes)."""
+        from ..devices import preset_names
+
+        dev = self.spec.printer.device
+        if dev in preset_names() or (Path(dev).suffix.lower() != ".toml" and "/" not in dev):
+            return dev  # a preset, or an unknown name load_device explains
+        return str(self.resolve(dev))
+
     def head_for_ink(self, ink: str) -> int:
         for j, h in enumerate(self.spec.printer.heads):
             if h.ink == ink:
@@ -291,6 +319,8 @@ def _check_refs(spec: JobSpec, lib: MaterialLibrary, src: str | None) -> None:
         if p.shape is not None:
             avail = {**p.shape.terminals(), **avail}
         for t in r.between:
+            if p.layer is not None:
+                break  # a layer's pads are named in its file: checked when the plan reads it
             if t not in avail:
                 err(f"resistance[{i}].between: part {r.part!r} has no terminal {t!r}; it has: {', '.join(sorted(avail)) or 'none'}")
         if r.between[0] == r.between[1]:
@@ -364,12 +394,10 @@ def load_job(path: str | Path) -> ResolvedJob:
         raise InputFileError("no such job file", path=p)
     if p.is_dir():
         raise InputFileError("is a directory, expected a job .toml file", path=p)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise ConfigError("job file is not UTF-8 text", path=p) from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"not valid TOML: {exc}", path=p) from None
+    from ..io.inputs import MAX_TOML_BYTES, parse_toml, read_input_text
+
+    text = read_input_text(p, what="job file", limit_bytes=MAX_TOML_BYTES, error=ConfigError)
+    data = parse_toml(text, p, what="job file", error=ConfigError)
     return parse_job(data, base_dir=p.resolve().parent, source=str(p))
 
 

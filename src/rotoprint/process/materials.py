@@ -19,9 +19,8 @@ of the system); measure your own and override them.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -41,8 +40,12 @@ __all__ = [
 ]
 
 
+_DAY_S = 86_400.0  # waits and post steps: at most a day each
+_SIGMA_MAX = 1e9  # S/m; silver, the best conductor, is 6.3e7
+
+
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 class Ink(_Strict):
@@ -55,10 +58,10 @@ class Ink(_Strict):
     name: str = Field(min_length=1)
     reactant: str = ""
     concentration_mol_per_l: float = Field(gt=0, le=50)
-    stoichiometry: float = Field(default=1.0, gt=0)
+    stoichiometry: float = Field(default=1.0, gt=0, le=1000)
     repeats: int = Field(default=1, ge=1, le=100)
-    wait_after_s: float = Field(default=0.0, ge=0)
-    ph: tuple[float, float] | None = None
+    wait_after_s: float = Field(default=0.0, ge=0, le=_DAY_S)
+    ph: tuple[Annotated[float, Field(ge=-2, le=16)], Annotated[float, Field(ge=-2, le=16)]] | None = None
     warning: str = ""
 
     @field_validator("name")
@@ -76,8 +79,8 @@ class PostStep(_Strict):
     """A wait or treatment after a material's passes in a layer."""
 
     kind: Literal["flash_heat", "cure", "dry", "uv_cure", "wait"]
-    temperature_c: float | None = None
-    duration_s: float = Field(default=0.0, ge=0)
+    temperature_c: float | None = Field(default=None, ge=-273.15, le=3000)
+    duration_s: float = Field(default=0.0, ge=0, le=_DAY_S)
     note: str = ""
 
     def describe(self) -> str:
@@ -90,8 +93,8 @@ class Product(_Strict):
     """The solid formed, for the thickness estimate ``t = n M / (rho (1 - porosity))``."""
 
     name: str
-    molar_mass_g_per_mol: float = Field(gt=0)
-    density_g_per_cm3: float = Field(gt=0)
+    molar_mass_g_per_mol: float = Field(gt=0, le=1e7)
+    density_g_per_cm3: float = Field(gt=0, le=100)
     porosity: float = Field(default=0.0, ge=0, lt=1)
 
 
@@ -103,8 +106,8 @@ class Material(_Strict):
     inks: tuple[Ink, ...] = Field(min_length=1)
     product: Product
     post_steps: tuple[PostStep, ...] = ()
-    conductivity_s_per_m: float | None = Field(default=None, gt=0)
-    bulk_conductivity_s_per_m: float | None = Field(default=None, gt=0)
+    conductivity_s_per_m: float | None = Field(default=None, gt=0, le=_SIGMA_MAX)
+    bulk_conductivity_s_per_m: float | None = Field(default=None, gt=0, le=_SIGMA_MAX)
     warnings: tuple[str, ...] = ()
     figures: dict[str, str] = Field(default_factory=dict)
     nominal: tuple[str, ...] = ()
@@ -321,12 +324,12 @@ def load_materials(source: str | Path | dict, *, base: MaterialLibrary | None = 
     if isinstance(source, dict):
         return base.with_materials(_materials_from_dict(source, None))
     path = Path(source)
-    if not path.is_file():
-        raise InputFileError("no such materials file" if not path.exists() else "is not a file", path=path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"not valid TOML: {exc}", path=path) from None
+    if not path.exists():
+        raise InputFileError("no such materials file", path=path)
+    from ..io.inputs import MAX_TOML_BYTES, parse_toml, read_input_text
+
+    text = read_input_text(path, what="materials file", limit_bytes=MAX_TOML_BYTES, error=ConfigError)
+    data = parse_toml(text, path, what="materials file", error=ConfigError)
     if set(data) - {"materials"}:
         raise ConfigError(f"unexpected table(s) {sorted(set(data) - {'materials'})}; expected [materials.NAME]", path=path)
     return base.with_materials(_materials_from_dict(data.get("materials", {}), str(path)))

@@ -49,6 +49,8 @@ __all__ = ["HeadSetup", "PassStep", "MaterialBlock", "LayerSchedule", "MaterialE
 
 log = logging.getLogger(__name__)
 
+_EMPTY_SEGMENTS = Segments(np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64))
+
 #: Radii sampled over a material's band for the thickness profile.
 _PROFILE_SAMPLES = 64
 #: Relative spread of a material's thickness over its band above which the plan warns.
@@ -226,8 +228,11 @@ class BuildPlan:
     """A planned multi-material job. :meth:`layer` makes one layer's schedule and images."""
 
     def __init__(self, job: ResolvedJob, device: InkjetDevice, meshes: dict[str, Mesh], heads: tuple[HeadSetup, ...],
-                 estimates: dict[str, MaterialEstimate], warnings: list[str]) -> None:
+                 estimates: dict[str, MaterialEstimate], warnings: list[str], planar: dict | None = None) -> None:
         self.job = job
+        #: layer parts (Gerber, Excellon, DXF, SVG): their exact polygons, sliced without a mesh
+        self.planar = dict(planar or {})
+        self._planar_segments = {n: pl.segments() for n, pl in self.planar.items()}
         self.device = device
         self.meshes = meshes
         self.heads = heads
@@ -237,7 +242,7 @@ class BuildPlan:
         self.layers = h0.layers
         self.placement: PartPlacement = dataclasses.replace(h0.part, angle_deg=job.spec.placement.angle_deg)
         lh = job.spec.job.layer_height_mm
-        self._slicers = {n: slice_mesh(m, device, layer_height_mm=lh) for n, m in meshes.items()}
+        self._slicers = {n: slice_mesh(m, device, layer_height_mm=lh) for n, m in meshes.items() if n not in self.planar}
 
     def __len__(self) -> int:
         return len(self.layers)
@@ -260,7 +265,20 @@ class BuildPlan:
     def sections(self, index: int) -> dict[str, Segments]:
         """Exact cross-sections (model XY) of every part in layer ``index``."""
         z = float(self.layers.z_slice_mm[index])
-        return {n: s.segments_at(z)[0] for n, s in self._slicers.items()}
+        out = {n: s.segments_at(z)[0] for n, s in self._slicers.items()}
+        for n, pl in self.planar.items():
+            out[n] = self._planar_segments[n] if pl.contains_z(z) else _EMPTY_SEGMENTS
+        return out
+
+    def part_terminals(self, name: str) -> dict:
+        """Named terminals of a part: rectangles ``(x0, y0, x1, y1)`` (built-in shapes, the
+        part's ``terminals``) or pad polygons (a layer part's file and points), model frame."""
+        part = self.job.part(name)
+        terms = dict(part.shape.terminals()) if part.shape is not None else {}
+        if name in self.planar:
+            terms.update(self.planar[name].layer.terminals)
+        terms.update(part.terminals)
+        return terms
 
     def _higher(self, part) -> list[str]:
         return [q.name for q in self.job.spec.parts if q.material != part.material and q.priority > part.priority]
@@ -363,6 +381,7 @@ class BuildPlan:
             "material_order": self.material_order,
             "materials": {n: m.model_dump(mode="json") for n, m in self.job.materials.items()},
             "parts": [p.model_dump(mode="json", exclude_none=True) for p in sp.parts],
+            "layer_parts": [pl.to_json(self.job.part(n).material) for n, pl in self.planar.items()],
             "heads": [h.to_json() for h in self.heads],
             "estimates": {n: e.to_json() for n, e in self.estimates.items()},
             "warnings": list(self.warnings),
@@ -436,17 +455,33 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
     BuildPlan
     """
     sp = job.spec
-    device = load_device(sp.printer.device)
+    device = load_device(job.device_spec())
     if not isinstance(device, InkjetDevice):
         raise ConfigError(f"printer.device: {device.name!r} is not an inkjet head; a multi-material job needs print heads",
                           path=job.source)
     meshes = {}
+    planar = {}
     for i, p in enumerate(sp.parts):
         try:
-            meshes[p.name] = load_part_mesh(job, p)
+            if p.layer is not None:
+                from .cadparts import default_tolerance, load_layer_part
+
+                planar[p.name] = load_layer_part(job.base_dir, p, default_tolerance_mm=default_tolerance(device.head.pitch_mm))
+                # the extruded polygon (vertical walls): only for the footprint and the printability check
+                meshes[p.name] = planar[p.name].mesh()
+            else:
+                meshes[p.name] = load_part_mesh(job, p)
         except RotoprintError as exc:
-            raise type(exc)(f"parts[{i}].{'mesh' if p.mesh else 'shape'} (part {p.name!r}, referenced by {job.source or 'the job'}): "
+            kind = 'mesh' if p.mesh else 'shape' if p.shape else 'layer'
+            raise type(exc)(f"parts[{i}].{kind} (part {p.name!r}, referenced by {job.source or 'the job'}): "
                             f"{exc.problem}", path=exc.path) from None
+    for i, r in enumerate(sp.resistance):
+        if r.part in planar:
+            avail = {**planar[r.part].layer.terminals, **job.part(r.part).terminals}
+            for t in r.between:
+                if t not in avail:
+                    raise ConfigError(f"resistance[{i}].between: part {r.part!r} has no terminal {t!r}; its layer "
+                                      f"{planar[r.part].file} has: {', '.join(sorted(avail)) or 'none'}", path=job.source)
     union = Mesh.from_triangles(np.concatenate([m.triangles for m in meshes.values()]), source="assembly")
     used_inks = {ink.name for m in job.materials.values() for ink in m.inks}
     clk = sp.printer.clock
@@ -489,4 +524,4 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
         estimates[mname] = est
         warnings.extend(est.warnings)
     log.debug("planned %d layers, %d heads", len(heads[0].lattice), len(heads))
-    return BuildPlan(job, device, meshes, tuple(heads), estimates, warnings)
+    return BuildPlan(job, device, meshes, tuple(heads), estimates, warnings, planar=planar)

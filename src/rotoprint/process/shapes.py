@@ -15,13 +15,18 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from ..ranges import COORD_MM
 from ..testing import box_triangles, extrude_polygon
 
 __all__ = ["BoxShape", "CylinderShape", "SquareCoilShape", "InterdigitatedShape", "Shape", "coil_centreline"]
 
 
+_MAX_MM = COORD_MM.hi  # every length and coordinate of a shape: within rotoprint.ranges.COORD_MM
+_Mm = Annotated[float, Field(ge=COORD_MM.lo, le=COORD_MM.hi)]
+
+
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
 def _box_xy(x0: float, y0: float, x1: float, y1: float, z0: float, h: float) -> np.ndarray:
@@ -32,8 +37,8 @@ class BoxShape(_Strict):
     """An axis-aligned box with its min corner at ``origin_mm``."""
 
     kind: Literal["box"]
-    size_mm: tuple[float, float, float]
-    origin_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    size_mm: tuple[_Mm, _Mm, _Mm]
+    origin_mm: tuple[_Mm, _Mm, _Mm] = (0.0, 0.0, 0.0)
 
     @model_validator(mode="after")
     def _pos(self) -> BoxShape:
@@ -55,10 +60,10 @@ class CylinderShape(_Strict):
     """A vertical cylinder (polygon of ``segments`` sides)."""
 
     kind: Literal["cylinder"]
-    radius_mm: float = Field(gt=0)
-    height_mm: float = Field(gt=0)
-    centre_mm: tuple[float, float] = (0.0, 0.0)
-    z0_mm: float = 0.0
+    radius_mm: float = Field(gt=0, le=_MAX_MM)
+    height_mm: float = Field(gt=0, le=_MAX_MM)
+    centre_mm: tuple[_Mm, _Mm] = (0.0, 0.0)
+    z0_mm: _Mm = 0.0
     segments: int = Field(default=96, ge=8, le=4096)
 
     def triangles(self) -> np.ndarray:
@@ -111,16 +116,16 @@ class SquareCoilShape(_Strict):
     (``pad_height_mm``, e.g. through a cover)."""
 
     kind: Literal["square_coil"]
-    outer_mm: float = Field(gt=0)
-    track_width_mm: float = Field(gt=0)
-    gap_mm: float = Field(gt=0)
+    outer_mm: float = Field(gt=0, le=_MAX_MM)
+    track_width_mm: float = Field(gt=0, le=_MAX_MM)
+    gap_mm: float = Field(gt=0, le=_MAX_MM)
     turns: int = Field(ge=1, le=200)
-    height_mm: float = Field(gt=0)
-    z0_mm: float = 0.0
-    origin_mm: tuple[float, float] = (0.0, 0.0)
-    pad_mm: float = Field(default=1.2, gt=0)
-    lead_mm: float = Field(default=0.6, ge=0)
-    pad_height_mm: float | None = Field(default=None, gt=0)
+    height_mm: float = Field(gt=0, le=_MAX_MM)
+    z0_mm: _Mm = 0.0
+    origin_mm: tuple[_Mm, _Mm] = (0.0, 0.0)
+    pad_mm: float = Field(default=1.2, gt=0, le=_MAX_MM)
+    lead_mm: float = Field(default=0.6, ge=0, le=_MAX_MM)
+    pad_height_mm: float | None = Field(default=None, gt=0, le=_MAX_MM)
 
     @model_validator(mode="after")
     def _fits(self) -> SquareCoilShape:
@@ -190,14 +195,14 @@ class InterdigitatedShape(_Strict):
 
     kind: Literal["interdigitated"]
     fingers: int = Field(ge=1, le=500)
-    finger_width_mm: float = Field(gt=0)
-    gap_mm: float = Field(gt=0)
-    overlap_mm: float = Field(gt=0)
-    bus_width_mm: float = Field(default=1.0, gt=0)
-    pad_mm: float = Field(default=1.5, gt=0)
-    height_mm: float = Field(gt=0)
-    z0_mm: float = 0.0
-    origin_mm: tuple[float, float] = (0.0, 0.0)
+    finger_width_mm: float = Field(gt=0, le=_MAX_MM)
+    gap_mm: float = Field(gt=0, le=_MAX_MM)
+    overlap_mm: float = Field(gt=0, le=_MAX_MM)
+    bus_width_mm: float = Field(default=1.0, gt=0, le=_MAX_MM)
+    pad_mm: float = Field(default=1.5, gt=0, le=_MAX_MM)
+    height_mm: float = Field(gt=0, le=_MAX_MM)
+    z0_mm: _Mm = 0.0
+    origin_mm: tuple[_Mm, _Mm] = (0.0, 0.0)
 
     def _layout(self):
         fw, g, ov, bw = self.finger_width_mm, self.gap_mm, self.overlap_mm, self.bus_width_mm

@@ -158,6 +158,16 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
         w(f"<tr><td>{sw}{_e(m)}</td><td>{_e(ps)}</td><td>{inks}</td><td>{post}</td><td>{est.cycles} (needed {est.cycles_needed})</td>"
           f"<td>{est.passes_per_layer}</td><td>{_fmt(est.per_layer_um[0])} - {_fmt(est.per_layer_um[1])}</td></tr>")
     w("</table>")
+    if plan_json.get("layer_parts"):
+        w("<h3>CAD layers</h3><table id='cad-layers'><tr><th>part</th><th>material</th><th>file</th><th>z (mm)</th>"
+          "<th>area (mm2)</th><th>regions / holes</th><th>narrowest track / gap (mm)</th><th>terminals</th></tr>")
+        for lp in plan_json["layer_parts"]:
+            sw = f"<span class='sw' style='background:rgb{colours.get(lp['material'], (128, 128, 128))}'></span>"
+            holes = f" minus {', '.join(lp['holes_from'])}" if lp["holes_from"] else ""
+            w(f"<tr><td>{_e(lp['part'])}</td><td>{sw}{_e(lp['material'])}</td><td>{_e(lp['file'])} ({_e(lp['format'])}){_e(holes)}</td>"
+              f"<td>{lp['z_mm'][0]:g} - {lp['z_mm'][1]:g}</td><td>{lp['area_mm2']:.4f}</td><td>{lp['regions']} / {lp['holes']}</td>"
+              f"<td>{_fmt(lp['narrowest_track_mm'])} / {_fmt(lp['narrowest_gap_mm'])}</td><td>{_e(', '.join(lp['terminals']) or '-')}</td></tr>")
+        w("</table>")
     if plan.warnings:
         w("<h3>Warnings</h3>" + "".join(f"<div class='warn'>{_e(x)}</div>" for x in plan.warnings))
     w("</section>")
@@ -195,11 +205,13 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
     w("</table></div></div></section>")
     # overlays
     w("<section id='overlays'><h2>Simulator overlays</h2><p style='font-size:13px'>Drops placed by the forward formula "
-      "from the print-ready data (coverage before density thinning), against the material's exact region: light blue "
+      "from the print-ready data; the headline is the deposit model's film (each drop's volume spread to a footprint and merged; "
+      "interior = the region less half a footprint), the cell-model IoU is secondary. Overlay (coverage before density "
+      "thinning), against the material's exact region: light blue "
       "printed, orange uncovered, pink printed outside, dark blue / red drops on / off the design.</p><div class='ovl'>")
     for o in plan_json["overlays"]:
         w(f"<figure><img alt='overlay' src='{_print_thumb(overlays_dir / o['file'])}'><figcaption>layer {o['layer']} "
-          f"{_e(o['material'])} ({_e(o['head'])}): IoU {o['iou']:.4f}, uncovered {100 * o['uncovered_fraction']:.2f} %</figcaption></figure>")
+          f"{_e(o['material'])} ({_e(o['head'])}): {_film_caption(o)}cell model IoU {o['iou']:.4f}, uncovered {100 * o['uncovered_fraction']:.2f} %</figcaption></figure>")
     w("</div></section>")
     # printability
     w("<section id='printability'><h2>Printability</h2>")
@@ -250,3 +262,12 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
       "<code>rotoprint simulate</code>) are the print-ready images.</p></section>")
     w(f"</main><script type='application/json' id='layer-data'>{layer_data}</script><script>{_JS}</script></body></html>")
     return "".join(w_ for w_ in parts)
+
+
+def _film_caption(o: dict) -> str:
+    """Headline of an overlay: the deposit model's film (rotary/deposit.py), when recorded."""
+    f = o.get("deposit")
+    if not f:
+        return ""
+    return (f"<b>film: {100 * f['uncovered_fraction']:.2f} % of the interior uncovered</b> "
+            f"({f['footprint_um']:.0f} um footprints; thinnest / mean {f['thinnest_to_mean']:.2f}); ")

@@ -27,6 +27,7 @@ simulator's reference image.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import logging
 import math
@@ -399,6 +400,7 @@ def slice_rotary(
     fill: str = "nonzero",
     gap_radius_mm: float = DEFAULT_GAP_RADIUS_MM,
     kernel: str = "numba",
+    pivot_offset_mm: float = 0.0,
 ) -> DirectSliceJob:
     """Plan direct rotary slicing of ``mesh`` for an inkjet ``device``.
 
@@ -428,6 +430,9 @@ def slice_rotary(
         Open meshes: see :func:`rotoprint.slice_mesh`.
     kernel : {'numba', 'numpy'}
         The jit kernel or the pure-numpy reference; their output is identical.
+    pivot_offset_mm : float
+        Radial offset of every swathe's pivot from the planned one: one interlaced pass
+        (:func:`rotoprint.rotary.interlace.plan_passes`); the swathes keep their nozzles.
 
     Returns
     -------
@@ -471,7 +476,12 @@ def slice_rotary(
     live[list(head.dead_nozzles)] = False
     tracks = []
     for j, sw in enumerate(plan.swathes):
-        lay = nozzle_layout(head, plan.mount(j))
+        mount = plan.mount(j)
+        if pivot_offset_mm:
+            if not math.isfinite(pivot_offset_mm):
+                raise ConfigError(f"pivot offset must be a finite number of mm, got {pivot_offset_mm!r}")
+            mount = dataclasses.replace(mount, pivot_radius_mm=mount.pivot_radius_mm + float(pivot_offset_mm))
+        lay = nozzle_layout(head, mount)
         dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
         en = sw.enabled
         i0, i1 = firing_range(lay.phi_rad[en], a_lo, a_hi, dphi, int(direction))
@@ -483,7 +493,7 @@ def slice_rotary(
         r = lay.r_mm[k]
         tracks.append(
             TrackSet(
-                index=j, pivot_radius_mm=sw.pivot_radius_mm, dphi_rad=dphi, ref_radius_mm=r_ref, first_firing=i0,
+                index=j, pivot_radius_mm=mount.pivot_radius_mm, dphi_rad=dphi, ref_radius_mm=r_ref, first_firing=i0,
                 firings=n_f, band_mm=sw.band_mm, enabled=en, nozzle=k.astype(np.int64), r_mm=r,
                 psi0_rad=lay.phi_rad[k] - alpha, pitch_mm=_local_pitch(r, EQUALISE_PITCH_WINDOW),
             )
@@ -494,7 +504,7 @@ def slice_rotary(
         "layer_height_mm": float(layer_height_mm), "tilt_deg": float(tilt_deg), "inner_radius_mm": float(inner_radius_mm),
         "angle_deg": float(angle_deg), "dpi_y": dpi_y, "ref_radius_mm": ref_radius_mm, "direction": int(direction),
         "max_swathes": max_swathes, "equalise": bool(equalise), "fill": fill, "gap_radius_mm": float(gap_radius_mm),
-        "kernel": kernel,
+        "kernel": kernel, **({"pivot_offset_mm": float(pivot_offset_mm)} if pivot_offset_mm else {}),
     }
     return djob
 

@@ -10,6 +10,7 @@ costs one gather.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import logging
 import math
@@ -272,6 +273,7 @@ def exact_maps(
     direction: int = 1,
     max_swathes: int | None = None,
     kernel: str = "numba",
+    pivot_offset_mm: float = 0.0,
 ) -> ExactMaps:
     """Build (or fetch from the cache) the sampling maps of the exact transform.
 
@@ -290,6 +292,9 @@ def exact_maps(
     max_swathes : int, optional
         Refuse designs that need more radial swathes.
     kernel : {"numba", "numpy"}
+    pivot_offset_mm : float
+        Radial offset of every swathe's pivot from the planned one (an interlaced pass,
+        :mod:`rotoprint.rotary.interlace`); the swathes keep their nozzles and bands.
 
     Examples
     --------
@@ -320,6 +325,8 @@ def exact_maps(
     setup = []
     for j, sw in enumerate(plan.swathes):
         mount = plan.mount(j)
+        if pivot_offset_mm:
+            mount = dataclasses.replace(mount, pivot_radius_mm=mount.pivot_radius_mm + float(pivot_offset_mm))
         lay = nozzle_layout(head, mount)
         dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
         i0, i1 = firing_range(lay.phi_rad[sw.enabled], a_lo, a_hi, dphi, direction)
@@ -404,6 +411,7 @@ def transform_exact(
     max_swathes: int | None = None,
     kind: str | None = None,
     kernel: str = "numba",
+    pivot_offset_mm: float = 0.0,
 ) -> RotaryPrint:
     """Make ``design`` print-ready for a (tilted) head over a rotating platform.
 
@@ -433,5 +441,6 @@ def transform_exact(
     maps = exact_maps(
         head, placement, tilt_deg=float(tilt_deg), dpi_y=dpi_y, ref_radius_mm=ref_radius_mm,
         mount_angle_deg=float(mount_angle_deg), direction=int(direction), max_swathes=max_swathes, kernel=kernel,
+        pivot_offset_mm=float(pivot_offset_mm),
     )
     return maps.apply(design, kind=kind)

@@ -15,7 +15,10 @@ import re
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
+
+from .. import ranges as R
+from .._resources import check_raster_fits
+from ..ranges import check_range
 
 from ..devices.models import InkjetHead
 from pydantic import ValidationError
@@ -24,6 +27,8 @@ from ..errors import ImageError, InputFileError, RotoprintError
 from ..io.atomic import check_output_path, write_owned_file
 from ..io.ownership import mark_json, mark_png
 from ..io.images import png_bytes
+from ..io.images import open_image
+from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes, read_json_file
 from .head import check_tilt
 from .placement import Placement
 from .printdata import SIDECAR_FORMAT, RotaryPrint, SwatheImage, levels_to_png, png_to_levels, runs_to_mask
@@ -152,40 +157,69 @@ def sidecar_path(path: str | Path) -> Path:
     return cand
 
 
-def _number(d: dict, key: str, where: str, sp: Path, *, positive: bool = False) -> float:
-    """``d[key]`` as a finite float (``> 0`` if ``positive``), or an InputFileError naming the field."""
+def _number(d: dict, key: str, where: str, sp: Path, *, positive: bool = False, rng: R.Range | None = None) -> float:
+    """``d[key]`` as a finite float (``> 0`` if ``positive``; in ``rng`` if given; an int if
+    ``rng.integer``), or an InputFileError naming the field."""
     v = d[key]
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
         raise InputFileError(f"sidecar field {where}{key} must be a finite number, got {v!r}", path=sp)
     if positive and not v > 0:
         raise InputFileError(f"sidecar field {where}{key} must be > 0, got {v!r}", path=sp)
+    if rng is not None:
+        return check_range(v, rng, f"sidecar field {where}{key}", error=InputFileError, path=sp)
     return float(v)
 
 
+_FIRING_INDEX = R.Range(-R.MAX_COUNT, R.MAX_COUNT, integer=True)
+_DPHI_RAD = R.Range(0.0, 2 * math.pi, "rad", lo_open=True)
+
+
 def _check_sidecar(side: dict, head: InkjetHead, sp: Path) -> None:
-    """Range checks on the numbers of a sidecar (tilt within the head's limit, dphi > 0, finite)."""
+    """Range checks on the numbers of a sidecar (:mod:`rotoprint.ranges`): tilt within the
+    head's limit, angles, densities and radii in range, integer counts and nozzle runs within
+    the head, and every swathe image sized before it is read."""
     tilt = _number(side, "tilt_deg", "", sp)
     try:
         check_tilt(head, tilt)
     except RotoprintError as exc:
         raise InputFileError(f"sidecar field tilt_deg: {exc.problem}", path=sp) from None
-    _number(side, "mount_angle_deg", "", sp)
-    _number(side, "dpi_y", "", sp, positive=True)
-    if side["direction"] not in (1, -1):
+    _number(side, "mount_angle_deg", "", sp, rng=R.ANGLE_DEG)
+    _number(side, "dpi_y", "", sp, positive=True, rng=R.DPI)
+    if side["direction"] not in (1, -1) or isinstance(side["direction"], bool):
         raise InputFileError(f"sidecar field direction must be 1 or -1, got {side['direction']!r}", path=sp)
+    if not isinstance(side["swathes"], list) or not 1 <= len(side["swathes"]) <= R.SWATHES.hi:
+        raise InputFileError(f"sidecar field swathes must be a list of 1 to {R.SWATHES.hi:g} swathes", path=sp)
+    pixels = 0
     for j, d in enumerate(side["swathes"]):
         where = f"swathes[{j}]."
-        dphi = _number(d, "dphi_rad", where, sp, positive=True)
+        dphi = _number(d, "dphi_rad", where, sp, positive=True, rng=_DPHI_RAD)
         if "angle_per_firing_deg" in d:
             deg = _number(d, "angle_per_firing_deg", where, sp, positive=True)
             if not math.isclose(deg, math.degrees(dphi), rel_tol=1e-9):
                 raise InputFileError(f"sidecar field {where}angle_per_firing_deg is {deg!r}, but dphi_rad "
                                      f"{dphi!r} is {math.degrees(dphi)!r} deg", path=sp)
-        _number(d, "pivot_radius_mm", where, sp, positive=True)
-        _number(d, "ref_radius_mm", where, sp, positive=True)
-        lo, hi = (_number({"band_mm": v}, "band_mm", where, sp) for v in d["band_mm"])
+        _number(d, "pivot_radius_mm", where, sp, positive=True, rng=R.RADIUS_MM)
+        _number(d, "ref_radius_mm", where, sp, positive=True, rng=R.RADIUS_MM)
+        _number(d, "index", where, sp, rng=R.COUNT)
+        _number(d, "first_firing_index", where, sp, rng=_FIRING_INDEX)
+        firings = _number(d, "firings", where, sp, rng=R.Range(1, R.MAX_COUNT, integer=True))
+        nozzles = _number(d, "nozzles", where, sp, rng=R.Range(1, head.nozzles, integer=True))
+        _number(d, "enabled_nozzles", where, sp, rng=R.Range(0, head.nozzles, integer=True))
+        runs = d.get("enabled_nozzle_runs")
+        if runs is not None:
+            ok = isinstance(runs, list) and len(runs) <= head.nozzles and all(
+                isinstance(r, list) and len(r) == 2 and all(isinstance(k, int) and not isinstance(k, bool) for k in r)
+                and 0 <= r[0] < r[1] <= head.nozzles for r in runs)
+            if not ok:
+                raise InputFileError(f"sidecar field {where}enabled_nozzle_runs must be [start, end) nozzle runs "
+                                     f"within the head's {head.nozzles} nozzles", path=sp)
+        if not isinstance(d["band_mm"], list) or len(d["band_mm"]) != 2:
+            raise InputFileError(f"sidecar field {where}band_mm must be [low, high], got {d['band_mm']!r}", path=sp)
+        lo, hi = (_number({"band_mm": v}, "band_mm", where, sp, rng=R.COORD_MM) for v in d["band_mm"])
         if not hi >= lo:
             raise InputFileError(f"sidecar field {where}band_mm must be [low, high] with high >= low, got {d['band_mm']!r}", path=sp)
+        pixels += firings * nozzles
+    check_raster_fits(1, pixels, 2, what=f"{sp.name}: the swathe images")
 
 
 def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
@@ -219,10 +253,7 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
     sp = sidecar_path(p)
     if not sp.exists():
         raise InputFileError(f"no sidecar {sp.name} beside it (written by 'rotoprint transform')", path=p)
-    try:
-        side = json.loads(sp.read_text(encoding="utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputFileError(f"sidecar is not valid JSON: {exc}", path=sp) from None
+    side = read_json_file(sp, what="sidecar")
     if not isinstance(side, dict) or side.get("format") != SIDECAR_FORMAT:
         raise InputFileError(f"not a rotoprint rotary-print sidecar (format {SIDECAR_FORMAT!r} expected)", path=sp)
     try:
@@ -239,8 +270,11 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
             f = sp.parent / d["file"]
             if not f.exists():
                 raise InputFileError(f"swathe image {d['file']} listed in the sidecar is missing", path=sp)
+            if not (sp.parent / d["file"]).resolve().is_relative_to(sp.parent.resolve()):
+                raise InputFileError(f"swathe image {d['file']!r} listed in the sidecar is outside its folder", path=sp)
+            data = read_input_bytes(f, what="print image", limit_bytes=MAX_IMAGE_BYTES)
             try:
-                with Image.open(f) as im:
+                with open_image(data, f, "print image") as im:
                     im.load()
                     if im.mode != "L":
                         raise ImageError(f"print image must be 8-bit greyscale, got mode {im.mode!r}", path=f)

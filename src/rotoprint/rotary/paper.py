@@ -21,6 +21,8 @@ import math
 import numpy as np
 
 from ..devices.models import InkjetHead
+from .._resources import check_raster_fits
+from ..ranges import check_count
 from ..errors import ConfigError
 from .exact import _check_design
 from .head import nozzle_layout, nozzle_offsets
@@ -163,8 +165,10 @@ def transform_paper(
         en = sw.enabled
         u0, u1 = int(u_k[en].min()), int(u_k[en].max())
         su = u1 - u0 + 1
-        c = int(math.ceil(a_hi / dphi))
-        sv = c - int(math.floor(a_lo / dphi)) + 1
+        c = check_count(math.ceil(a_hi / dphi), f"firings of swathe {j}")
+        sv = c - check_count(math.floor(a_lo / dphi), f"firings of swathe {j}") + 1
+        # X, Y, col, row, their floors and the index: about 56 bytes a polar pixel
+        check_raster_fits(su, sv, 56, what=f"polar image of swathe {j}")
         # step 1: polar image P[v, u] (columns u0..u1)
         rho = cx_T + np.arange(u0, u1 + 1) * pc
         alpha = (c - np.arange(sv)) * dphi
@@ -188,6 +192,8 @@ def transform_paper(
         else:
             i0 = c - int(shift[en].max()) - sv + 1
             i1 = c - int(shift[en].min())
+        # v (int64), the mask, the samples and the levels: about 11 bytes a print pixel
+        check_raster_fits(head.nozzles, i1 - i0 + 1, 11, what=f"print image of swathe {j}")
         ii = np.arange(i0, i1 + 1)[:, None]
         v = (c - shift[None, :] + ii) if direction == 1 else (c - shift[None, :] - ii)
         u = (u_k - u0)[None, :]

@@ -87,9 +87,11 @@ def png_to_levels(png: np.ndarray, grey_levels: int) -> np.ndarray:
     Returns
     -------
     (F, N) uint8 ndarray
-        ``round(png * grey_levels / 255)``.
+        ``round(png * grey_levels / 255)``, through a 256-entry table (one byte a pixel of
+        working memory, not the 16 of a float64 round trip).
     """
-    return np.rint(png.astype(np.float64) * (grey_levels / 255.0)).astype(np.uint8)
+    lut = np.rint(np.arange(256, dtype=np.float64) * (grey_levels / 255.0)).astype(np.uint8)
+    return lut[np.asarray(png, dtype=np.uint8)]
 
 
 def design_kind(design: np.ndarray) -> str:

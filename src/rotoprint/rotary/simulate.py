@@ -24,11 +24,14 @@ Definitions (design grid, pixel ``(j, c)`` covering ``[c, c+1) x [j, j+1)``):
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import ndimage
 
+from .._resources import check_raster_fits
+from ..ranges import DROP_UM, JITTER_UM, check_range
 from ..errors import ConfigError, ImageError
 from .head import Mount, nozzle_layout
 from .printdata import RotaryPrint, design_kind, design_levels
@@ -176,6 +179,9 @@ class Simulation:
     error_px: np.ndarray  # (M,) float64
 
 
+_DISC_LOOP_FACTOR = 64  # stamp loop while its work is under this many passes over the design
+
+
 def _printed_mask(drops: Drops, shape: tuple[int, int], px: float, py: float, radius_mm: float) -> np.ndarray:
     h, w = shape
     printed = np.zeros(shape, bool)
@@ -186,6 +192,19 @@ def _printed_mask(drops: Drops, shape: tuple[int, int], px: float, py: float, ra
     wx = int(math.ceil(radius_mm / px)) + 1
     wy = int(math.ceil(radius_mm / py)) + 1
     r2 = radius_mm * radius_mm
+    if (2 * wx + 1) * (2 * wy + 1) * max(len(c0), 1) > _DISC_LOOP_FACTOR * h * w:
+        # large discs: the stamp loop would cost (window x drops); a nearest-drop query costs
+        # one lookup per pixel whatever the radius, and marks the same pixels (a pixel centre
+        # within the radius of some drop is within it of the nearest one)
+        from scipy.spatial import cKDTree
+
+        if len(c0):
+            jj, cc = np.divmod(np.arange(h * w, dtype=np.int64), w)
+            tree = cKDTree(np.column_stack((drops.col * px, drops.row * py)))
+            dist, _ = tree.query(np.column_stack(((cc + 0.5) * px, (jj + 0.5) * py)), distance_upper_bound=radius_mm * (1 + 1e-12))
+            near = dist <= radius_mm
+            printed.reshape(-1)[near] = True
+        return printed
     for dr in range(-wy, wy + 1):
         for dc in range(-wx, wx + 1):
             c = c0 + dc
@@ -328,8 +347,11 @@ def simulate(
     if design.shape != (pl.height_px, pl.width_px):
         raise ImageError(f"design is {design.shape[1]} x {design.shape[0]} px, the print was made for {pl.width_px} x {pl.height_px} px")
     d_um = pr.head.drop_diameter_um if drop_diameter_um is None else float(drop_diameter_um)
-    if not (d_um >= 0 and math.isfinite(d_um)):
-        raise ConfigError(f"drop diameter must be >= 0 um, got {d_um}")
+    if drop_diameter_um is not None:
+        d_um = check_range(d_um, DROP_UM, "drop diameter (um)")
+    check_range(jitter_um, JITTER_UM, "jitter (um)")
+    # the cell model and the disc model keep about 14 float64 arrays per design pixel
+    check_raster_fits(pl.width_px, pl.height_px, 112, what="the simulation of a design")
     drops = place_drops(pr, jitter_um=jitter_um, dead_nozzles=dead_nozzles, seed=seed)
     inked = design_mask(design, pr.head.grey_levels)
     px, py = pl.pitch_x_mm, pl.pitch_y_mm
@@ -391,6 +413,26 @@ COLOURS = {
 }
 
 
+def check_overlay_fits(shape: tuple[int, int], scale: int) -> int:
+    """Refuse, before anything is simulated, an overlay of a ``shape = (H, W)`` design at
+    ``scale`` that would not fit in memory; returns ``scale`` as an int.
+
+    Raises
+    ------
+    ConfigError
+        ``scale`` is not an integer in 1..16.
+    RasterTooLargeError
+        The ``(H*scale, W*scale, 3)`` picture and its working copies would not fit.
+    """
+    if isinstance(scale, bool) or not isinstance(scale, numbers.Integral) or scale < 1 or scale > 16:
+        raise ConfigError(f"overlay scale must be 1..16, got {scale}")
+    scale = int(scale)
+    h, w = shape
+    # the picture, its row-repeated half-way copy and the PNG encoder's copy: about 7 bytes a pixel
+    check_raster_fits(w * scale, h * scale, 7, what=f"the overlay at --scale {scale}")
+    return scale
+
+
 def render_overlay(sim: Simulation, *, scale: int = 2) -> np.ndarray:
     """``(H*scale, W*scale, 3) uint8`` picture: design printed (light blue), design left
     uncovered (orange), printed outside the design (pink), drops on ink (dark blue) and
@@ -415,8 +457,7 @@ def render_overlay(sim: Simulation, *, scale: int = 2) -> np.ndarray:
     ConfigError
         ``scale`` is outside 1..16.
     """
-    if scale < 1 or scale > 16:
-        raise ConfigError(f"overlay scale must be 1..16, got {scale}")
+    scale = check_overlay_fits(sim.inked.shape, scale)
     h, w = sim.inked.shape
     img = np.empty((h, w, 3), np.uint8)
     img[:] = COLOURS["background"]

@@ -9,6 +9,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .grid import _cell_index
+
 
 #: Segments shorter than this (mm) are rounding slivers (e.g. of an open mesh's gap closing):
 #: they are not sampled, their direction being noise.
@@ -23,8 +25,8 @@ def _bands(sy, ey, y0, hb, nb):  # pragma: no cover - jit
     for k in range(n):
         a = min(sy[k], ey[k])
         b = max(sy[k], ey[k])
-        i0 = max(0, min(nb - 1, int(math.floor((a - y0) / hb))))
-        i1 = max(0, min(nb - 1, int(math.floor((b - y0) / hb))))
+        i0 = _cell_index((a - y0) / hb, nb)
+        i1 = _cell_index((b - y0) / hb, nb)
         for i in range(i0, i1 + 1):
             count[i + 1] += 1
     for i in range(nb):
@@ -34,8 +36,8 @@ def _bands(sy, ey, y0, hb, nb):  # pragma: no cover - jit
     for k in range(n):
         a = min(sy[k], ey[k])
         b = max(sy[k], ey[k])
-        i0 = max(0, min(nb - 1, int(math.floor((a - y0) / hb))))
-        i1 = max(0, min(nb - 1, int(math.floor((b - y0) / hb))))
+        i0 = _cell_index((a - y0) / hb, nb)
+        i1 = _cell_index((b - y0) / hb, nb)
         for i in range(i0, i1 + 1):
             idx[fill[i]] = k
             fill[i] += 1

@@ -10,7 +10,7 @@ import numpy as np
 from numba import njit
 
 from .chains import _RUNS_FROM, _RUN_COS, _RUN_MIN_LEN_MM, _chain_runs, chain_successors
-from .grid import _cell_size
+from .grid import _cell_index, _cell_size
 from .pointhash import _keys
 
 
@@ -371,10 +371,10 @@ def _split_cells(sx, sy, ex, ey, x0, y0, h, ncx, ncy, grow):  # pragma: no cover
                 bx = ex[k] if j == mk - 1 else sx[k] + f1 * (ex[k] - sx[k])
                 by = ey[k] if j == mk - 1 else sy[k] + f1 * (ey[k] - sy[k])
             # (truncation is the floor here: the negatives it rounds up are clamped to 0)
-            cx0 = max(0, min(ncx - 1, int((min(ax, bx) - pad - x0) * ih)))
-            cx1 = max(0, min(ncx - 1, int((max(ax, bx) + pad - x0) * ih)))
-            cy0 = max(0, min(ncy - 1, int((min(ay, by) - pad - y0) * ih)))
-            cy1 = max(0, min(ncy - 1, int((max(ay, by) + pad - y0) * ih)))
+            cx0 = _cell_index((min(ax, bx) - pad - x0) * ih, ncx)
+            cx1 = _cell_index((max(ax, bx) + pad - x0) * ih, ncx)
+            cy0 = _cell_index((min(ay, by) - pad - y0) * ih, ncy)
+            cy1 = _cell_index((max(ay, by) + pad - y0) * ih, ncy)
             cr[p, 0] = cx0
             cr[p, 1] = cx1
             cr[p, 2] = cy0

@@ -14,6 +14,17 @@ _PARALLEL_EPS = 1e-15
 
 
 @njit(cache=True, nogil=True, inline="always")
+def _cell_index(v, n):  # pragma: no cover - jit
+    """``floor(v)`` clamped to ``0 .. n - 1``, the float clamped before the int conversion (a
+    float past int64, from a width of 1e19 mm, would wrap to any index); NaN gives 0."""
+    if not v > 0.0:
+        return 0
+    if v >= n - 1:
+        return n - 1
+    return int(v)
+
+
+@njit(cache=True, nogil=True, inline="always")
 def _clip_x(ax, ay, bx, by, y0, y1, lo, hi):  # pragma: no cover - jit
     """``lo, hi`` widened by the x extent of the edge from ``(ax, ay)`` to ``(bx, by)`` within
     the band ``y0 <= y <= y1`` (unchanged when the edge misses the band)."""
@@ -37,8 +48,8 @@ def _span(ax, ay, bx, by, gr, x0, y0, h, ncx, pad):  # pragma: no cover - jit
     lo, hi = _clip_x(ax, ay, bx, by, yb, yb + h + 2.0 * pad, np.inf, -np.inf)
     if lo > hi:
         return 0, -1
-    c0 = max(0, min(ncx - 1, int(math.floor((lo - pad - x0) / h))))
-    c1 = max(0, min(ncx - 1, int(math.floor((hi + pad - x0) / h))))
+    c0 = _cell_index((lo - pad - x0) / h, ncx)
+    c1 = _cell_index((hi + pad - x0) / h, ncx)
     return c0, c1
 
 

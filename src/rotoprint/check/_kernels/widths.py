@@ -14,7 +14,7 @@ from numba import njit
 from .chains import _RUNS_FROM, _RUN_MIN_LEN_MM, _RUN_MIN_SEGS, _chain_runs, chain_components, chain_successors
 from .classify import classify_segments
 from .crossings import split_at_crossings
-from .grid import _cell_size, _clip_x, _dda_start, _hit, _span
+from .grid import _cell_index, _cell_size, _clip_x, _dda_start, _hit, _span
 from .pointhash import _keys
 
 
@@ -146,10 +146,10 @@ def _seg_cells(sx, sy, ex, ey, keep, run, x0, y0, h, ncx, ncy):  # pragma: no co
         b0 = sy[k]
         a1 = ex[k]
         b1 = ey[k]
-        cx0 = max(0, min(ncx - 1, int(math.floor((min(a0, a1) - pad - x0) * inv))))
-        cx1 = max(0, min(ncx - 1, int(math.floor((max(a0, a1) + pad - x0) * inv))))
-        cy0 = max(0, min(ncy - 1, int(math.floor((min(b0, b1) - pad - y0) * inv))))
-        cy1 = max(0, min(ncy - 1, int(math.floor((max(b0, b1) + pad - y0) * inv))))
+        cx0 = _cell_index((min(a0, a1) - pad - x0) * inv, ncx)
+        cx1 = _cell_index((max(a0, a1) + pad - x0) * inv, ncx)
+        cy0 = _cell_index((min(b0, b1) - pad - y0) * inv, ncy)
+        cy1 = _cell_index((max(b0, b1) + pad - y0) * inv, ncy)
         box[k, 0] = cx0
         box[k, 1] = cx1
         box[k, 2] = cy0

@@ -1,0 +1,199 @@
+"""SVG drawings into exact polygons, read with svgelements.
+
+Every shape (path, rect, circle, ellipse, polygon, polyline, line) with its transforms
+applied: its fill (``fill-rule`` nonzero or evenodd, exact winding numbers) and its stroke
+(``stroke-width`` through the transforms, ``stroke-linecap`` butt/round/square,
+``stroke-linejoin`` miter/round/bevel with ``stroke-miterlimit``) are dark; ``fill="none"`` and
+``stroke="none"`` are not. Arcs and Bézier curves become chords within the tolerance.
+
+Units: svgelements resolves the document to CSS pixels (96 per inch; ``width="30mm"`` with a
+``viewBox`` maps user units to millimetres), so coordinates are ``px * 25.4 / 96`` mm; ``units``
+overrides that (the pixel is then that unit). Y is flipped (SVG's Y runs down the page).
+
+Refused: ``width``/``height`` in a unit that is not a length, transforms nested more than
+:data:`MAX_TRANSFORM_DEPTH` deep, elements nested more than :data:`MAX_ELEMENT_DEPTH` deep.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+import shapely
+from shapely.geometry import LinearRing, LineString
+
+from ...errors import CadError
+from ..inputs import check_input_file
+from ._geometry import PlanarLayer, as_multipolygon, fill_rings, length_unit_mm, segments_for_arc
+
+__all__ = ["read_svg", "MAX_TRANSFORM_DEPTH", "MAX_ELEMENT_DEPTH"]
+
+MAX_FILE_BYTES = 64 * 1024 * 1024
+MAX_TRANSFORM_DEPTH = 32
+MAX_ELEMENT_DEPTH = 256
+_SVG_LENGTH = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([a-zA-Z%]*)\s*$")
+_SVG_UNITS = {"", "px", "mm", "cm", "in", "pt", "pc", "q", "%", "em", "ex"}
+
+
+def _precheck(path: Path) -> None:
+    depth = 0
+    tdepth = [0]
+    worst = 0
+    try:
+        for ev, el in ET.iterparse(path, events=("start", "end")):
+            if ev == "start":
+                depth += 1
+                t = tdepth[-1] + (1 if el.get("transform") else 0)
+                tdepth.append(t)
+                worst = max(worst, t)
+                if depth > MAX_ELEMENT_DEPTH:
+                    raise CadError(f"elements are nested more than {MAX_ELEMENT_DEPTH} deep", path=path)
+                if t > MAX_TRANSFORM_DEPTH:
+                    raise CadError(f"transforms are nested more than {MAX_TRANSFORM_DEPTH} deep; flatten the "
+                                   "groups before reading", path=path)
+                if depth == 1:
+                    for k in ("width", "height"):
+                        v = el.get(k)
+                        if v is None:
+                            continue
+                        m = _SVG_LENGTH.match(v)
+                        if not m or m.group(2).lower() not in _SVG_UNITS:
+                            raise CadError(f"{k}={v!r} of the <svg> element is not a length", path=path)
+            else:
+                depth -= 1
+                tdepth.pop()
+                el.clear()
+    except ET.ParseError as exc:
+        raise CadError(f"not a readable SVG (XML) file: {exc}", path=path) from None
+
+
+def _flatten(sub, tol: float) -> tuple[np.ndarray, bool]:
+    """One subpath's points (px) and whether it closes."""
+    from svgelements import Arc, Close, CubicBezier, Line, Move, QuadraticBezier
+
+    pts: list[tuple[float, float]] = []
+    closed = False
+    for seg in sub:
+        if isinstance(seg, Move):
+            pts.append((seg.end.x, seg.end.y))
+        elif isinstance(seg, Close):
+            closed = True
+            if seg.start is not None:
+                pts.append((seg.end.x, seg.end.y))
+        elif isinstance(seg, Line):
+            pts.append((seg.end.x, seg.end.y))
+        else:
+            if isinstance(seg, Arc):
+                r = max(abs(seg.rx), abs(seg.ry))
+                rmin = max(min(abs(seg.rx), abs(seg.ry)), 1e-12)
+                n = segments_for_arc(r * r / rmin, seg.sweep, tol)
+            elif isinstance(seg, CubicBezier):
+                c = [np.array([q.x, q.y]) for q in (seg.start, seg.control1, seg.control2, seg.end)]
+                m = max(np.hypot(*(c[0] - 2 * c[1] + c[2])), np.hypot(*(c[1] - 2 * c[2] + c[3])))
+                n = max(1, math.ceil(math.sqrt(6 * m / (8 * tol))))
+            elif isinstance(seg, QuadraticBezier):
+                c = [np.array([q.x, q.y]) for q in (seg.start, seg.control, seg.end)]
+                m = np.hypot(*(c[0] - 2 * c[1] + c[2]))
+                n = max(1, math.ceil(math.sqrt(2 * m / (8 * tol))))
+            else:
+                raise CadError(f"unsupported path segment {type(seg).__name__}")
+            if n > 1_000_000:
+                raise CadError(f"a curve needs {n:,} chords at this tolerance; use a larger tolerance")
+            for t in np.arange(1, n + 1) / n:
+                q = seg.point(float(t))
+                pts.append((q.x, q.y))
+    a = np.asarray(pts, np.float64)
+    if len(a):
+        keep = np.ones(len(a), bool)
+        keep[1:] = np.any(np.diff(a, axis=0) != 0, axis=1)
+        a = a[keep]
+    return a, closed
+
+
+def _stroke(points: np.ndarray, closed: bool, width: float, values: dict, tol: float):
+    cap = {"butt": "flat", "round": "round", "square": "square"}.get(str(values.get("stroke-linecap", "butt")).strip(), "flat")
+    join = {"miter": "mitre", "round": "round", "bevel": "bevel"}.get(str(values.get("stroke-linejoin", "miter")).strip(), "mitre")
+    try:
+        limit = float(values.get("stroke-miterlimit", 4.0))
+    except (TypeError, ValueError):
+        limit = 4.0
+    qs = max(2, segments_for_arc(width / 2, math.pi / 2, tol))
+    if closed and len(points) >= 3:
+        ring = points if not np.array_equal(points[0], points[-1]) else points[:-1]
+        if len(ring) >= 3:
+            return LinearRing(ring).buffer(width / 2, quad_segs=qs, join_style=join, mitre_limit=limit)
+    if len(points) == 1:
+        if cap == "flat":
+            return shapely.Polygon()
+        return shapely.Point(points[0]).buffer(width / 2, quad_segs=qs, cap_style=cap)
+    return LineString(points).buffer(width / 2, quad_segs=qs, cap_style=cap, join_style=join, mitre_limit=limit)
+
+
+def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None) -> PlanarLayer:
+    """Read an SVG drawing's filled and stroked area into its exact region (mm, Y up).
+
+    Parameters
+    ----------
+    path : str or Path
+    tolerance_mm : float
+        Largest distance of chords from arcs and curves, mm.
+    units : str, optional
+        Unit of svgelements' CSS pixel (default ``px``: 1/96 in).
+
+    Returns
+    -------
+    PlanarLayer
+
+    Raises
+    ------
+    CadError
+        Not an SVG, deeply nested transforms, or a size that is not a length.
+    """
+    import svgelements as se
+
+    p = Path(path)
+    check_input_file(p, what="SVG file", limit_bytes=MAX_FILE_BYTES)  # regular, bounded: never a blocking read
+    _precheck(p)
+    # svgelements' own CSS pixel per mm (it converts "mm" with this factor)
+    mm_per_px = length_unit_mm(units, path=p) if units else 1.0 / float(se.Length("1mm").value(ppi=96.0))
+    tol = float(tolerance_mm) / mm_per_px
+    try:
+        doc = se.SVG.parse(str(p), reify=True, ppi=96.0)
+    except (ValueError, TypeError, ET.ParseError, IndexError, ZeroDivisionError) as exc:
+        raise CadError(f"not a readable SVG file: {exc}", path=p) from None
+    parts = []
+    counts = {"fills": 0, "strokes": 0}
+    for el in doc.elements():
+        if not isinstance(el, se.Shape) or isinstance(el, se.Text):
+            continue
+        if str(el.values.get("visibility", "visible")) == "hidden" or str(el.values.get("display", "")) == "none":
+            continue
+        path_ = se.Path(el)
+        subs = [_flatten(s, tol) for s in path_.as_subpaths()]
+        subs = [(a, c) for a, c in subs if len(a)]
+        if not subs:
+            continue
+        fill = el.fill
+        if fill is not None and fill.value is not None and fill.alpha != 0:
+            rule = "evenodd" if str(el.values.get("fill-rule", "nonzero")).strip() == "evenodd" else "nonzero"
+            reg = fill_rings([a for a, _ in subs], rule)
+            if not reg.is_empty:
+                parts.append(reg)
+                counts["fills"] += 1
+        stroke = el.stroke
+        w = float(getattr(el, "implicit_stroke_width", None) or el.stroke_width or 0.0)
+        if stroke is not None and stroke.value is not None and stroke.alpha != 0 and w > 0:
+            for a, c in subs:
+                g = _stroke(a, c, w, el.values, tol)
+                if not g.is_empty:
+                    parts.append(g)
+            counts["strokes"] += 1
+    region = as_multipolygon(shapely.union_all(parts)) if parts else as_multipolygon(shapely.Polygon())
+    from shapely import affinity
+
+    region = as_multipolygon(affinity.affine_transform(region, [mm_per_px, 0, 0, -mm_per_px, 0, 0]))
+    region = as_multipolygon(shapely.orient_polygons(region, exterior_cw=False))
+    return PlanarLayer(region=region, terminals={}, source=str(p), fmt="svg", tolerance_mm=float(tolerance_mm), counts=counts)

@@ -1,0 +1,532 @@
+"""The deposit model: drops of ink become a film, and the film is compared with the design.
+
+Every drop keeps its exact landing site (from :func:`~rotoprint.rotary.simulate.place_drops`)
+and its volume ``V`` (pl): the head's ``drop_volume_pl`` for the largest level, ``level /
+grey_levels`` of it for smaller ones. In flight it is a sphere of diameter
+``d0 = (6 V / pi)^(1/3)`` (8 pl -> 24.8 um); on the substrate it spreads to a footprint of
+diameter ``D = spread_factor * d0`` (the head's ``spread_factor``, an ink/substrate figure,
+nominal in the presets) and takes the shape of a spherical cap of that base holding ``V``
+(height ``h`` from ``V = pi h (3 a^2 + h^2) / 6``, ``a = D / 2``). Drops that overlap merge:
+their thicknesses add on a fine grid (cell <= ``D / cells_per_footprint``, an integer fraction
+of the design pixel). Each drop's cap is normalised on the grid so that its volume is deposited
+exactly: the film holds the planned volume up to rounding (and up to drops falling beyond the
+grid, reported).
+
+Figures (:class:`FilmReport`), all on the design's mask (pixels the design asks to print):
+
+- *interior*: design cells whose centre is at least half a footprint (``D / 2`` of the largest
+  drop) plus half a cell from the nearest cell centre outside the design: the design less a
+  boundary band in which a footprint centred inside may fall short of the edge. The band's
+  figure is reported beside it.
+- *uncovered fraction*: interior cells with no film (no footprint reaches their centre).
+- *thinnest* and *mean* thickness over the interior, um; *radial bins*: mean thickness of the
+  interior in 1 mm annuli of platform radius, and their spread ``max |bin / mean of bins - 1|``
+  over bins holding at least a tenth of the median bin's area (slivers at the ends are listed
+  but not counted).
+- *drops outside*: drops whose site is outside the design mask; *volume outside*: the share of
+  the deposited volume on cells outside the design.
+- *reagent pairs*: for two films on the same grid, the fraction of one's covered design area not
+  covered by the other.
+
+Memory: the grid is processed in strips of rows (``strip_cells`` cells per film), so a design
+of any size needs only a few strips' worth of memory; the grid's width is bounded.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from ..devices.models import InkjetHead
+from ..errors import ConfigError, ImageError, RasterTooLargeError
+from . import _deposit_kernels as _k
+from .placement import Placement
+
+__all__ = [
+    "DepositOptions",
+    "InkDrops",
+    "FilmReport",
+    "Deposit",
+    "flight_diameter_um",
+    "footprint_diameter_um",
+    "cap_height_um",
+    "ink_drops",
+    "deposit_film",
+    "deposit_print",
+]
+
+#: Largest grid width, cells (a strip is at least one row of this).
+MAX_GRID_COLS = 2_000_000
+#: Largest grid, cells (about 2 minutes of deposition at the measured rate).
+MAX_GRID_CELLS = 2_000_000_000
+#: Smallest share of the median bin's area for a radial bin to count in the spread.
+BIN_MIN_SHARE = 0.1
+#: 1 pl in um^3.
+UM3_PER_PL = 1000.0
+
+
+def flight_diameter_um(volume_pl: float | np.ndarray) -> float | np.ndarray:
+    """In-flight diameter of a drop, ``(6 V / pi)^(1/3)``, um (``V`` in pl; 1 pl = 1000 um^3).
+
+    Examples
+    --------
+    >>> round(float(flight_diameter_um(8.0)), 1), round(float(flight_diameter_um(40.0)), 1)
+    (24.8, 42.4)
+    """
+    return np.cbrt(6.0 * np.asarray(volume_pl, dtype=np.float64) * UM3_PER_PL / math.pi)[()]
+
+
+def footprint_diameter_um(volume_pl: float | np.ndarray, spread_factor: float) -> float | np.ndarray:
+    """Footprint diameter on the substrate, ``spread_factor * flight_diameter_um(V)``, um.
+
+    Examples
+    --------
+    >>> round(float(footprint_diameter_um(8.0, 2.0)), 1)
+    49.6
+    """
+    return spread_factor * flight_diameter_um(volume_pl)
+
+
+def cap_height_um(volume_um3: np.ndarray, radius_um: np.ndarray) -> np.ndarray:
+    """Height ``h`` of the spherical cap of base radius ``a`` and volume ``V``:
+    the real root of ``h^3 + 3 a^2 h - 6 V / pi = 0`` (Cardano; one real root since the
+    discriminant is positive), um.
+
+    Examples
+    --------
+    >>> h = cap_height_um(np.array([8000.0]), np.array([24.8]))
+    >>> round(float(h[0]), 2), round(float(np.pi * h[0] * (3 * 24.8**2 + h[0]**2) / 6), 6)
+    (8.0, 8000.0)
+    """
+    v = np.asarray(volume_um3, dtype=np.float64)
+    a = np.asarray(radius_um, dtype=np.float64)
+    p = 3.0 * a * a
+    q = -6.0 * v / math.pi
+    disc = np.sqrt((q / 2.0) ** 2 + (p / 3.0) ** 3)
+    return np.cbrt(-q / 2.0 + disc) + np.cbrt(-q / 2.0 - disc)
+
+
+@dataclass(frozen=True)
+class DepositOptions:
+    """How drops spread and how finely the film is resolved.
+
+    Parameters
+    ----------
+    spread_factor : float, optional
+        Footprint diameter over in-flight diameter (default: the head's ``spread_factor``).
+    footprint_um : float, optional
+        Footprint diameter of a full drop, um, instead of the spread factor (smaller drops
+        scale with the cube root of their volume).
+    cells_per_footprint : float
+        The grid cell is at most ``D / cells_per_footprint`` (and an integer fraction of the
+        design pixel), 2..50.
+    strip_cells : int
+        Cells per strip and film processed at once (memory: 8 bytes each, a few arrays).
+    """
+
+    spread_factor: float | None = None
+    footprint_um: float | None = None
+    cells_per_footprint: float = 5.0
+    strip_cells: int = 2_000_000
+
+    def __post_init__(self) -> None:
+        for name in ("spread_factor", "footprint_um"):
+            v = getattr(self, name)
+            if v is not None and not (math.isfinite(v) and 0 < v <= 1e5):
+                raise ConfigError(f"{name} must be a number in (0, 1e5], got {v!r}")
+        if not (math.isfinite(self.cells_per_footprint) and 2 <= self.cells_per_footprint <= 50):
+            raise ConfigError(f"cells_per_footprint must be in 2..50, got {self.cells_per_footprint!r}")
+        if not 10_000 <= int(self.strip_cells) <= 1_000_000_000:
+            raise ConfigError(f"strip_cells must be in 10000..1e9, got {self.strip_cells!r}")
+
+    def full_footprint_um(self, head: InkjetHead) -> float:
+        """Footprint diameter of the head's full drop, um."""
+        if self.footprint_um is not None:
+            return float(self.footprint_um)
+        sf = head.spread_factor if self.spread_factor is None else self.spread_factor
+        return float(footprint_diameter_um(head.drop_volume_pl, sf))
+
+
+@dataclass(frozen=True, eq=False)
+class InkDrops:
+    """Drops ready to deposit: ``col, row`` ``(M,) float64`` continuous design coordinates
+    (the placement's pixels), ``volume_pl`` ``(M,) float64``."""
+
+    col: np.ndarray
+    row: np.ndarray
+    volume_pl: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = np.asarray(self.col).shape
+        if np.asarray(self.row).shape != n or np.asarray(self.volume_pl).shape != n or len(n) != 1:
+            raise ConfigError("InkDrops needs col, row and volume_pl of one shape (M,)")
+        v = np.asarray(self.volume_pl)
+        if v.size and not (np.isfinite(v).all() and (v >= 0).all()):
+            raise ConfigError("drop volumes must be finite and >= 0 pl")
+        c, r = np.asarray(self.col), np.asarray(self.row)
+        if c.size and not (np.isfinite(c).all() and np.isfinite(r).all()):
+            raise ConfigError("drop sites must be finite")
+
+    def __len__(self) -> int:
+        return int(np.asarray(self.col).size)
+
+    @staticmethod
+    def concat(parts: Sequence[InkDrops]) -> InkDrops:
+        """One set from several (e.g. the passes of a layer)."""
+        if not parts:
+            return InkDrops(np.zeros(0), np.zeros(0), np.zeros(0))
+        return InkDrops(*(np.concatenate([np.asarray(getattr(p, f), np.float64) for p in parts]) for f in ("col", "row", "volume_pl")))
+
+
+def ink_drops(drops, head: InkjetHead) -> InkDrops:
+    """:class:`InkDrops` from placed drops (:class:`~rotoprint.rotary.simulate.Drops`): level
+    ``L`` of a head with ``G`` grey levels holds ``L / G`` of ``drop_volume_pl``."""
+    vol = np.asarray(drops.level, np.float64) * (head.drop_volume_pl / head.grey_levels)
+    return InkDrops(np.asarray(drops.col, np.float64), np.asarray(drops.row, np.float64), vol)
+
+
+@dataclass(frozen=True)
+class FilmReport:
+    """Figures of one film (see the module docstring). Thicknesses in um, areas in mm2."""
+
+    drops: int
+    footprint_um: float
+    spread_factor: float | None
+    grid_um: tuple[float, float]
+    planned_volume_pl: float
+    deposited_volume_pl: float
+    volume_error_fraction: float
+    volume_beyond_grid_pl: float
+    volume_outside_design_fraction: float
+    drops_outside: int
+    drops_outside_fraction: float
+    design_area_mm2: float
+    interior_area_mm2: float
+    band_area_mm2: float
+    uncovered_fraction: float
+    uncovered_area_mm2: float
+    band_uncovered_fraction: float
+    design_uncovered_fraction: float
+    thinnest_um: float
+    mean_um: float
+    thinnest_to_mean: float
+    radial_spread: float
+    radial_bins: tuple[tuple[float, float, float], ...] = field(default=())
+
+    def to_json(self) -> dict:
+        d = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+        d["radial_bins"] = [{"r_mm": a, "mean_um": b, "area_mm2": c} for a, b, c in self.radial_bins]
+        return d
+
+
+@dataclass(frozen=True, eq=False)
+class Deposit:
+    """Films of one or more drop sets on one grid.
+
+    Attributes
+    ----------
+    films : tuple of FilmReport
+        One per drop set, in order.
+    pairs : tuple of dict
+        Per requested pair ``(i, j)``: ``a``, ``b``, ``a_not_b_fraction`` (share of film
+        ``i``'s covered design area that film ``j`` does not cover) and ``b_not_a_fraction``.
+    thickness : (rows, cols) float64 or None
+        The first film's thickness map (um) when asked for (``keep_map=True``), grid cell
+        ``(r, c)`` at design coordinates ``((c + 0.5 - origin[0]) / n[0], (r + 0.5 -
+        origin[1]) / n[1])``.
+    """
+
+    films: tuple[FilmReport, ...]
+    pairs: tuple[dict, ...]
+    cells_per_pixel: tuple[int, int]
+    origin_cells: tuple[int, int]
+    thickness: np.ndarray | None = None
+
+    def to_json(self) -> dict:
+        out = self.films[0].to_json() if len(self.films) == 1 else {"films": [f.to_json() for f in self.films]}
+        if self.pairs:
+            out["reagent_pairs"] = list(self.pairs)
+        return out
+
+
+def _drop_shapes(volume_pl: np.ndarray, head: InkjetHead, opts: DepositOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per drop: footprint radius, cap sphere radius, cap height (um)."""
+    v = np.asarray(volume_pl, np.float64)
+    full = opts.full_footprint_um(head)
+    rel = np.cbrt(np.maximum(v, 0.0) / head.drop_volume_pl)
+    a = 0.5 * full * rel
+    h = cap_height_um(v * UM3_PER_PL, np.maximum(a, 1e-12))
+    h = np.maximum(h, 1e-12)
+    rs = (a * a + h * h) / (2.0 * h)
+    return a, rs, h
+
+
+def deposit_film(
+    design_mask: np.ndarray,
+    placement: Placement,
+    head: InkjetHead,
+    drop_sets: Sequence[InkDrops],
+    *,
+    options: DepositOptions | None = None,
+    pairs: Sequence[tuple[int, int]] = (),
+    keep_map: bool = False,
+    use_jit: bool = True,
+) -> Deposit:
+    """Deposit every drop set on a fine grid over the design and measure the films.
+
+    Parameters
+    ----------
+    design_mask : (H, W) bool
+        Pixels the design asks to print, on ``placement``'s grid.
+    placement : Placement
+        The design's grid in the platform frame (for the radial bins and the cell size).
+    head : InkjetHead
+        Its ``drop_volume_pl`` and ``spread_factor`` give the footprints.
+    drop_sets : sequence of InkDrops
+        One film per set (e.g. one per material or reagent); passes of one layer are one set.
+    options : DepositOptions, optional
+    pairs : sequence of (int, int)
+        Index pairs of reactive reagents to compare.
+    keep_map : bool
+        Return the first film's whole thickness map (memory: 8 bytes per cell).
+    use_jit : bool
+        numba kernels (default) or the numpy reference (slow; for tests).
+
+    Returns
+    -------
+    Deposit
+
+    Raises
+    ------
+    ImageError
+        ``design_mask`` is not the placement's size.
+    ConfigError
+        No drop set, a pair index out of range, bad options.
+    RasterTooLargeError
+        The grid would exceed :data:`MAX_GRID_COLS` columns or :data:`MAX_GRID_CELLS` cells
+        (the message gives the size).
+
+    Examples
+    --------
+    >>> from rotoprint import load_device
+    >>> head = load_device("omnidot760").head
+    >>> pl = Placement(20, 20, 25.4 / 360, 25.4 / 360, inner_radius_mm=60.0)
+    >>> mask = np.ones((20, 20), bool)
+    >>> cc, rr = np.meshgrid(np.arange(20) + 0.5, np.arange(20) + 0.5)
+    >>> drops = InkDrops(cc.ravel(), rr.ravel(), np.full(400, 8.0))
+    >>> f = deposit_film(mask, pl, head, [drops]).films[0]
+    >>> abs(f.volume_error_fraction) < 1e-9, f.uncovered_fraction > 0.5
+    (True, True)
+    """
+    opts = options or DepositOptions()
+    mask = np.asarray(design_mask, bool)
+    h_px, w_px = placement.height_px, placement.width_px
+    if mask.shape != (h_px, w_px):
+        raise ImageError(f"design mask is {mask.shape[1]} x {mask.shape[0]} px, the placement is {w_px} x {h_px} px")
+    if not drop_sets:
+        raise ConfigError("deposit_film needs at least one drop set")
+    for i, j in pairs:
+        if not (0 <= i < len(drop_sets) and 0 <= j < len(drop_sets)) or i == j:
+            raise ConfigError(f"reagent pair ({i}, {j}) must name two different drop sets of 0..{len(drop_sets) - 1}")
+    d_full = opts.full_footprint_um(head)
+    a_nom = d_full / 2.0
+    px_um, py_um = placement.pitch_x_mm * 1e3, placement.pitch_y_mm * 1e3
+    nx = max(1, math.ceil(px_um * opts.cells_per_footprint / d_full))
+    ny = max(1, math.ceil(py_um * opts.cells_per_footprint / d_full))
+    gx, gy = px_um / nx, py_um / ny
+    shapes = [_drop_shapes(s.volume_pl, head, opts) for s in drop_sets]
+    a_max = max([a_nom] + [float(sh[0].max()) for sh in shapes if sh[0].size])
+    pad_x = math.ceil(a_max / gx) + 2
+    pad_y = math.ceil(a_max / gy) + 2
+    # the grid: the design rectangle and every drop site, plus a footprint
+    c_lo, c_hi, r_lo, r_hi = 0.0, float(w_px), 0.0, float(h_px)
+    for s in drop_sets:
+        if len(s):
+            c_lo, c_hi = min(c_lo, float(np.min(s.col))), max(c_hi, float(np.max(s.col)))
+            r_lo, r_hi = min(r_lo, float(np.min(s.row))), max(r_hi, float(np.max(s.row)))
+    ox = pad_x + math.ceil(-c_lo * nx)
+    oy = pad_y + math.ceil(-r_lo * ny)
+    cols = ox + math.ceil(c_hi * nx) + pad_x
+    rows = oy + math.ceil(r_hi * ny) + pad_y
+    if cols > MAX_GRID_COLS or rows * cols > MAX_GRID_CELLS:
+        raise RasterTooLargeError(
+            f"the film grid would be {cols} x {rows} cells ({rows * cols / 1e6:.0f} M, cell {gx:.1f} x {gy:.1f} um); "
+            f"at most {MAX_GRID_COLS} columns and {MAX_GRID_CELLS / 1e6:.0f} M cells: use a larger footprint or fewer cells_per_footprint"
+        )
+    norms_fn = _k.drop_norms_jit if use_jit else _k.drop_norms_numpy
+    strip_fn = _k.deposit_strip_jit if use_jit else _k.deposit_strip_numpy
+    prepared = []
+    for s, (a, rs, hh) in zip(drop_sets, shapes):
+        u = np.asarray(s.col, np.float64) * nx + ox
+        v = np.asarray(s.row, np.float64) * ny + oy
+        order = np.argsort(v, kind="stable")
+        u, v = u[order], v[order]
+        a, rs, hh = a[order], rs[order], hh[order]
+        vol = np.asarray(s.volume_pl, np.float64)[order] * UM3_PER_PL
+        norm = norms_fn(u, v, a, rs, hh, gx, gy)
+        # site inside the design mask?
+        ci = np.floor(np.asarray(s.col, np.float64)).astype(np.int64)
+        ri = np.floor(np.asarray(s.row, np.float64)).astype(np.int64)
+        ok = (ci >= 0) & (ci < w_px) & (ri >= 0) & (ri < h_px)
+        on = np.zeros(ci.size, bool)
+        on[ok] = mask[ri[ok], ci[ok]]
+        prepared.append((u, v, vol, a, rs, hh, norm, int(ci.size - on.sum())))
+    # column -> design column (or -1 outside the design)
+    gc = np.arange(cols)
+    dcol = np.floor((gc + 0.5 - ox) / nx).astype(np.int64)
+    dcol_ok = (dcol >= 0) & (dcol < w_px)
+    dcol = np.clip(dcol, 0, w_px - 1)
+    g_min = min(gx, gy)
+    margin = math.ceil((a_nom + g_min) / gy) + 2
+    strip_rows = max(1, int(opts.strip_cells) // cols)
+    area_mm2 = gx * gy * 1e-6
+    nsets = len(drop_sets)
+    acc = [dict(dep=0.0, out_dep=0.0, design=0, interior=0, unc=0, band=0, band_unc=0, tmin=math.inf, tsum=0.0,
+                bins_sum=np.zeros(0), bins_n=np.zeros(0, np.int64), covered_design=0) for _ in range(nsets)]
+    pair_acc = [[0, 0] for _ in pairs]
+    full = np.zeros((rows, cols), np.float64) if keep_map else None
+    for r0 in range(0, rows, strip_rows):
+        r1 = min(rows, r0 + strip_rows)
+        e0, e1 = max(0, r0 - margin), min(rows, r1 + margin)
+        gr = np.arange(e0, e1)
+        drow = np.floor((gr + 0.5 - oy) / ny).astype(np.int64)
+        drow_ok = (drow >= 0) & (drow < h_px)
+        dmask = mask[np.clip(drow, 0, h_px - 1)][:, dcol] & drow_ok[:, None] & dcol_ok[None, :]
+        core = slice(r0 - e0, r1 - e0)
+        des = dmask[core]
+        if des.any():
+            dist = ndimage.distance_transform_edt(dmask, sampling=(gy, gx))[core]
+            inter = des & (dist >= a_nom + 0.5 * g_min)
+        else:
+            inter = des
+        band = des & ~inter
+        ii, jj = np.nonzero(inter)
+        if ii.size:
+            xd = (jj + 0.5 - ox) / nx
+            yd = (ii + r0 + 0.5 - oy) / ny
+            X, Y = placement.to_platform(xd, yd)
+            rad = np.hypot(X, Y)
+            bidx = np.floor(rad).astype(np.int64)
+        covered = []
+        for si, (u, v, vol, a, rs, hh, norm, _) in enumerate(prepared):
+            film = np.zeros((r1 - r0, cols), np.float64)
+            lo = np.searchsorted(v, r0 - a_max / gy - 2.0, side="left")
+            hi = np.searchsorted(v, r1 + a_max / gy + 2.0, side="right")
+            if hi > lo:
+                strip_fn(u[lo:hi], v[lo:hi], vol[lo:hi], a[lo:hi], rs[lo:hi], hh[lo:hi], norm[lo:hi], gx, gy, r0, film)
+            if full is not None and si == 0:
+                full[r0:r1] = film
+            cov = film > 0
+            covered.append(cov)
+            ac = acc[si]
+            tot = float(film.sum())
+            ac["dep"] += tot
+            ac["out_dep"] += tot - float(film[des].sum())
+            ac["design"] += int(des.sum())
+            ac["covered_design"] += int((cov & des).sum())
+            ac["interior"] += int(ii.size)
+            ac["band"] += int(band.sum())
+            ac["band_unc"] += int((band & ~cov).sum())
+            if ii.size:
+                t = film[ii, jj]
+                ac["unc"] += int((t <= 0).sum())
+                ac["tmin"] = min(ac["tmin"], float(t.min()))
+                ac["tsum"] += float(t.sum())
+                nb = int(bidx.max()) + 1
+                if ac["bins_sum"].size < nb:
+                    ac["bins_sum"] = np.pad(ac["bins_sum"], (0, nb - ac["bins_sum"].size))
+                    ac["bins_n"] = np.pad(ac["bins_n"], (0, nb - ac["bins_n"].size))
+                ac["bins_sum"][:nb] += np.bincount(bidx, weights=t, minlength=nb)
+                ac["bins_n"][:nb] += np.bincount(bidx, minlength=nb)
+        for pi, (i, j) in enumerate(pairs):
+            ci_, cj_ = covered[i] & des, covered[j] & des
+            pair_acc[pi][0] += int((ci_ & ~cj_).sum())
+            pair_acc[pi][1] += int((cj_ & ~ci_).sum())
+    films = []
+    for si, (s, ac, prep) in enumerate(zip(drop_sets, acc, prepared)):
+        planned = float(np.sum(s.volume_pl))
+        dep = ac["dep"] * gx * gy / UM3_PER_PL
+        n_int = ac["interior"]
+        mean = ac["tsum"] / n_int if n_int else float("nan")
+        tmin = ac["tmin"] if n_int else float("nan")
+        bins = []
+        spread = float("nan")
+        nz = np.flatnonzero(ac["bins_n"])
+        if nz.size:
+            med = float(np.median(ac["bins_n"][nz]))
+            means = ac["bins_sum"][nz] / ac["bins_n"][nz]
+            bins = [(float(b), float(m), float(n * area_mm2)) for b, m, n in zip(nz, means, ac["bins_n"][nz])]
+            keep = ac["bins_n"][nz] >= BIN_MIN_SHARE * med
+            if keep.any():
+                mk = means[keep]
+                spread = float(np.max(np.abs(mk / mk.mean() - 1.0)))
+        m = len(s)
+        films.append(
+            FilmReport(
+                drops=m,
+                footprint_um=d_full,
+                spread_factor=None if opts.footprint_um is not None else (head.spread_factor if opts.spread_factor is None else opts.spread_factor),
+                grid_um=(gx, gy),
+                planned_volume_pl=planned,
+                deposited_volume_pl=dep,
+                volume_error_fraction=dep / planned - 1.0 if planned else 0.0,
+                volume_beyond_grid_pl=max(0.0, planned - dep) if planned and dep < planned * (1 - 1e-9) else 0.0,
+                volume_outside_design_fraction=ac["out_dep"] / ac["dep"] if ac["dep"] else 0.0,
+                drops_outside=prep[7],
+                drops_outside_fraction=prep[7] / m if m else 0.0,
+                design_area_mm2=ac["design"] * area_mm2,
+                interior_area_mm2=n_int * area_mm2,
+                band_area_mm2=ac["band"] * area_mm2,
+                uncovered_fraction=ac["unc"] / n_int if n_int else 0.0,
+                uncovered_area_mm2=ac["unc"] * area_mm2,
+                band_uncovered_fraction=ac["band_unc"] / ac["band"] if ac["band"] else 0.0,
+                design_uncovered_fraction=1.0 - ac["covered_design"] / ac["design"] if ac["design"] else 0.0,
+                thinnest_um=tmin,
+                mean_um=mean,
+                thinnest_to_mean=tmin / mean if n_int and mean > 0 else float("nan"),
+                radial_spread=spread,
+                radial_bins=tuple(bins),
+            )
+        )
+    pair_out = []
+    for (i, j), (a_nb, b_na) in zip(pairs, pair_acc):
+        ca, cb = acc[i]["covered_design"], acc[j]["covered_design"]
+        pair_out.append({"a": i, "b": j, "a_not_b_fraction": a_nb / ca if ca else 0.0, "b_not_a_fraction": b_na / cb if cb else 0.0})
+    return Deposit(films=tuple(films), pairs=tuple(pair_out), cells_per_pixel=(nx, ny), origin_cells=(ox, oy), thickness=full)
+
+
+def deposit_print(prints, design: np.ndarray, *, options: DepositOptions | None = None, dead_nozzles: tuple[int, ...] = (),
+                  jitter_um: float = 0.0, seed: int = 0, keep_map: bool = False) -> Deposit:
+    """The film of one or more prints of one design (e.g. the passes of a layer), as one set.
+
+    Parameters
+    ----------
+    prints : RotaryPrint or sequence of RotaryPrint
+        Prints on the same placement and head.
+    design : (H, W) uint8
+        The design (binary or grey; see :func:`~rotoprint.rotary.simulate.design_mask`).
+    options, keep_map
+        As in :func:`deposit_film`.
+    dead_nozzles, jitter_um, seed
+        As in :func:`~rotoprint.rotary.simulate.place_drops`.
+
+    Returns
+    -------
+    Deposit
+    """
+    from .simulate import design_mask, place_drops
+
+    prs = [prints] if not isinstance(prints, (list, tuple)) else list(prints)
+    if not prs:
+        raise ConfigError("deposit_print needs at least one print")
+    pl, head = prs[0].placement, prs[0].head
+    for p in prs[1:]:
+        if p.placement != pl or p.head.nozzles != head.nozzles:
+            raise ConfigError("the prints of one film must share the placement and the head")
+    parts = [ink_drops(place_drops(p, jitter_um=jitter_um, dead_nozzles=dead_nozzles, seed=seed + q), head) for q, p in enumerate(prs)]
+    mask = design_mask(np.asarray(design), head.grey_levels)
+    return deposit_film(mask, pl, head, [InkDrops.concat(parts)], options=options, keep_map=keep_map)

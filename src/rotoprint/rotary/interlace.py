@@ -1,0 +1,586 @@
+"""Even track pitch on a rotary platform: tilt choice and interlaced passes.
+
+A tilted dual-row head does not interleave evenly on a rotating platform: the exact track
+radii ``|P_k|`` of the two rows drift against each other along the head, so the gaps between
+neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary.md``).
+
+- :func:`tilt_scan` measures, per tilt, the gaps between the live tracks inside the band where
+  both rows print: the mean gap (the radial pitch the tilt offers) and the largest; a tilt is
+  *even* when ``largest / mean <= even_ratio`` (default :data:`EVEN_RATIO`). :func:`best_tilt`
+  names the even tilt with the finest mean pitch.
+- :func:`plan_passes` prints a layer in ``N`` passes, each with every swathe's pivot moved
+  radially by an offset ``delta_q`` (pass 0: 0). The offsets minimise the largest gap of the
+  union of all passes' live tracks over the design's radial range (ties: the smallest sum of
+  squared gaps), by coordinate descent over a grid of offsets in ``[0, 2 * pitch)`` started
+  from the even split ``q * pitch / N``. Dead nozzles are left out of the union, so the
+  optimum places live tracks of other passes over their tracks; the plan reports how far each
+  dead track is from the nearest live one. The drop spacing along a track is then chosen with
+  the footprint ``D``: drops at radial spacing ``a`` (the largest gap) and spacing ``b`` along
+  the track leave no point farther than ``sqrt(a^2 + b^2) / 2`` from a drop, so ``b =
+  sqrt((c D)^2 - a^2)`` with ``c =`` :data:`COVER_SHARE` keeps every point within ``c D / 2``
+  of a drop centre, where a spherical cap still holds ``1 - c^2`` of its peak height (about
+  28 % for c = 0.85, chosen by measuring the film of the test design); ``b`` is never coarser than the head's native ``25.4 / dpi_y``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..devices.models import InkjetHead
+from ..errors import ConfigError, GeometryError
+from .head import Mount, nozzle_layout
+from .swathes import SwathePlan
+
+__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes"]
+
+#: A tilt interleaves evenly when its largest track gap is at most this times the mean gap.
+EVEN_RATIO = 1.25
+#: Drop lattice kept within this share of the footprint (see the module docstring).
+COVER_SHARE = 0.85
+#: Most passes the planner tries when it chooses the number itself.
+MAX_PASSES = 4
+#: Offsets tried per pass and round of the coordinate descent.
+_CANDIDATES = 160
+_ROUNDS = 3
+
+
+@dataclass(frozen=True)
+class TiltRow:
+    """Track gaps of one tilt inside the band where every row prints (mm)."""
+
+    tilt_deg: float
+    tracks: int
+    mean_pitch_mm: float
+    largest_gap_mm: float
+    smallest_gap_mm: float
+    evenness: float
+    even: bool
+
+    def to_json(self) -> dict:
+        return dict(self.__dict__)
+
+
+def tilt_scan(head: InkjetHead, tilts_deg: Sequence[float], *, pivot_radius_mm: float, even_ratio: float = EVEN_RATIO) -> list[TiltRow]:
+    """Mean and largest gap between neighbouring live tracks per tilt, and whether it is even.
+
+    Parameters
+    ----------
+    head : InkjetHead
+        Its ``dead_nozzles`` are left out.
+    tilts_deg : sequence of float
+    pivot_radius_mm : float
+    even_ratio : float
+        Largest gap over mean gap at or below which the tilt counts as even (> 1).
+
+    Returns
+    -------
+    list of TiltRow
+
+    Raises
+    ------
+    ConfigError
+        ``even_ratio`` is not a number > 1.
+    GeometryError
+        A tilt is at or beyond the head's maximum, or a nozzle would cross the axis.
+
+    Examples
+    --------
+    >>> from rotoprint import load_device
+    >>> rows = tilt_scan(load_device("omnidot760").head, [0.0, 20.0], pivot_radius_mm=60.0)
+    >>> [r.even for r in rows], round(rows[1].largest_gap_mm * 1000)
+    ([True, False], 137)
+    """
+    from .head import head_figures
+
+    if not (math.isfinite(even_ratio) and even_ratio > 1):
+        raise ConfigError(f"even ratio must be a number > 1, got {even_ratio!r}")
+    out = []
+    for t in tilts_deg:
+        f = head_figures(head, tilt_deg=float(t), pivot_radius_mm=pivot_radius_mm)
+        lo, hi = f.overlap_band_mm
+        n = f.tracks_in_band
+        mean = (hi - lo) / (n - 1) if n > 1 else float("nan")
+        ev = f.largest_track_gap_mm / mean if n > 1 else float("nan")
+        out.append(TiltRow(float(t), n, mean, f.largest_track_gap_mm, f.smallest_track_gap_mm, ev, bool(n > 1 and ev <= even_ratio)))
+    return out
+
+
+def best_tilt(rows: Sequence[TiltRow]) -> TiltRow | None:
+    """The even tilt with the finest mean pitch (None when no tilt is even)."""
+    even = [r for r in rows if r.even]
+    return min(even, key=lambda r: (r.mean_pitch_mm, r.largest_gap_mm)) if even else None
+
+
+def _pass_radii(head: InkjetHead, plan: SwathePlan, live: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per swathe: live enabled nozzles' platform positions at offset 0 and the radial unit vector."""
+    out = []
+    for j, sw in enumerate(plan.swathes):
+        lay = nozzle_layout(head, plan.mount(j))
+        out.append(lay.xy_mm[sw.enabled & live])
+    return out
+
+
+def union_radii(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], *, dead_nozzles: Sequence[int] | None = None) -> np.ndarray:
+    """Sorted radii (mm) of every live enabled track of every swathe and pass, ``(M,) float64``.
+
+    A pass with offset ``delta`` moves every swathe's pivot by ``delta`` along the radial line
+    of the mount (the nozzle positions shift by ``delta * e``).
+    """
+    live = np.ones(head.nozzles, bool)
+    dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
+    live[list(dead)] = False
+    psi = math.radians(plan.mount_angle_deg)
+    e = np.array([math.cos(psi), math.sin(psi)])
+    parts = []
+    for xy in _pass_radii(head, plan, live):
+        for d in offsets_mm:
+            p = xy + float(d) * e
+            parts.append(np.hypot(p[:, 0], p[:, 1]))
+    return np.sort(np.concatenate(parts)) if parts else np.zeros(0)
+
+
+def _gap_score(r: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
+    """Largest gap and sum of squared gaps of sorted rows ``(C, M)`` over ``[lo, hi]``."""
+    inside = (r >= lo) & (r <= hi)
+    rr = np.where(inside, r, np.nan)
+    rr = np.sort(rr, axis=1)
+    g = np.diff(rr, axis=1)
+    g = np.where(np.isfinite(g), g, 0.0)
+    return g.max(axis=1), (g * g).sum(axis=1)
+
+
+@dataclass(frozen=True)
+class PassPlan:
+    """Interlaced passes of one layer (lengths in mm).
+
+    Attributes
+    ----------
+    offsets_mm : tuple of float
+        Radial pivot offset of each pass (pass 0: 0).
+    largest_gap_mm, mean_gap_mm : float
+        Of the union of all passes' live tracks over the design's radial range.
+    single_pass_largest_gap_mm : float
+        The same for pass 0 alone (what printing without interlace leaves).
+    dead_track_cover_mm : tuple of float
+        Per dead nozzle (and pass), the distance from its track to the nearest live track of
+        the union, the largest over swathes and passes.
+    along_track_mm : float
+        Chosen drop spacing along a track at the reference radius (``b``).
+    dpi_y : float
+        The clock: ``25.4 / along_track_mm``.
+    footprint_um : float
+    """
+
+    offsets_mm: tuple[float, ...]
+    largest_gap_mm: float
+    mean_gap_mm: float
+    single_pass_largest_gap_mm: float
+    dead_nozzles: tuple[int, ...]
+    dead_track_cover_mm: tuple[float, ...]
+    along_track_mm: float
+    dpi_y: float
+    footprint_um: float
+
+    @property
+    def passes(self) -> int:
+        return len(self.offsets_mm)
+
+    def to_json(self) -> dict:
+        d = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+        d["passes"] = self.passes
+        return d
+
+
+def plan_passes(
+    head: InkjetHead,
+    plan: SwathePlan,
+    *,
+    footprint_um: float,
+    passes: int | None = None,
+    max_passes: int = MAX_PASSES,
+    dead_nozzles: Sequence[int] | None = None,
+    cover_share: float = COVER_SHARE,
+) -> PassPlan:
+    """Choose the number of passes (unless given), their radial offsets and the clock.
+
+    Parameters
+    ----------
+    head : InkjetHead
+        Nozzles and native clock; its ``dead_nozzles`` unless ``dead_nozzles`` is given.
+    plan : SwathePlan
+        The swathes of pass 0 (:func:`~rotoprint.rotary.plan_swathes`); its radial range is
+        the range the union is judged over.
+    footprint_um : float
+        Footprint diameter of a drop (:mod:`rotoprint.rotary.deposit`).
+    passes : int, optional
+        Number of passes, 1..64; default the fewest (up to ``max_passes``) whose largest gap
+        allows a square drop lattice within ``cover_share`` of the footprint
+        (``largest gap <= cover_share * D / sqrt(2)``).
+    max_passes : int
+    dead_nozzles : sequence of int, optional
+    cover_share : float
+        ``c`` of the module docstring, in (0, 1].
+
+    Returns
+    -------
+    PassPlan
+
+    Raises
+    ------
+    ConfigError
+        Passes outside 1..64, a footprint or cover share out of range.
+    GeometryError
+        The footprint is narrower than the largest gap of the best plan (no clock closes it).
+
+    Examples
+    --------
+    >>> from rotoprint import load_device
+    >>> from rotoprint.rotary import plan_swathes
+    >>> head = load_device("omnidot760").head
+    >>> sp = plan_swathes(head, tilt_deg=20.0, inner_radius_mm=60.0, outer_radius_mm=80.0)
+    >>> pp = plan_passes(head, sp, footprint_um=49.6)
+    >>> pp.passes <= 4, pp.largest_gap_mm < pp.single_pass_largest_gap_mm / 2
+    (True, True)
+    """
+    if passes is not None and not 1 <= int(passes) <= 64:
+        raise ConfigError(f"passes must be 1..64, got {passes!r}")
+    if not 1 <= int(max_passes) <= 64:
+        raise ConfigError(f"max passes must be 1..64, got {max_passes!r}")
+    if not (math.isfinite(footprint_um) and footprint_um > 0):
+        raise ConfigError(f"footprint must be > 0 um, got {footprint_um!r}")
+    if not (math.isfinite(cover_share) and 0 < cover_share <= 1):
+        raise ConfigError(f"cover share must be in (0, 1], got {cover_share!r}")
+    dead = tuple(sorted(set(head.dead_nozzles if dead_nozzles is None else dead_nozzles)))
+    bad = [k for k in dead if not 0 <= k < head.nozzles]
+    if bad:
+        raise ConfigError(f"dead nozzle indices must be in 0..{head.nozzles - 1}, got {bad}")
+    lo, hi = plan.inner_radius_mm, plan.outer_radius_mm
+    live = np.ones(head.nozzles, bool)
+    live[list(dead)] = False
+    psi = math.radians(plan.mount_angle_deg)
+    e = np.array([math.cos(psi), math.sin(psi)])
+    xys = _pass_radii(head, plan, live)
+
+    def radii(d: float | np.ndarray) -> np.ndarray:
+        d = np.atleast_1d(np.asarray(d, np.float64))
+        rows = []
+        for xy in xys:
+            px = xy[None, :, 0] + d[:, None] * e[0]
+            py = xy[None, :, 1] + d[:, None] * e[1]
+            rows.append(np.hypot(px, py))
+        return np.concatenate(rows, axis=1)  # (C, M)
+
+    base = radii(0.0)
+    g1, _ = _gap_score(base, lo, hi)
+    inside = np.sort(base[0][(base[0] >= lo) & (base[0] <= hi)])
+    pitch = float((inside[-1] - inside[0]) / (inside.size - 1)) if inside.size > 1 else head.pitch_mm
+    d_mm = footprint_um * 1e-3
+
+    def optimise(n: int) -> tuple[list[float], float, float]:
+        offs = [q * pitch / n for q in range(n)]
+        cand = np.linspace(0.0, 2.0 * pitch, _CANDIDATES, endpoint=False)
+        best = (math.inf, math.inf)
+        for _ in range(_ROUNDS if n > 1 else 0):
+            for q in range(1, n):
+                fixed = np.concatenate([radii(offs[p])[0] for p in range(n) if p != q])
+                r = np.concatenate([np.broadcast_to(fixed, (cand.size, fixed.size)), radii(cand)], axis=1)
+                gmax, gsq = _gap_score(r, lo, hi)
+                key = np.lexsort((gsq, np.round(gmax * 1e7)))
+                offs[q] = float(cand[key[0]])
+        r = np.concatenate([radii(o)[0] for o in offs])[None, :]
+        gmax, gsq = _gap_score(r, lo, hi)
+        best = (float(gmax[0]), float(gsq[0]))
+        return offs, best[0], best[1]
+
+    if passes is not None:
+        offs, gmax, _ = optimise(int(passes))
+    else:
+        for n in range(1, int(max_passes) + 1):
+            offs, gmax, _ = optimise(n)
+            if gmax <= cover_share * d_mm / math.sqrt(2):
+                break
+    union = np.sort(np.concatenate([radii(o)[0] for o in offs]))
+    ui = union[(union >= lo) & (union <= hi)]
+    mean_gap = float((ui[-1] - ui[0]) / (ui.size - 1)) if ui.size > 1 else float("nan")
+    reach = cover_share * d_mm
+    if gmax >= reach:
+        raise GeometryError(
+            f"{len(offs)} pass(es) leave a largest track gap of {gmax * 1000:.1f} um, not less than "
+            f"{cover_share:g} x the {footprint_um:.1f} um footprint: more passes, a larger footprint or another tilt"
+        )
+    b = min(math.sqrt(reach * reach - gmax * gmax), 25.4 / head.dpi_y)
+    cover = []
+    if dead:
+        dl = np.zeros(head.nozzles, bool)
+        dl[list(dead)] = True
+        for j, sw in enumerate(plan.swathes):
+            xy = nozzle_layout(head, plan.mount(j)).xy_mm[sw.enabled & dl]
+            for o in offs:
+                p = xy + o * e
+                rd = np.hypot(p[:, 0], p[:, 1])
+                rd = rd[(rd >= lo) & (rd <= hi)]
+                if rd.size:
+                    pos = np.clip(np.searchsorted(union, rd), 1, union.size - 1)
+                    cover.append(float(np.max(np.minimum(np.abs(union[pos] - rd), np.abs(union[pos - 1] - rd)))))
+    return PassPlan(
+        offsets_mm=tuple(float(o) for o in offs),
+        largest_gap_mm=float(gmax),
+        mean_gap_mm=mean_gap,
+        single_pass_largest_gap_mm=float(g1[0]),
+        dead_nozzles=dead,
+        dead_track_cover_mm=tuple(cover),
+        along_track_mm=float(b),
+        dpi_y=25.4 / b,
+        footprint_um=float(footprint_um),
+    )
+
+
+PASSES_FORMAT = "rotoprint-rotary-passes"
+
+
+def parse_passes(text: str | int) -> int | None:
+    """``"auto"`` -> None (the planner's choice), else an integer 1..64."""
+    if isinstance(text, str) and text.strip().lower() == "auto":
+        return None
+    try:
+        n = int(text)
+    except (TypeError, ValueError):
+        raise ConfigError(f"passes must be a whole number 1..64 or 'auto', got {text!r}") from None
+    if not 1 <= n <= 64:
+        raise ConfigError(f"passes must be 1..64 or 'auto', got {n}")
+    return n
+
+
+def pass_files(out_png, n: int) -> list:
+    """``PRINT.png`` -> ``[PRINT-p1.png, ..., PRINT-pN.png]``."""
+    from pathlib import Path
+
+    p = Path(out_png)
+    return [p.with_name(f"{p.stem}-p{q + 1}{p.suffix}") for q in range(n)]
+
+
+def transform_passes(design: np.ndarray, head: InkjetHead, placement, out_png, *, passes: str | int = "auto", tilt_deg: float,
+                     dpi_y: float | None = None, ref_radius_mm: float | None = None, mount_angle_deg: float = 0.0,
+                     direction: int = 1, max_swathes: int | None = None, device_name: str = "", design_info: dict | None = None,
+                     footprint_um: float | None = None, equalise: bool = False, force: bool = False, inputs=()) -> dict:
+    """Plan interlaced passes for ``design`` and write each pass as its own exact print.
+
+    Pass ``q`` is written as ``PRINT-p{q+1}.png`` (swathes ``-p{q+1}-s1.png``, ...) with its own
+    sidecar; every swathe of it records ``pass``, ``passes`` and ``pass_offset_mm`` (its
+    ``pivot_radius_mm`` is already moved by the offset). ``PRINT-passes.json`` (format
+    :data:`PASSES_FORMAT`) lists the plan and the files. The clock is the plan's unless
+    ``dpi_y`` is given. With ``equalise`` and a grey-level head, every site keeps its drop and
+    its size follows the track's share (:func:`~rotoprint.rotary.halftone.halftone_print`);
+    with a binary head, every track keeps the share of its drops of
+    :func:`track_fractions` (the same volume per area everywhere), and the clock is made finer
+    ``ceil(1 / smallest share)`` times, so that no track's kept drops are farther apart than planned.
+
+    Returns
+    -------
+    dict
+        The passes manifest as written.
+    """
+    import dataclasses
+    import json
+    from pathlib import Path
+
+    from ..io.atomic import write_owned_file
+    from .deposit import DepositOptions
+    from .exact import transform_exact
+    from .files import write_print
+    from .swathes import plan_swathes
+
+    n = parse_passes(passes)
+    r_in, r_out = placement.radial_range_mm()
+    sp = plan_swathes(head, tilt_deg=tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
+                      mount_angle_deg=mount_angle_deg, direction=direction, max_swathes=max_swathes)
+    d_um = DepositOptions(footprint_um=footprint_um).full_footprint_um(head)
+    pp = plan_passes(head, sp, footprint_um=d_um, passes=n)
+    clock = pp.dpi_y if dpi_y is None else float(dpi_y)
+    fracs = None
+    grey = equalise and head.grey_levels > 1
+    if grey:  # by drop size: every site keeps its drop; the plan is made for the smallest drop used
+        fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um,
+                                floor=max(1.0 / head.grey_levels, GREY_FLOOR), target_percentile=0.0)
+        f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
+        pp = plan_passes(head, sp, footprint_um=d_um * f_min ** (1.0 / 3.0), passes=n)
+        clock = pp.dpi_y if dpi_y is None else float(dpi_y)
+        fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um,
+                                floor=max(1.0 / head.grey_levels, GREY_FLOOR), target_percentile=0.0)
+    elif equalise:
+        fracs = track_fractions(head, sp, pp.offsets_mm, dpi_y=clock, ref_radius_mm=ref_radius_mm, footprint_um=d_um)
+        f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
+        # the shares do not change with the clock; the ordered pattern spaces kept drops at most
+        # ceil(1 / f) firings apart, so this keeps every track within the planned spacing
+        clock = clock * math.ceil(1.0 / f_min - 1e-9)
+    files = pass_files(out_png, pp.passes)
+    sides = []
+    for q, (off, f) in enumerate(zip(pp.offsets_mm, files)):
+        pr = transform_exact(design, head, placement, tilt_deg=tilt_deg, dpi_y=clock, ref_radius_mm=ref_radius_mm,
+                             mount_angle_deg=mount_angle_deg, direction=direction, max_swathes=max_swathes, pivot_offset_mm=off)
+        if grey:
+            from .halftone import halftone_print
+
+            pr = halftone_print(pr, fracs[q])
+        elif fracs is not None:
+            pr = thin_print(pr, fracs[q], pass_index=q)
+        sw = tuple(dataclasses.replace(s, extra={**s.extra, "pass": q, "passes": pp.passes, "pass_offset_mm": off}) for s in pr.swathes)
+        pr = dataclasses.replace(pr, swathes=sw)
+        sides.append(write_print(pr, f, device_name=device_name, design=design_info, force=force, inputs=inputs))
+    manifest = {
+        "format": PASSES_FORMAT,
+        "version": 1,
+        "device": device_name,
+        "tilt_deg": float(tilt_deg),
+        "dpi_y": clock,
+        "equalise": ("grey levels" if grey else "thinning") if equalise else None,
+        "pass_plan": pp.to_json(),
+        "files": [f.with_suffix(".json").name for f in files],
+    }
+    mp = Path(out_png).with_name(Path(out_png).stem + "-passes.json")
+    write_owned_file(mp, (json.dumps(manifest, indent=2) + "\n").encode("utf-8"), kind="passes", inputs=inputs, force=force)
+    return manifest
+
+
+def read_passes(path) -> list:
+    """The sidecar paths of a passes manifest written by :func:`transform_passes` (or of
+    ``slice --rotary --passes``), in pass order, resolved beside the manifest."""
+    from pathlib import Path
+
+    from ..errors import InputFileError
+
+    from ..io.inputs import read_json_file
+
+    p = Path(path)
+    data = read_json_file(p, what="passes manifest")
+    if not isinstance(data, dict) or data.get("format") != PASSES_FORMAT:
+        raise InputFileError(f"not a passes manifest (format {PASSES_FORMAT!r} expected)", path=p)
+    files = data.get("files")
+    if not isinstance(files, list) or not files or not all(isinstance(f, str) and "/" not in f and "\\" not in f for f in files):
+        raise InputFileError("passes manifest field files must be a non-empty list of file names", path=p)
+    return [p.parent / f for f in files]
+
+
+_GOLDEN = 0.6180339887498949
+#: Smallest share of its drops a track keeps under equalisation.
+EQUALISE_FLOOR = 0.5
+#: Smallest share of the full volume a grey-level site keeps under equalisation (its footprint,
+#: ``cbrt`` of it, sets the passes and the clock; 0.3 allows a 3:1 radius span).
+GREY_FLOOR = 0.3
+#: Percentile of the unthinned radial thickness (at the tracks) that equalisation aims at.
+EQUALISE_TARGET_PERCENTILE = 10.0
+
+
+def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], *, dpi_y: float,
+                    ref_radius_mm: float | None = None, dead_nozzles: Sequence[int] | None = None,
+                    footprint_um: float | None = None, iterations: int = 60, floor: float | None = None,
+                    target_percentile: float | None = None) -> list[list[np.ndarray]]:
+    """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
+
+    Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
+    ``f_k`` lays ``f_k / (r_k dphi_k)`` drops per mm; averaged along the track, a drop of
+    footprint radius ``a`` adds across the radius the profile ``(1 - x^2 / a^2)^(3/2)`` (a
+    paraboloid cap integrated along the track). The radial thickness at track ``m`` is
+    ``T_m = sum_k f_k / (r_k dphi_k) * K(r_m - r_k)``; multiplicative updates
+    ``f_k <- clip(f_k * T* / T_k, EQUALISE_FLOOR, 1)`` (``iterations`` times) drive ``T``
+    towards ``T*``, the :data:`EQUALISE_TARGET_PERCENTILE` percentile of the unthinned ``T``
+    over the tracks where every pass prints: sparse tracks keep every drop, tracks in a
+    cluster share theirs. No track keeps
+    less than :data:`EQUALISE_FLOOR` (so a clock ``ceil(1 / f_min)`` times finer keeps every
+    track's drops at most the planned spacing apart).
+
+    ``floor`` replaces :data:`EQUALISE_FLOOR` (e.g. ``1 / grey_levels`` for halftoning) and
+    ``target_percentile`` :data:`EQUALISE_TARGET_PERCENTILE` (0: the thinnest track, which
+    every other can match when the floor allows, as with grey levels).
+
+    Returns
+    -------
+    list (pass) of list (swathe) of (N,) float64
+        Shares in (0, 1] for enabled live nozzles, 0 elsewhere.
+    """
+    from .deposit import DepositOptions
+
+    lo_f = EQUALISE_FLOOR if floor is None else float(floor)
+    if not 0 < lo_f <= 1:
+        raise ConfigError(f"floor must be in (0, 1], got {floor!r}")
+    from .exact import swathe_clock
+
+    live = np.ones(head.nozzles, bool)
+    dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
+    live[list(dead)] = False
+    a_mm = 0.5e-3 * (DepositOptions().full_footprint_um(head) if footprint_um is None else float(footprint_um))
+    psi = math.radians(plan.mount_angle_deg)
+    e = np.array([math.cos(psi), math.sin(psi)])
+    rs, ws, where = [], [], []
+    for q, o in enumerate(offsets_mm):
+        for j, sw in enumerate(plan.swathes):
+            dphi, _ = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
+            xy = nozzle_layout(head, plan.mount(j)).xy_mm + float(o) * e
+            r = np.hypot(xy[:, 0], xy[:, 1])
+            k = np.flatnonzero(sw.enabled & live)
+            rs.append(r[k])
+            ws.append(1.0 / (r[k] * dphi))
+            where.append((q, j, k))
+    r = np.concatenate(rs)
+    w = np.concatenate(ws)
+    order = np.argsort(r, kind="stable")
+    r_s, w_s = r[order], w[order]
+    # neighbour pairs within a footprint radius (both directions) and their profile weights
+    ii, jj, kk = [np.arange(r_s.size)], [np.arange(r_s.size)], [np.ones(r_s.size)]
+    shift = 1
+    while shift < r_s.size:
+        d = r_s[shift:] - r_s[:-shift]
+        near = np.flatnonzero(d < a_mm)
+        if near.size == 0:
+            break
+        kv = (1.0 - (d[near] / a_mm) ** 2) ** 1.5
+        ii += [near, near + shift]
+        jj += [near + shift, near]
+        kk += [kv, kv]
+        shift += 1
+    ii, jj, kk = np.concatenate(ii), np.concatenate(jj), np.concatenate(kk)
+    f = np.ones(r_s.size)
+    # the target is the thinnest track where every pass prints, a footprint in from either end
+    # (nearer the ends tracks lack neighbours on one side)
+    lo_t = max(float(r_s[0]), plan.inner_radius_mm + max(0.0, max(offsets_mm))) + a_mm
+    hi_t = min(float(r_s[-1]), plan.outer_radius_mm + min(0.0, min(offsets_mm))) - a_mm
+    mid = (r_s >= lo_t) & (r_s <= hi_t)
+    if not mid.any():
+        mid[:] = True
+    t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
+    pct = EQUALISE_TARGET_PERCENTILE if target_percentile is None else float(target_percentile)
+    target = float(np.percentile(t[mid], pct))
+    for _ in range(max(0, int(iterations))):
+        f = np.clip(f * (target / t), lo_f, 1.0)
+        t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
+    f_all = np.empty_like(f)
+    f_all[order] = f
+    out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
+    pos = 0
+    for q, j, k in where:
+        out[q][j][k] = f_all[pos:pos + k.size]
+        pos += k.size
+    return out
+
+
+def thin_print(pr, fractions: Sequence[np.ndarray], *, pass_index: int = 0):
+    """``pr`` with track ``k`` of swathe ``j`` keeping firing ``i`` only when
+    ``floor((i + 1) f + o) > floor(i f + o)`` (``f = fractions[j][k]``, ``o`` a golden-ratio
+    step per nozzle and pass): an ordered, even pattern on the absolute firing index, exactly
+    ``f`` of the firings over any run."""
+    import dataclasses
+
+    out = []
+    for sw, f in zip(pr.swathes, fractions):
+        n_f = sw.levels.shape[0]
+        i = (np.arange(n_f, dtype=np.float64) + sw.first_firing)[:, None]
+        k = np.arange(sw.levels.shape[1])
+        o = np.mod((k + 7919 * pass_index) * _GOLDEN, 1.0)[None, :]
+        ff = np.asarray(f, np.float64)[None, :]
+        keep = np.floor((i + 1) * ff + o) > np.floor(i * ff + o)
+        out.append(dataclasses.replace(sw, levels=np.where(keep, sw.levels, 0).astype(np.uint8)))
+    return dataclasses.replace(pr, swathes=tuple(out))
