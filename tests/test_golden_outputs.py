@@ -23,14 +23,15 @@ from rotoprint.testing import torus_mesh
 
 #: sha256 over (relative path, normalised bytes) of every file, and the file count.
 #: Recomputed on main 186b68d (issue 12's ownership markers: rotoprint-output.json in every
-#: folder, a marked zip comment in the SL1, marked PNGs and sidecars in the build); the first
-#: values were from main d2285d8.
+#: folder, a marked zip comment in the SL1, marked PNGs and sidecars in the build), then the
+#: rotary slices and builds on main 9ed8a1c (the film merge: overlays carry the deposit, the
+#: rotary output changed with it); the first values were from main d2285d8.
 GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
     "sl1": ("a65bf0beebd18b13ab8dfa7f39652fbfc3a77420891f686904381e339f5fce0f", 1),
-    "rotary-slices": ("6b831d9eab50a72ba5834187295b509ff00968acc87b71af579f415684bac888", 26),
-    "build-coil-no-check": ("33961481c41db10469286933ba93e56224b60f3b664d182c75b9bb4f85dd0c2b", 100),
-    "build-gas": ("a6426847894c13ed55e8fab0242a94fd2ee8e10cc35c2b2f830286debe6e22ae", 57),
+    "rotary-slices": ("68981c4252b5f2495f200f5876e9b1e8f8f8493ea88089088fce8ce8b8b20c69", 26),
+    "build-coil-no-check": ("d5b2ef5c99206b7d7880f084ebb9b360afd30d9b73d231bdd5934aceb6385f23", 100),
+    "build-gas": ("33d9905baab0a277fc73bcdc9289e4df9d9e99be88ddfef69b9a3dc44eec35a4", 57),
 }
 
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")
