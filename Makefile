@@ -10,6 +10,9 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[test,bench]'
+	@# numba caches its kernels in __pycache__ beside the sources: compile them now, in two
+	@# processes, one line per kernel, instead of during the first demo / check / slice
+	$(BIN)/python -m rotoprint._warmup
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -31,3 +34,5 @@ bench: $(STAMP)
 
 clean:
 	rm -rf $(VENV) demo-output .pytest_cache build src/*.egg-info
+	rm -f src/rotoprint/_native*.so
+	find src -name '*.nbi' -delete -o -name '*.nbc' -delete

@@ -44,6 +44,7 @@ def main(argv: list[str]) -> int:
             continue
         spec = importlib.util.spec_from_file_location(path.stem, path)
         mod = importlib.util.module_from_spec(spec)
+        sys.modules[path.stem] = mod  # dataclasses look their module up
         spec.loader.exec_module(mod)
         rows = mod.run(quick=quick)
         print(_table(getattr(mod, "TITLE", path.stem), rows), flush=True)

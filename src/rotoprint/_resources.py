@@ -73,8 +73,14 @@ def release_free_memory() -> None:
     import ctypes
     import ctypes.util
 
+    try:  # libc.so.6 first: find_library runs ldconfig / gcc in subprocesses (~20 ms)
+        libc = ctypes.CDLL("libc.so.6")
+    except OSError:  # pragma: no cover - not glibc
+        try:
+            libc = ctypes.CDLL(ctypes.util.find_library("c"))
+        except (OSError, TypeError):
+            return
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
         libc.malloc_trim(0)
-    except (OSError, AttributeError):  # pragma: no cover - not glibc
+    except AttributeError:  # pragma: no cover - not glibc
         pass

@@ -27,8 +27,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from scipy import sparse
-from scipy.sparse import csgraph
 
 from .constants import DEGENERATE_AREA_REL, MAX_COORDINATE_MM, MAX_OPEN_SIDE_FRACTION
 from .errors import MeshError
@@ -86,7 +84,10 @@ class Mesh:
 
         ``fill_holes``: fill the mesh's boundary loops (step 4b; only with ``orient="auto"``).
 
-        ``_owned``: the caller hands the array over, so it may be modified in place."""
+        ``_owned``: the caller hands the array over, so it may be modified in place (and
+        freed once the vertices are merged, when it comes inside a one-element list)."""
+        if _owned and isinstance(triangles, list) and len(triangles) == 1:
+            triangles = triangles.pop()
         tri = np.asarray(triangles, dtype=np.float64)
         if tri.ndim != 3 or tri.shape[1:] != (3, 3):
             raise MeshError(f"triangles must have shape (N, 3, 3), got {tri.shape}", path=source)
@@ -231,19 +232,43 @@ class _Topology:
         lo = np.minimum(a, b)
         hi = np.maximum(a, b)
         key = lo * np.int64(n_vertices) + hi
-        uniq, inverse, counts = _unique_inverse(key.ravel())
+        del lo, hi
+        from ._accel import native
+
+        self.forward = (a < b)  # (F, 3): side k runs from the lower to the higher vertex index
+        fwd = self.forward.ravel()
+        if native is not None:
+            # Edges by hashing (only the distinct keys sorted), the sides of every edge in one
+            # pass: the same edges, numbering and pairs as the sorting path below (tested).
+            flat = np.ascontiguousarray(key.ravel())
+            first_pos = np.empty(flat.shape[0], np.int64)
+            inverse = np.empty(flat.shape[0], np.int64)
+            n_e = native.merge_keys(flat, first_pos, inverse)
+            uniq = flat[first_pos[:n_e]]
+            del first_pos, flat
+            order = np.argsort(uniq)
+            uniq = uniq[order]
+            rank = np.empty(n_e, np.int64)
+            rank[order] = np.arange(n_e)
+            np.take(rank, inverse, out=inverse)
+            del rank, order
+            counts = np.bincount(inverse, minlength=n_e)
+            s1, s2 = np.empty(n_e, np.int64), np.empty(n_e, np.int64)
+            native.first_two(inverse, n_e, s1, s2)
+            pair_edges = np.flatnonzero(counts == 2)
+            s1, s2 = s1[pair_edges], s2[pair_edges]
+        else:
+            uniq, inverse, counts = _unique_inverse(key.ravel())
+            # Manifold pairs: sides of two faces on one edge used exactly twice.
+            order = np.argsort(inverse, kind="stable")
+            e_sorted = inverse[order]
+            first = np.flatnonzero((e_sorted[:-1] == e_sorted[1:]) & (counts[e_sorted[:-1]] == 2))
+            s1, s2 = order[first], order[first + 1]
+            pair_edges = e_sorted[first]
         self.edges = np.stack([uniq // n_vertices, uniq % n_vertices], axis=1)
         self.face_edges = inverse.reshape(-1, 3)
         self.edge_face_count = counts
-        self.forward = (a < b)  # (F, 3): side k runs from the lower to the higher vertex index
         self.boundary_edge = self.edge_face_count == 1
-        n_f = faces.shape[0]
-        # Manifold pairs: sides of two faces on one edge used exactly twice.
-        order = np.argsort(self.face_edges.ravel())
-        e_sorted = self.face_edges.ravel()[order]
-        first = np.flatnonzero((e_sorted[:-1] == e_sorted[1:]) & (self.edge_face_count[e_sorted[:-1]] == 2))
-        s1, s2 = order[first], order[first + 1]
-        fwd = self.forward.ravel()
         self.pair_faces = np.stack([s1 // 3, s2 // 3], axis=1)
         self.pair_same_direction = fwd[s1] == fwd[s2]
         self.orientation_conflicts = int(np.count_nonzero(self.pair_same_direction))
@@ -251,17 +276,49 @@ class _Topology:
         # faces wound the same way (their chains do not link).
         suspect = self.edge_face_count != 2
         if self.orientation_conflicts:
-            bad = first[self.pair_same_direction]
-            suspect[e_sorted[bad]] = True
+            suspect[pair_edges[self.pair_same_direction]] = True
         self.suspect_edges = suspect
-        # Shells: faces connected through any shared edge (manifold or not).
-        n_e = self.edges.shape[0]
-        rows = np.repeat(np.arange(n_f), 3)
-        g = sparse.coo_matrix((np.ones(3 * n_f, np.int8), (rows, n_f + self.face_edges.ravel())), shape=(n_f + n_e,) * 2)
-        n_comp, labels = csgraph.connected_components(g, directed=False)
-        face_labels = labels[:n_f]
-        _, self.shell = np.unique(face_labels, return_inverse=True)
-        self.n_shells = int(self.shell.max()) + 1
+        # Shells: faces connected through any shared edge (manifold or not), numbered by
+        # their lowest face index.
+        self.shell, self.n_shells = shell_labels(self.face_edges, self.edges.shape[0])
+
+
+def shell_labels(face_edges: np.ndarray, n_edges: int) -> tuple[np.ndarray, int]:
+    """Connected shells: faces sharing an edge are one shell.
+
+    Parameters
+    ----------
+    face_edges : (F, 3) int64
+        Edge index of every face side, in ``[0, n_edges)``.
+    n_edges : int
+
+    Returns
+    -------
+    labels : (F,) int64
+        Shell of every face; shells are numbered in the order of their lowest face index.
+    n_shells : int
+    """
+    from ._accel import native
+
+    fe = np.ascontiguousarray(face_edges, dtype=np.int64)
+    if native is not None:
+        labels = np.empty(fe.shape[0], np.int64)
+        n = native.shell_labels(fe, int(n_edges), labels)
+        return labels, int(n)
+    return shell_labels_scipy(fe, n_edges)
+
+
+def shell_labels_scipy(face_edges: np.ndarray, n_edges: int) -> tuple[np.ndarray, int]:
+    """Reference of :func:`shell_labels` (scipy's connected components over faces and edges)."""
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
+    n_f = face_edges.shape[0]
+    rows = np.repeat(np.arange(n_f), 3)
+    g = sparse.coo_matrix((np.ones(3 * n_f, np.int8), (rows, n_f + face_edges.ravel())), shape=(n_f + n_edges,) * 2)
+    _, labels = csgraph.connected_components(g, directed=False)
+    _, shell = np.unique(labels[:n_f], return_inverse=True)
+    return shell.astype(np.int64), int(shell.max()) + 1
 
 
 class PrebuiltTopology:
@@ -274,6 +331,16 @@ class PrebuiltTopology:
 
 
 def _double_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    from ._accel import native
+
+    if native is not None:
+        out = np.empty(faces.shape[0], np.float64)
+        native.double_areas(np.ascontiguousarray(vertices, np.float64), np.ascontiguousarray(faces, np.int64), out)
+        return out
+    return _double_areas_numpy(vertices, faces)
+
+
+def _double_areas_numpy(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     v0, v1, v2 = (vertices[faces[:, k]] for k in range(3))
     return np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
 
@@ -294,7 +361,28 @@ def _unique_inverse(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 def _unique_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unique ``(N, 3) float64`` rows (sorted) and the inverse: bit-identical rows merge."""
+    """Unique ``(N, 3) float64`` rows (sorted) and the inverse: bit-identical rows merge.
+
+    With the C extension: merged by hashing, then only the distinct rows sorted; the result
+    is that of :func:`_unique_rows_numpy` (tested)."""
+    from ._accel import native
+
+    if native is None or not rows.flags.c_contiguous or rows.dtype != np.float64:
+        return _unique_rows_numpy(rows)
+    first = np.empty(rows.shape[0], np.int64)
+    ids = np.empty(rows.shape[0], np.int64)
+    u = native.merge_rows(rows, first, ids)
+    distinct = rows[first[:u]]
+    del first
+    order = np.lexsort(distinct.T[::-1])
+    rank = np.empty(u, np.int64)
+    rank[order] = np.arange(u)
+    np.take(rank, ids, out=ids)
+    return distinct[order], ids
+
+
+def _unique_rows_numpy(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Reference of :func:`_unique_rows`: one lexsort over all rows."""
     order = np.lexsort(rows.T[::-1])
     sr = rows[order]
     new = np.empty(len(sr), bool)
@@ -310,6 +398,9 @@ def _make_winding_consistent(faces: np.ndarray, topo: _Topology) -> tuple[np.nda
     """Flip faces so that neighbours across manifold edges traverse the edge oppositely."""
     if topo.orientation_conflicts == 0:
         return faces, 0
+    from scipy import sparse
+    from scipy.sparse import csgraph
+
     n_f = faces.shape[0]
     pf = topo.pair_faces
     parity = topo.pair_same_direction.astype(np.int8)

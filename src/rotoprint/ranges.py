@@ -32,6 +32,7 @@ quantity                range                  used for
 ``SWATHES``             1 ... 10000            radial swathes
 ``SEED``                0 ... 2**32 - 1        random seeds
 ``OVERLAY_SCALE``       1 ... 16               overlay pixels per design pixel
+``MACHINE_BITS``        1 ... 4 (1, 2 or 4)    bits per nozzle of machine/ firing data
 ======================  =====================  =======================================
 """
 
@@ -98,6 +99,7 @@ COUNT = Range(0, 1_000_000, integer=True)
 SWATHES = Range(1, 10_000, integer=True)
 SEED = Range(0, 2**32 - 1, integer=True)
 OVERLAY_SCALE = Range(1, 16, integer=True)
+MACHINE_BITS = Range(1, 4, integer=True)  # and 1, 2 or 4: see machine.program.MachineOptions
 NOZZLE_INDEX = Range(0, 100_000, integer=True)  # the largest head (devices.models)
 DIRECTION = Range(-1, 1, integer=True)  # and not 0: see check_direction
 

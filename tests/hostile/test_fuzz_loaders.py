@@ -205,7 +205,7 @@ def _crafted() -> dict[str, tuple[bytes, str]]:
         "stl_huge.stl": (stl.replace("vertex 0.0 0.0 0.0", "vertex 1e200 0.0 0.0", 1).encode(), "a coordinate reaches 1e+200 mm"),
         "obj_nan.obj": (obj.replace("v 0.00000000 0.00000000 0.00000000", "v nan 0 0").encode(), "5 triangle(s) have NaN"),
         # declared counts larger than the content
-        "off_count.off": (off.replace("8 12 0", "999999999 12 0").encode(), "could not read as OFF"),
+        "off_count.off": (off.replace("8 12 0", "999999999 12 0").encode(), "OFF header declares 999999999 vertices"),
         "ply_count.ply": (ply.replace("element vertex 8", "element vertex 999999999").encode(), "PLY header declares 999999999 vertex"),
     }
 

@@ -33,6 +33,10 @@ BASE = {
     "head": ["head", "-d", "omnidot760"],
     "transform": ["transform", "d.png", "-d", "omnidot760", "--tilt", "30", "--radius", "50", "-o", "p.png", "-q"],
     "simulate": ["simulate", "pr/p.png", "-o", "ov.png"],
+    # build and replay: the swept value is refused while the options are parsed, before the
+    # job or the program is looked at
+    "build": ["build", "job.toml", "--out", "bout", "--no-report"],
+    "replay": ["replay", "bout/machine/program.json", "-o", "ov.png"],
 }
 
 
@@ -321,6 +325,16 @@ def test_binary_ply_header_declaring_more_faces_than_it_holds(run_cli, work):
     (work / "lie.ply").write_bytes(data.replace(b"element face 12\n", b"element face 1000000\n"))
     _refused(run_cli, work, ["info", "lie.ply"], "lie.ply", "1000000 face")
     assert run_cli("info", "b.ply")[0] == 0
+
+
+def test_off_header_declaring_more_faces_than_it_holds(run_cli, work):
+    body = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n3 0 2 3\n3 1 2 3\n"
+    (work / "lie.off").write_text("OFF\n# a comment\n4 100000 0\n" + body)
+    _refused(run_cli, work, ["info", "lie.off"], "lie.off", "100000 faces")
+    (work / "lie1.off").write_text("OFF 40 4 0\n" + body)  # counts on the keyword's line
+    _refused(run_cli, work, ["info", "lie1.off"], "lie1.off", "40 vertices")
+    (work / "ok.off").write_text("OFF\n4 4 0\n" + body)
+    assert run_cli("info", "ok.off")[0] == 0
 
 
 # ------------------------------------------------------------------ the segfault, in a child process

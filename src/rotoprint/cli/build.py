@@ -12,7 +12,8 @@ from typing import Annotated
 
 import typer
 
-from ._common import ForceOpt, JsonOpt, console, out_console, print_json, progress, styled
+from .. import ranges as R
+from ._common import ForceOpt, JsonOpt, console, in_range, out_console, print_json, progress, styled
 
 EXIT_SHORT = 3
 
@@ -50,6 +51,11 @@ def report_summary(res, *, label: str = "") -> None:
         console.print(styled(("printability: some features fall short", "red"), " (see the report)"))
     out_console.print(f"report: {res.report_path}")
     out_console.print(f"plan:   {res.plan_path}")
+    m = s.get("machine")
+    if m:
+        flag = f", FLAGGED clocks: {', '.join(m['flagged_clocks'])}" if m["flagged_clocks"] else ""
+        out_console.print(f"machine: {res.out_dir / 'machine' / 'program.json'} ({m['steps']} steps, {m['revolutions']} revolutions, "
+                          f"{_fmt_time(m['time_s'])}{flag})")
 
 
 def build_command(
@@ -59,6 +65,9 @@ def build_command(
     no_report: Annotated[bool, typer.Option("--no-report", help="Do not write report.html.")] = False,
     json_out: JsonOpt = False,
     force: ForceOpt = False,
+    bits: Annotated[int | None, typer.Option("--bits", help="Bits per nozzle in machine/ (1, 2 or 4; default: from the head's grey levels).", callback=in_range(R.MACHINE_BITS))] = None,
+    row_delays: Annotated[str, typer.Option("--row-delays", help="machine/: 'baked' into the images (exact at every radius) or as per-row offsets in the 'program'.")] = "baked",
+    no_machine: Annotated[bool, typer.Option("--no-machine", help="Do not write machine/.")] = False,
 ) -> int:
     """Plan a multi-material job: print-ready images per layer, head and ink, the ordered passes,
     thickness and resistance estimates, printability, and a self-contained report.html."""
@@ -67,6 +76,9 @@ def build_command(
     from ..pipeline import run_build
     from ..pipeline.build import job_inputs
 
+    from ..machine.program import MachineOptions
+
+    mopts = False if no_machine else MachineOptions(bits=bits, row_delays=row_delays)  # checked before any work
     check_output_path(out, is_dir=True, inputs=[job], force=force)  # before the job is read
     spec = load_job(job)
     with progress() as bar:
@@ -78,7 +90,7 @@ def build_command(
             bar.update(tasks[stage], completed=done)
 
         res = run_build(spec, out, on_step=on_step, check=False if no_check else None, report=not no_report, force=force,
-                        inputs=[job, *job_inputs(spec)])
+                        inputs=[job, *job_inputs(spec)], machine=mopts)
     if json_out:
         print_json({"out": str(res.out_dir), "report": str(res.report_path) if not no_report else None,
                     "plan": str(res.plan_path), **res.summary})

@@ -38,6 +38,9 @@ def _register() -> None:
     from . import build as build_cmd
 
     app.command("build")(build_cmd.build_command)
+    from . import replay
+
+    app.command("replay")(replay.replay_command)
 
 
 _register()
@@ -60,6 +63,16 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(argv: list[str] | None) -> int:
+    from .. import _jitnotice
+
+    _jitnotice.install(console)  # a first run's jit compiles show a progress line
+    try:
+        return _run_app(argv)
+    finally:
+        _jitnotice.finish(console)
+
+
+def _run_app(argv: list[str] | None) -> int:
     try:
         result = app(args=argv, prog_name="rotoprint", standalone_mode=False)
         if isinstance(result, int) and not isinstance(result, bool):  # typer.Exit(code) lands here

@@ -15,7 +15,7 @@ from PIL import Image
 
 from ..errors import ImageError, InputFileError
 
-__all__ = ["png_bytes", "write_png", "read_grey_image", "open_image"]
+__all__ = ["png_bytes", "png_bytes_window", "write_png", "read_grey_image", "open_image"]
 
 
 @contextlib.contextmanager
@@ -57,7 +57,9 @@ def png_bytes(image: np.ndarray, *, compress_level: int = 3) -> bytes:
     ----------
     image : (H, W) uint8
     compress_level : int
-        zlib level passed to Pillow (0 none ... 9 smallest); the pixels are the same for any.
+        zlib level (0 stores, 1 ... 9 deflate); the pixels are the same for any. With the C
+        extension the encoder is the one of :func:`png_bytes_window` (whole image as the
+        window; zlib's run-length strategy, for which levels 1 to 9 are the same), else Pillow.
 
     Returns
     -------
@@ -71,9 +73,63 @@ def png_bytes(image: np.ndarray, *, compress_level: int = 3) -> bytes:
     """
     if image.dtype != np.uint8 or image.ndim != 2:
         raise ImageError(f"layer images must be 2-D uint8, got {image.ndim}-D {image.dtype}")
+    from .._accel import native
+
+    if native is not None and image.size and 0 <= compress_level <= 9:
+        h, w = image.shape
+        return native.png_grey(np.ascontiguousarray(image), w, h, 0, 0, h, w, False, False, int(compress_level))
     buf = io.BytesIO()
     Image.fromarray(image, mode=None).save(buf, format="PNG", compress_level=compress_level)
     return buf.getvalue()
+
+
+def png_bytes_window(window: np.ndarray, shape: tuple[int, int], r0: int, c0: int, *, mirror_x: bool = False,
+                     mirror_y: bool = False) -> bytes:
+    """An 8-bit greyscale PNG of a ``shape`` image that is black except for ``window`` at
+    ``(r0, c0)``, flipped left-right and/or top-bottom: the DLP masks' encoder.
+
+    Rows equal to the row above are filtered "Up" and runs of them are copied from deflate
+    chunks made once per process; the other rows are deflated with zlib's run-length strategy
+    (see ``rotoprint/_native.c``). Without the C extension: the same pixels through
+    :func:`png_bytes` (other bytes). The bytes depend on the pixels only.
+
+    Parameters
+    ----------
+    window : (hh, ww) uint8
+    shape : (int, int)
+        ``(H, W)`` of the whole image.
+    r0, c0 : int
+        Where the window's first pixel lies in the image before flipping.
+    mirror_x, mirror_y : bool
+        Reverse the column / row order of the whole image.
+
+    Returns
+    -------
+    bytes
+
+    Raises
+    ------
+    ImageError
+        ``window`` is not 2-D uint8 or does not fit in ``shape`` at ``(r0, c0)``.
+    """
+    from .._accel import native
+
+    h, w = (int(v) for v in shape)
+    if window.dtype != np.uint8 or window.ndim != 2:
+        raise ImageError(f"layer images must be 2-D uint8, got {window.ndim}-D {window.dtype}")
+    hh, ww = window.shape
+    if r0 < 0 or c0 < 0 or r0 + hh > h or c0 + ww > w or h <= 0 or w <= 0:
+        raise ImageError(f"a {hh} x {ww} window at ({r0}, {c0}) does not fit a {h} x {w} image")
+    if native is not None:
+        return native.png_grey(np.ascontiguousarray(window), w, h, int(r0), int(c0), hh, ww, bool(mirror_x),
+                               bool(mirror_y), 6)
+    img = np.zeros((h, w), np.uint8)
+    img[r0 : r0 + hh, c0 : c0 + ww] = window
+    if mirror_x:
+        img = img[:, ::-1]
+    if mirror_y:
+        img = img[::-1]
+    return png_bytes(np.ascontiguousarray(img))
 
 
 def write_png(path: str | Path, image: np.ndarray, *, compress_level: int = 3) -> str:

@@ -113,6 +113,8 @@ def load_triangles(path: str | Path) -> np.ndarray:
         raise MeshError("file is empty", path=path)
     if suffix == ".ply":
         check_ply_counts(data, path)
+    elif suffix == ".off":
+        check_off_counts(data, path)
     return _load_with_trimesh(path, data)
 
 
@@ -197,6 +199,42 @@ def check_ply_counts(data: bytes, path: Path) -> None:
         if have < need:
             desc = ", ".join(f"{n} {name}" for name, n, _ in elements)
             raise MeshError(f"PLY header declares {desc}, at least {need} bytes, but the file holds {have}", path=path)
+
+
+def check_off_counts(data: bytes, path: Path) -> None:
+    """Refuse an OFF file whose header declares more vertices and faces than it holds.
+
+    The counts line (``NV NF NE``, after the ``OFF`` keyword and any ``#`` comments) must be
+    followed by at least ``NV + NF`` data lines; trimesh would otherwise read what is there and
+    keep quiet about the rest.
+
+    Raises
+    ------
+    MeshError
+        A count that is not a non-negative integer, or fewer data lines than declared.
+    """
+    lines = (ln.split(b"#", 1)[0].strip() for ln in data.splitlines())
+    lines = [ln for ln in lines if ln]
+    if not lines or not lines[0].upper().endswith(b"OFF") and not lines[0].upper().startswith(b"OFF"):
+        return  # not a header we can read: trimesh says what is wrong
+    head = lines[0].split()
+    rest = 1
+    counts = head[1:]  # "OFF NV NF NE" on one line
+    if not counts:
+        if len(lines) < 2:
+            return
+        counts, rest = lines[1].split(), 2
+    try:
+        nv, nf = int(counts[0]), int(counts[1])
+    except (ValueError, IndexError):
+        raise MeshError(f"OFF header: counts line {b' '.join(counts).decode('ascii', 'replace')!r} is not 'NV NF NE'",
+                        path=path) from None
+    if nv < 0 or nf < 0:
+        raise MeshError(f"OFF header declares {nv} vertices and {nf} faces", path=path)
+    have = len(lines) - rest
+    if have < nv + nf:
+        raise MeshError(f"OFF header declares {nv} vertices and {nf} faces ({nv + nf} lines) "
+                        f"but the file holds {have} data lines", path=path)
 
 
 def _load_with_trimesh(path: Path, data: bytes) -> np.ndarray:
@@ -327,7 +365,8 @@ def load_mesh(
             f"{COORD_MM.text()} (check --units, --scale and --translate)",
             path=path,
         )
-    mesh = Mesh.from_triangles(tri, source=str(path), fill_holes=fill_holes, _owned=True)
+    box = [tri]  # handed over: freed inside once the vertices are merged (less peak memory)
     del tri
+    mesh = Mesh.from_triangles(box, source=str(path), fill_holes=fill_holes, _owned=True)
     release_free_memory()
     return mesh

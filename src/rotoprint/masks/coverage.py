@@ -29,6 +29,7 @@ __all__ = [
     "accumulate_numpy",
     "segments_area_px",
     "fraction_to_grey",
+    "coverage_window",
     "BACKENDS",
 ]
 
@@ -243,14 +244,48 @@ def coverage_mask(start_px, end_px, shape, *, backend: str = "jit") -> np.ndarra
     """
     if backend != "jit":
         return fraction_to_grey(coverage_fraction(start_px, end_px, shape, backend=backend))
-    s, e = _check_segments(start_px, end_px)
     h, w = _check_shape(shape)
     check_raster_fits(w, h, 8 + 1, what="coverage raster")
-    from ._coverage_kernels import accumulate_jit, resolve_grey_jit
-
     out = np.zeros((h, w), np.uint8)
+    r0, c0, win, tail = coverage_window(start_px, end_px, (h, w))
+    if win.size:
+        out[r0 : r0 + win.shape[0], c0 : c0 + win.shape[1]] = win
+        if tail is not None:
+            out[r0 : r0 + win.shape[0], c0 + win.shape[1] :] = tail[:, None]
+    return out
+
+
+def coverage_window(start_px, end_px, shape) -> tuple[int, int, np.ndarray, np.ndarray | None]:
+    """The part of :func:`coverage_mask` that can be non-zero: its bounding window.
+
+    Parameters
+    ----------
+    start_px, end_px : (S, 2) float64
+        Oriented segments, as for :func:`coverage_mask`.
+    shape : (int, int)
+        ``(height, width)`` of the whole mask.
+
+    Returns
+    -------
+    r0, c0 : int
+        Row and column of the window's first pixel in the mask.
+    window : (hh, ww) uint8 ndarray
+        The mask's pixels ``[r0 : r0 + hh, c0 : c0 + ww]``; every pixel outside the window's
+        rows is 0, and so is every pixel left of it.
+    tail : (hh,) uint8 ndarray or None
+        The level of the pixels right of the window in each of its rows (their total
+        winding): None when they are all 0, as for closed loops.
+
+    Raises
+    ------
+    ConfigError, GeometryError, RasterTooLargeError
+        As :func:`coverage_mask`.
+    """
+    s, e = _check_segments(start_px, end_px)
+    h, w = _check_shape(shape)
+    empty = (0, 0, np.zeros((0, 0), np.uint8), None)
     if s.shape[0] == 0:
-        return out
+        return empty
     # Work in the segments' bounding window only: rows outside it have no crossings, and
     # columns left of it are fully inside or outside per row, which the kernel handles by
     # folding everything left of the window into its first column.
@@ -263,24 +298,32 @@ def coverage_mask(start_px, end_px, shape, *, backend: str = "jit") -> np.ndarra
     if r1 <= r0 or c1 <= c0:
         # nothing crosses the image rows, or all of it lies left or right of the image
         if r1 > r0 and c0 >= w:
-            return out
+            return empty
         if r1 > r0:  # all left of the image: whole rows may be inside
             c0, c1 = 0, w
         else:
-            return out
+            return empty
     hh, ww = r1 - r0, c1 - c0
-    acc = np.zeros((hh, ww + 1), np.float64)
-    accumulate_jit(
-        np.ascontiguousarray(s[:, 0] - c0), np.ascontiguousarray(s[:, 1] - r0),
-        np.ascontiguousarray(e[:, 0] - c0), np.ascontiguousarray(e[:, 1] - r0), hh, ww, acc,
-    )
-    win = resolve_grey_jit(acc, ww, np.empty((hh, ww), np.uint8))
-    out[r0:r1, c0:c1] = win
-    if c1 < w:
+    check_raster_fits(ww + 1, hh, 8 + 1, what="coverage window")
+    args = (np.ascontiguousarray(s[:, 0] - c0), np.ascontiguousarray(s[:, 1] - r0),
+            np.ascontiguousarray(e[:, 0] - c0), np.ascontiguousarray(e[:, 1] - r0))
+    from .._accel import native
+
+    if native is not None:
+        win = np.empty((hh, ww), np.uint8)
+        tail = np.empty(hh, np.uint8)
+        native.coverage(*args, hh, ww, win, tail)
+    else:
+        from ._coverage_kernels import accumulate_jit, resolve_grey_jit
+
+        acc = np.zeros((hh, ww + 1), np.float64)
+        accumulate_jit(*args, hh, ww, acc)
+        win = resolve_grey_jit(acc, ww, np.empty((hh, ww), np.uint8))
         # right of the window every row carries its total winding (0 for closed loops)
-        tail = resolve_grey_jit(np.ascontiguousarray(acc.sum(axis=1, keepdims=True)), 1, np.empty((hh, 1), np.uint8))
-        out[r0:r1, c1:] = tail
-    return out
+        tail = resolve_grey_jit(np.ascontiguousarray(acc.sum(axis=1, keepdims=True)), 1, np.empty((hh, 1), np.uint8))[:, 0]
+    if c1 >= w or not tail.any():
+        tail = None
+    return r0, c0, win, tail
 
 
 def segments_area_px(start_px, end_px) -> float:

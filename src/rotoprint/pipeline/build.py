@@ -13,6 +13,7 @@ output, see :mod:`rotoprint.io.ownership`, or with ``force``)::
                                    ordered passes with their image files and SHA-256
     report.html                    self-contained report (no network)
     layers/layer_00000/MATERIAL-INK.png (+ .json sidecar; -s1, -s2 for several swathes)
+    machine/                       packed firing data, TIFF planes, program.json/.txt (docs/machine.md)
     overlays/layer_00000-MATERIAL.png   simulator overlays of a few layers
 """
 
@@ -143,9 +144,11 @@ def _layer_printability(placed, limits: dict) -> dict:
             "ok": bool(track_ok and gap_ok)}
 
 
-def stage_layers(job, plan, tmp: Path, step: Step) -> LayerOutputs:
+def stage_layers(job, plan, tmp: Path, step: Step, mw=None) -> LayerOutputs:
     """Print-ready images of every layer into ``tmp/layers``, each layer's composite, and the
-    design and printed masks of the materials with a resistance estimate."""
+    design and printed masks of the materials with a resistance estimate; with ``mw`` (the
+    machine writer of :func:`rotoprint.machine.program.machine_stage`) every layer is also
+    streamed into ``machine/`` (progress as the ``machine`` step)."""
     from ..report.colours import composite_image
     from ..rotary.files import print_files
     from ..rotary.simulate import simulate
@@ -194,6 +197,9 @@ def stage_layers(job, plan, tmp: Path, step: Step) -> LayerOutputs:
                     p = simulate(pr, ref).printed
                     cov = p if cov is None else (cov & p)
                 out.printed_masks[m].append(cov)
+        if mw is not None:
+            step("machine", i, n)
+            mw.add_layer(sched, masks)
         out.layers_json.append({
             "index": i, "z_bottom_mm": sched.z_bottom_mm, "z_top_mm": sched.z_top_mm, "time_s": sched.time_s,
             "blocks": [b.to_json() for b in sched.blocks], "images": images,
@@ -315,7 +321,7 @@ def job_inputs(job) -> list[Path]:
 
 
 def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: bool | None = None,
-              report: bool = True, force: bool = False, inputs: Iterable[str | Path] = ()) -> BuildResult:
+              report: bool = True, force: bool = False, inputs: Iterable[str | Path] = (), machine=None) -> BuildResult:
     """Run the stages of :data:`STAGES` for ``job`` and write ``out_dir``.
 
     Parameters
@@ -333,6 +339,9 @@ def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: b
     inputs : iterable of path
         Files the run read besides the job's own (:func:`job_inputs`): ``out_dir`` must not be
         or hold one.
+    machine : MachineOptions or False, optional
+        How ``machine/`` is written (:class:`rotoprint.machine.program.MachineOptions`; default
+        options when None); ``False``: no machine folder.
 
     Returns
     -------
@@ -354,10 +363,14 @@ def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: b
     with atomic_dir(out, kind="build", inputs=[*inputs, *job_inputs(job)], force=force) as tmp:
         (tmp / "layers").mkdir()
         (tmp / "overlays").mkdir()
+        from ..machine.program import machine_stage
+
+        mw = machine_stage(plan, tmp / "machine", machine)  # the machine folder, streamed layer by layer
         with _timed(timings, "check_s"):
             checks = stage_check(job, plan, tmp, step) if do_check else []
         with _timed(timings, "layers_s"):
-            layers = stage_layers(job, plan, tmp, step)
+            layers = stage_layers(job, plan, tmp, step, mw)
+            machine_totals = mw.close() if mw is not None else None
         with _timed(timings, "simulate_s"):
             overlays = stage_simulate(job, plan, layers.present, tmp, step)
         with _timed(timings, "resistance_s"):
@@ -383,6 +396,7 @@ def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: b
         "printability_ok": all(c["ok"] for c in checks) if checks else None,
         "estimated_print_time_s": layers.total_time_s,
         "timings_s": all_timings, "plan_sha256": hashlib.sha256(text.encode()).hexdigest(),
+        "machine": machine_totals,
     }
     return BuildResult(out_dir=final, report_path=final / "report.html", plan_path=final / "plan.json", summary=summary)
 

@@ -114,7 +114,11 @@ class MaskLayer:
         from ..io.images import png_bytes
         from ..masks.pipeline import MaskOptions, layer_masks
 
-        masks = layer_masks(job, index, MaskOptions(**self.options))
+        options = MaskOptions(**self.options)
+        fast = _coverage_window(job, index, options)
+        if fast is not None:
+            return fast
+        masks = layer_masks(job, index, options)
         copies = len(masks)
         files = {mask_name(index * copies + c): png_bytes(m.image, compress_level=self.compress_level)
                  for c, m in enumerate(masks)}
@@ -127,6 +131,32 @@ class MaskLayer:
             cols = np.flatnonzero(fp.any(axis=0))
             crop = (int(rows[0]), int(cols[0]), np.ascontiguousarray(fp[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]))
         return Rendered(index, files, {"plain_sums": [int(m.plain.sum(dtype=np.uint64)) for m in masks]}, crop)
+
+
+def _coverage_window(job, index: int, options) -> Rendered | None:
+    """Coverage masks without inset, smoothing, ERM or inversion, made and encoded from the
+    part's window only (the rest of the mask is black): the same pixels as
+    :func:`~rotoprint.masks.pipeline.layer_masks`, without whole-image passes. None when
+    the options or the layer need the general path."""
+    if (options.mode != "coverage" or options.erm or options.invert or index < options.first_layers
+            or job.fill != "nonzero"):
+        return None
+    from ..io.images import png_bytes_window
+    from ..masks.coverage import coverage_window
+
+    s, e, _ = job.pixel_segments(index)
+    shape = job.grid.shape
+    r0, c0, win, tail = coverage_window(s, e, shape)
+    if tail is not None:  # the rows right of the window are not black: general path
+        return None
+    rows = np.flatnonzero(win.any(axis=1))
+    crop = None
+    if rows.size:
+        cols = np.flatnonzero(win.any(axis=0))
+        crop = (r0 + int(rows[0]), c0 + int(cols[0]),
+                np.ascontiguousarray(win[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]))
+    png = png_bytes_window(win, shape, r0, c0, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
+    return Rendered(index, {mask_name(index): png}, {"plain_sums": [int(win.sum(dtype=np.uint64))]}, crop)
 
 
 @dataclass(frozen=True)

@@ -46,6 +46,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 from .. import ranges as R
 from ..errors import ConfigError, InputFileError
+from ..machine.spec import MachineSpec
 from .materials import Material, MaterialLibrary, builtin_library, load_materials, validation_message
 from .cadparts import LayerFile
 from .shapes import Shape
@@ -210,6 +211,7 @@ class JobSpec(_Strict):
     resistance: tuple[ResistanceSpec, ...] = ()
     process: ProcessSpec = ProcessSpec()
     materials: dict[str, dict] = Field(default_factory=dict)
+    machine: MachineSpec = MachineSpec()  # the [machine] section: encoder, radial stage, speeds (docs/machine.md)
 
     @model_validator(mode="after")
     def _names(self) -> JobSpec:

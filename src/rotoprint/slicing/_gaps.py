@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from ._sections import Segments
 
@@ -69,32 +68,10 @@ def _balance(seg: Segments, suspect: np.ndarray) -> tuple[np.ndarray, np.ndarray
 def _chains(seg: Segments) -> np.ndarray:
     """Chain label per segment: segments linked end-to-start through a shared mesh edge."""
     nodes, inv = np.unique(np.concatenate([seg.start_edge, seg.end_edge]), return_inverse=True)
+    from ._kernels import union_labels as _union_labels  # numba: loaded only for open meshes
+
     n = len(seg)
     return _union_labels(inv[:n].astype(np.int64), inv[n:].astype(np.int64), len(nodes))
-
-
-@njit(cache=True, nogil=True)
-def _union_labels(a, b, n_nodes):  # pragma: no cover - jit
-    """Connected components of the graph with edges ``a[k] - b[k]``; the label of ``a[k]``."""
-    parent = np.arange(n_nodes)
-    for k in range(a.shape[0]):
-        x = a[k]
-        while parent[x] != x:
-            parent[x] = parent[parent[x]]
-            x = parent[x]
-        y = b[k]
-        while parent[y] != y:
-            parent[y] = parent[parent[y]]
-            y = parent[y]
-        if x != y:
-            parent[max(x, y)] = min(x, y)
-    out = np.empty(a.shape[0], np.int64)
-    for k in range(a.shape[0]):
-        x = a[k]
-        while parent[x] != x:
-            x = parent[x]
-        out[k] = x
-    return out
 
 
 def close_gaps(seg: Segments, suspect_edge: np.ndarray, gap_radius_mm: float) -> tuple[Segments, GapReport]:

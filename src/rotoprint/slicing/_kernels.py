@@ -164,3 +164,27 @@ def section_kernel(V, F, FE, faces, z):  # pragma: no cover - jit
                 _crossing(V, vb, va, z, start, k)
                 se[k] = FE[f, side]
     return start, end, se, ee
+
+
+@njit(cache=True, nogil=True)
+def union_labels(a, b, n_nodes):  # pragma: no cover - jit
+    """Connected components of the graph with edges ``a[k] - b[k]``; the label of ``a[k]``."""
+    parent = np.arange(n_nodes)
+    for k in range(a.shape[0]):
+        x = a[k]
+        while parent[x] != x:
+            parent[x] = parent[parent[x]]
+            x = parent[x]
+        y = b[k]
+        while parent[y] != y:
+            parent[y] = parent[parent[y]]
+            y = parent[y]
+        if x != y:
+            parent[max(x, y)] = min(x, y)
+    out = np.empty(a.shape[0], np.int64)
+    for k in range(a.shape[0]):
+        x = a[k]
+        while parent[x] != x:
+            x = parent[x]
+        out[k] = x
+    return out

@@ -63,12 +63,23 @@ class FaceSweep:
 
 def section(mesh: Mesh, faces_idx: np.ndarray, z: float) -> Segments:
     """Oriented segments of the faces ``faces_idx`` (all crossing ``z``) at height ``z``
-    (the jit kernel; :func:`section_numpy` is the reference it is tested against)."""
+    (the C kernel, or the jit kernel where it is not built; :func:`section_numpy` is the
+    reference both are tested against)."""
+    from .._accel import native
+
+    faces_idx = np.ascontiguousarray(faces_idx, np.int64)
+    if native is not None:
+        V = np.ascontiguousarray(mesh.vertices, np.float64)
+        F = np.ascontiguousarray(mesh.faces, np.int64)
+        FE = np.ascontiguousarray(mesh.topology.face_edges, np.int64)
+        n = faces_idx.shape[0]
+        start, end = np.empty((n, 2)), np.empty((n, 2))
+        se, ee = np.empty(n, np.int64), np.empty(n, np.int64)
+        native.section(V, F, FE, faces_idx, float(z), start, end, se, ee)
+        return Segments(start=start, end=end, start_edge=se, end_edge=ee)
     from ._kernels import section_kernel
 
-    start, end, se, ee = section_kernel(
-        mesh.vertices, mesh.faces, mesh.topology.face_edges, np.ascontiguousarray(faces_idx, np.int64), float(z)
-    )
+    start, end, se, ee = section_kernel(mesh.vertices, mesh.faces, mesh.topology.face_edges, faces_idx, float(z))
     return Segments(start=start, end=end, start_edge=se, end_edge=ee)
 
 

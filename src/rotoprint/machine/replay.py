@@ -1,0 +1,329 @@
+"""Replaying a machine program: read only ``program.json`` and the packed files, decode them,
+land every drop as the machine would and compare with the layer's design region.
+
+The drops are placed by :func:`rotoprint.rotary.simulate.simulate` from the decoded images
+and the program's geometry (head model, tilt, mount, direction, stage position, angle per
+firing, first firing), so a replay of a build's program gives the figures ``simulate`` gives
+for the build's images. Firings are placed at the program's angle per firing (``dphi_rad``);
+the integer clock ratio's drift from it is reported per swathe (``angle_error_per_rev_deg``),
+not added to the drops.
+
+Refused, with one line naming the step: a file that is missing or whose SHA-256 differs, a
+radial stage position outside the machine's stage, a clock the head or the controller cannot
+make (firing frequency above the head's or machine's maximum, a platform speed above the
+machine's, a multiplier or divider beyond the controller's limits, a ratio that does not make
+the image's firings per revolution).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from pydantic import ValidationError
+
+from ..devices.models import InkjetHead
+from ..errors import InputFileError, RotoprintError
+from ..io.inputs import parse_json, read_input_bytes
+from ..io.machine import nozzle_order, read_packed, unpack_levels
+from ..rotary.placement import Placement
+from ..rotary.printdata import RotaryPrint, SwatheImage, runs_to_mask
+from .program import PROGRAM_FORMAT, PROGRAM_VERSION, unshift_rows
+from .spec import MachineSpec
+
+__all__ = ["load_program", "ReplayImage", "replay_layers", "replay_program", "MAX_PROGRAM_BYTES", "MAX_IMAGE_BYTES"]
+
+#: Largest program.json read (a 1,000-layer coil program is about 200 MB).
+MAX_PROGRAM_BYTES = 2 * 2**30
+#: Largest packed file read.
+MAX_IMAGE_BYTES = 1 * 2**30
+
+
+def _read_bounded(path: Path, limit: int, what: str, where: str, program: Path) -> bytes:
+    """A regular file of at most ``limit`` bytes (:func:`rotoprint.io.inputs.read_input_bytes`),
+    its refusals as one line naming ``where`` in ``program``."""
+    if not path.exists() and not path.is_symlink():
+        raise InputFileError(f"{where}: {what} {path.name} is missing", path=program)
+    try:
+        return read_input_bytes(path, what=what, limit_bytes=limit)
+    except InputFileError as exc:
+        raise InputFileError(f"{where}: {what} {path.name} {exc.problem}", path=program) from None
+
+
+def load_program(path: str | Path) -> dict:
+    """Read and check the header of a machine program.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``machine/program.json``.
+
+    Returns
+    -------
+    dict
+        The parsed program.
+
+    Raises
+    ------
+    InputFileError
+        Missing, too big, not JSON, not a rotoprint machine program or of a newer version, a
+        ``machine`` section that does not validate, or a head whose clock, stage position or
+        speed the machine cannot make (the message names the head and swathe).
+    """
+    p = Path(path)
+    prog = parse_json(read_input_bytes(p, what="machine program", limit_bytes=MAX_PROGRAM_BYTES), p, what="program")
+    if not isinstance(prog, dict) or prog.get("format") != PROGRAM_FORMAT:
+        raise InputFileError(f"not a rotoprint machine program (format {PROGRAM_FORMAT!r} expected)", path=p)
+    if not isinstance(prog.get("version"), int) or prog["version"] > PROGRAM_VERSION:
+        raise InputFileError(f"program version {prog.get('version')!r}; this rotoprint reads up to {PROGRAM_VERSION}", path=p)
+    try:
+        spec = MachineSpec(**prog["machine"])
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        raise InputFileError(f"machine.{'.'.join(str(x) for x in err['loc'])}: {err['msg']}", path=p) from None
+    except (KeyError, TypeError):
+        raise InputFileError("program has no valid machine section", path=p) from None
+    prog["_spec"] = spec
+    try:
+        for h in prog["heads"]:
+            h["_model"] = InkjetHead(**h["model"])
+            for s in h["swathes"]:
+                _check_swathe(spec, h, s, {**s, **s["clock"]}, f"head {h['name']} swathe {s['swathe']}", p)
+        prog["layers"], prog["totals"]  # noqa: B018 - presence
+    except (KeyError, TypeError, ValidationError) as exc:
+        raise InputFileError(f"program is incomplete or invalid: {type(exc).__name__}: {exc}", path=p) from None
+    return prog
+
+
+def _check_swathe(spec: MachineSpec, head: dict, sw: dict, step: dict, where: str, p: Path) -> None:
+    """A stage position and a clock the machine can make, else one line naming ``where``."""
+    lo, hi = spec.radial_stage_mm
+    pos = step["radial_stage_mm"]
+    if not (isinstance(pos, (int, float)) and math.isfinite(pos) and lo <= pos <= hi):
+        raise InputFileError(f"{where}: radial stage position {pos!r} mm is outside the machine's stage [{lo:g}, {hi:g}] mm", path=p)
+    f = step["frequency_hz"]
+    fmax = min(head["_model"].max_frequency_hz, spec.head_frequency_hz or math.inf)
+    if not (isinstance(f, (int, float)) and 0 < f <= fmax):
+        raise InputFileError(f"{where}: firing clock {f!r} Hz is beyond what the head can reach ({fmax:g} Hz)", path=p)
+    m, d = step["multiplier"], step["divider"]
+    if not (isinstance(m, int) and isinstance(d, int) and 1 <= m <= spec.clock_max_multiplier and 1 <= d <= spec.clock_max_divider):
+        raise InputFileError(f"{where}: encoder ratio x{m!r}/{d!r} is beyond the controller's limits "
+                             f"(multiplier <= {spec.clock_max_multiplier}, divider <= {spec.clock_max_divider})", path=p)
+    dphi = sw["dphi_rad"]
+    want = 2 * math.pi / dphi
+    got = spec.encoder_counts_per_rev * m / d
+    if abs(got / want - 1) > 0.01:
+        raise InputFileError(f"{where}: encoder ratio x{m}/{d} makes {got:.6g} firings per revolution, the image needs "
+                             f"{want:.6g}: the clock cannot be reached", path=p)
+    rpm = 60.0 * f / got
+    if rpm > spec.max_platform_rpm:
+        raise InputFileError(f"{where}: {f:g} Hz needs the platform at {rpm:.2f} rpm, above the machine's "
+                             f"{spec.max_platform_rpm:g} rpm", path=p)
+
+
+@dataclass(frozen=True, eq=False)
+class ReplayImage:
+    """One head's image of one material in one layer, decoded: the print and the design."""
+
+    layer: int
+    material: str
+    ink: str
+    head: str
+    print: RotaryPrint
+    design: np.ndarray  # (H, W) uint8, 0 / 255
+
+
+class _Files:
+    """Packed files read and checked once each."""
+
+    def __init__(self, root: Path, program: Path) -> None:
+        self.root = root
+        self.program = program
+
+    def read(self, rel: str, sha: str, where: str) -> bytes:
+        f = self.root / rel
+        if not (f.resolve().is_relative_to(self.root.resolve())):
+            raise InputFileError(f"{where}: file {rel!r} is outside the machine folder", path=self.program)
+        data = _read_bounded(f, MAX_IMAGE_BYTES, "file", where, self.program)
+        if hashlib.sha256(data).hexdigest() != sha:
+            raise InputFileError(f"{where}: file {rel} was altered (its SHA-256 differs from the program's)", path=self.program)
+        return data
+
+
+def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | None = None) -> Iterator[tuple[dict, list[ReplayImage]]]:
+    """Check every step of the chosen layers and decode their images, layer by layer.
+
+    Parameters
+    ----------
+    prog : dict
+        From :func:`load_program`.
+    program_path : str or Path
+    layers : list of int, optional
+        Layer indices to decode (default all); the steps of every layer are checked.
+
+    Yields
+    ------
+    layer : dict
+        The program's layer record.
+    images : list of ReplayImage
+        One per (material, ink) of the layer, swathes together.
+    """
+    p = Path(program_path)
+    root = p.parent
+    files = _Files(root, p)
+    spec: MachineSpec = prog["_spec"]
+    heads = {h["name"]: h for h in prog["heads"]}
+    pk = prog["packing"]
+    bits = pk["bits_per_nozzle"]
+    nn = pk["nozzle_order"]
+    want = None if layers is None else set(layers)
+    for lay in prog["layers"]:
+        i = lay["index"]
+        recs = {}
+        for r in lay["images"]:
+            recs[r["file"]] = r
+        for st in lay["steps"]:
+            where = f"layer {i} step {st['n']} ({st['kind']}" + (f" of {st['head']} swathe {st['swathe']})" if st["kind"] == "revolution" else ")")
+            t = st.get("time_s")
+            if not (isinstance(t, (int, float)) and math.isfinite(t) and t >= 0):
+                raise InputFileError(f"{where}: time_s {t!r} is not a duration", path=p)
+            if st["kind"] != "revolution":
+                continue
+            h = heads.get(st["head"])
+            if h is None or not 0 <= st["swathe"] < len(h["swathes"]):
+                raise InputFileError(f"{where}: no such head or swathe in the program's heads", path=p)
+            _check_swathe(spec, h, h["swathes"][st["swathe"]], st, where, p)
+            if st["image"] is not None and st["image"] not in recs:
+                raise InputFileError(f"{where}: image {st['image']} is not listed in layer {i}'s images", path=p)
+        if want is not None and i not in want:
+            continue
+        designs = {}
+        for d in lay["designs"]:
+            where = f"layer {i} design of {d['material']}"
+            data = files.read(d["file"], d["sha256"], where)
+            try:
+                w = read_packed(data, d["height_px"], d["width_px"], 1)
+                designs[d["material"]] = unpack_levels(w, 1, np.arange(d["width_px"])) * np.uint8(255)
+            except RotoprintError as exc:
+                raise InputFileError(f"{where}: {exc.problem}", path=p) from None
+        groups: dict[tuple[str, str], list[dict]] = {}
+        for r in lay["images"]:
+            groups.setdefault((r["material"], r["ink"]), []).append(r)
+        out = []
+        for (mname, ink), rs in groups.items():
+            h = heads[rs[0]["head"]]
+            model: InkjetHead = h["_model"]
+            order = nozzle_order(model.nozzles, model.rows, odd_row=nn["odd_row"], descending=nn["direction"] == "descending")
+            rows_of = np.arange(model.nozzles) % model.rows
+            sws = []
+            for r in sorted(rs, key=lambda r: r["swathe"]):
+                where = f"layer {i} image {r['file']}"
+                data = files.read(r["file"], r["sha256"], where)
+                try:
+                    lv = unpack_levels(read_packed(data, r["firings"], r["nozzles"], bits), bits, order)
+                except RotoprintError as exc:
+                    raise InputFileError(f"{where}: {exc.problem}", path=p) from None
+                first = r["first_firing_index"]
+                if r.get("row_offsets_firings"):
+                    lv, dfirst = unshift_rows(lv, rows_of, r["row_offsets_firings"])
+                    first += dfirst
+                runs = r.get("enabled_nozzle_runs")
+                sws.append(SwatheImage(index=r["swathe"], levels=lv, pivot_radius_mm=float(r["pivot_radius_mm"]),
+                                       first_firing=int(first), dphi_rad=float(r["dphi_rad"]),
+                                       ref_radius_mm=float(r["ref_radius_mm"]),
+                                       band_mm=(float(r["band_mm"][0]), float(r["band_mm"][1])),
+                                       enabled_nozzles=int(r["enabled_nozzles"]),
+                                       enabled=None if runs is None else runs_to_mask(runs, model.nozzles)))
+            r0 = rs[0]
+            pr = RotaryPrint(method=r0["method"], head=model, tilt_deg=float(r0["tilt_deg"]),
+                             mount_angle_deg=float(r0["mount_angle_deg"]), direction=int(r0["direction"]),
+                             dpi_y=float(r0["dpi_y"]), placement=Placement.from_json(r0["placement"]), swathes=tuple(sws))
+            if mname not in designs:
+                raise InputFileError(f"layer {i}: no design region of {mname} for its images", path=p)
+            out.append(ReplayImage(layer=i, material=mname, ink=ink, head=h["name"], print=pr, design=designs[mname]))
+        yield lay, out
+
+
+def replay_program(path: str | Path, *, layer: int | None = None, on_step: Callable[[str, int, int], None] | None = None,
+                   keep_layer: int | None = None, overlay_scale: int | None = None, deposit: bool = False) -> dict:
+    """Replay a program: the simulator's figures for every image of every (or one) layer.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``machine/program.json``.
+    layer : int, optional
+        Only this layer (its steps and every other layer's steps are still checked).
+    on_step : callable, optional
+        ``on_step("replay", done, total)``.
+    keep_layer : int, optional
+        Keep the :class:`~rotoprint.rotary.simulate.Simulation` objects of this layer (for
+        the overlay), under ``"_sims"``.
+    overlay_scale : int, optional
+        The overlay's scale, checked against memory before anything is simulated.
+    deposit : bool
+        Also run the deposit model (:func:`rotoprint.rotary.deposit.deposit_film`, the film
+        figures a build gives for its overlays) on every image: ``deposit`` per image, without
+        the radial bins. About a second per image.
+
+    Returns
+    -------
+    dict
+        ``images``: per image ``layer, material, ink, head, swathes`` and the keys of
+        ``simulate``'s report (``iou``, ``uncovered_fraction``, ``drops``, ...); ``iou`` the
+        lowest and ``uncovered_fraction`` the highest over them; ``drops`` and
+        ``drops_outside`` summed; ``time_s``, ``steps``, the program's totals; ``clock`` the
+        largest angle error per revolution and the flagged swathes.
+    """
+    from ..rotary.simulate import check_overlay_fits, simulate
+
+    p = Path(path)
+    prog = load_program(p)
+    if overlay_scale is not None:
+        try:
+            g = prog["design_grid"]
+            shape = (int(g["height_px"]), int(g["width_px"]))
+        except (KeyError, TypeError, ValueError):
+            raise InputFileError("program has no valid design_grid", path=p) from None
+        check_overlay_fits(shape, overlay_scale)
+    nl = len(prog["layers"])
+    if layer is not None and not 0 <= layer < nl:
+        raise InputFileError(f"--layer {layer}: the program has layers 0..{nl - 1}", path=p)
+    step = on_step or (lambda *a: None)
+    results = []
+    sims = []
+    for k, (lay, imgs) in enumerate(replay_layers(prog, p, layers=None if layer is None else [layer])):
+        step("replay", k, nl)
+        for im in imgs:
+            sim = simulate(im.print, im.design)
+            if keep_layer is not None and im.layer == keep_layer:
+                sims.append((im, sim))
+            r = {"layer": im.layer, "material": im.material, "ink": im.ink, "head": im.head,
+                 "method": im.print.method, "tilt_deg": im.print.tilt_deg, "swathes": len(im.print.swathes),
+                 **sim.report.to_json()}
+            if deposit:
+                from ..rotary.deposit import deposit_film, ink_drops
+
+                film = deposit_film(sim.inked, im.print.placement, im.print.head, [ink_drops(sim.drops, im.print.head)])
+                r["deposit"] = {k: v for k, v in film.films[0].to_json().items() if k != "radial_bins"}
+            results.append(r)
+    step("replay", nl, nl)
+    tot = prog["totals"]
+    errs = [s["clock"]["angle_error_per_rev_deg"] for h in prog["heads"] for s in h["swathes"]]
+    out = {
+        "program": str(p), "layers": nl, "replayed_layers": sorted({r["layer"] for r in results}) if layer is None else [layer],
+        "images": results,
+        "iou": min((r["iou"] for r in results), default=float("nan")),
+        "uncovered_fraction": max((r["uncovered_fraction"] for r in results), default=float("nan")),
+        "drops": sum(r["drops"] for r in results),
+        "drops_outside": sum(r["drops_outside"] for r in results),
+        "time_s": tot["time_s"], "steps": tot["steps"], "revolutions": tot["revolutions"],
+        "clock": {"max_angle_error_per_rev_deg": max(errs, default=0.0), "flagged": tot["flagged_clocks"]},
+    }
+    if keep_layer is not None:
+        out["_sims"] = sims
+    return out

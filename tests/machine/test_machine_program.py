@@ -1,0 +1,327 @@
+"""machine/ of a build: the program's steps and times, clocks, limits, and its replay.
+
+The coil demo is built once (no printability check, no report): replay of its program must
+give the drops, IoU and coverage that ``simulate`` gives for the build's own images."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+
+import numpy as np
+import pytest
+
+from rotoprint.machine import clock_ratio
+from rotoprint.machine.program import MachineOptions, write_machine_folder
+from rotoprint.machine.replay import replay_program
+from rotoprint.process import load_job, parse_job
+from rotoprint.pipeline import run_build
+from rotoprint.process.examples import write_example
+from rotoprint.process.plan import plan_job
+from rotoprint.rotary.printdata import clock_dphi
+from rotoprint.rotary.simulate import simulate
+
+
+@pytest.fixture(scope="module")
+def coil(tmp_path_factory):
+    root = tmp_path_factory.mktemp("coil")
+    job = load_job(write_example("coil-sensor", root / "job"))
+    res = run_build(job, root / "out", check=False, report=False)
+    return job, res, root / "out" / "machine" / "program.json"
+
+
+def _small_job(**machine):
+    d = {
+        "job": {"name": "small", "layer_height_mm": 0.05},
+        "printer": {"device": "omnidot760", "tilt_deg": 20.0,
+                    "heads": [{"name": "H1", "ink": "ammonium_sulphate"},
+                              {"name": "H2", "ink": "calcium_chloride", "mount_angle_deg": 90.0}]},
+        "placement": {"inner_radius_mm": 60.0},
+        "parts": [{"name": "b", "material": "plaster", "priority": 1,
+                   "shape": {"kind": "box", "size_mm": [3, 2, 0.1], "origin_mm": [0, 0, 0]}}],
+        "process": {"cycles_per_layer": {"plaster": 1}},
+    }
+    if machine:
+        d["machine"] = machine
+    return parse_job(d, base_dir=".", source="small.toml")
+
+
+def _same(a: dict, b: dict) -> None:
+    assert a.keys() >= b.keys()
+    for k, v in b.items():
+        if isinstance(v, float):
+            assert (math.isnan(v) and math.isnan(a[k])) or a[k] == pytest.approx(v, rel=1e-9, abs=1e-12), k
+        else:
+            assert a[k] == v, k
+
+
+def test_replay_of_the_coil_program_gives_simulates_figures_for_every_layer_and_head(coil):
+    job, res, prog_path = coil
+    rep = replay_program(prog_path)
+    plan = plan_job(job)
+    by = {(r["layer"], r["material"], r["ink"]): r for r in rep["images"]}
+    n = 0
+    for i in range(len(plan)):
+        sched = plan.layer(i)
+        secs = plan.sections(i)
+        for (m, ink), pr in sched.images.items():
+            ref = plan.reference_image(m, secs).astype(np.uint8) * 255
+            sim = simulate(pr, ref).report.to_json()
+            _same(by[(i, m, ink)], sim)
+            assert by[(i, m, ink)]["head"] == plan.head(ink).name
+            n += 1
+    assert n == len(rep["images"]) and n > 15
+    assert {r["head"] for r in rep["images"]} == {h.name for h in plan.heads}
+    assert rep["iou"] == min(r["iou"] for r in rep["images"])
+
+
+def test_replay_with_the_deposit_model_gives_the_builds_film_figures(coil):
+    from rotoprint.rotary.deposit import deposit_film, ink_drops
+
+    job, _, prog_path = coil
+    rep = replay_program(prog_path, layer=2, deposit=True)
+    plan = plan_job(job)
+    sched = plan.layer(2)
+    secs = plan.sections(2)
+    assert len(rep["images"]) == len(sched.images) > 0
+    for r in rep["images"][:2]:
+        pr = sched.images[(r["material"], r["ink"])]
+        sim = simulate(pr, plan.reference_image(r["material"], secs).astype(np.uint8) * 255)
+        film = deposit_film(sim.inked, pr.placement, pr.head, [ink_drops(sim.drops, pr.head)]).films[0].to_json()
+        _same(r["deposit"], {k: v for k, v in film.items() if k not in ("radial_bins", "grid_um")})
+        assert r["deposit"]["grid_um"] == film["grid_um"]
+
+
+def test_program_time_is_the_sum_of_its_steps_and_the_plans_estimate(coil):
+    _, res, prog_path = coil
+    prog = json.loads(prog_path.read_text())
+    steps = [s for L in prog["layers"] for s in L["steps"]]
+    assert prog["totals"]["steps"] == len(steps) and [s["n"] for s in steps] == list(range(len(steps)))
+    total = math.fsum(s["time_s"] for s in steps)
+    assert prog["totals"]["time_s"] == pytest.approx(total, rel=1e-12)
+    assert total == pytest.approx(res.summary["estimated_print_time_s"], rel=1e-12)
+    for L in prog["layers"]:
+        assert math.fsum(s["time_s"] for s in L["steps"]) == pytest.approx(L["plan_time_s"], rel=1e-12)
+        assert L["steps"][-1]["kind"] == "z_step" and L["steps"][-1]["z_step_mm"] == pytest.approx(0.02)
+    # silver's flash heat 150 C for 60 s after its passes, with the head spitting meanwhile
+    posts = [s for s in steps if s["kind"] == "post" and s["material"] == "silver"]
+    assert posts and all(s["post"] == "flash_heat" and s["temperature_c"] == 150 and s["time_s"] == 60 for s in posts)
+    assert posts[0]["idle"] == {"mode": "spit", "spits": 30, "drops_per_nozzle": 300}
+    rev = [s for s in steps if s["kind"] == "revolution"]
+    assert prog["totals"]["revolutions"] == len(rev)
+    for s in rev[:50]:
+        assert {"layer", "pass", "head", "ink", "swathe", "radial_stage_mm", "multiplier", "divider",
+                "angle_error_per_rev_deg", "index_offset_counts", "firings", "image", "sha256", "time_s"} <= s.keys()
+    txt = (prog_path.parent / "program.txt").read_text()
+    assert txt.count(" rev ") == len(rev) and "flash heat at 150 C for 60 s" in txt
+
+
+def test_motion_times_add_to_the_total():
+    job = _small_job(z_step_s=2.5, radial_move_s=1.5)
+    plan = plan_job(job)
+    est = sum(plan.layer(i).time_s for i in range(len(plan)))
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as d:
+        tot = write_machine_folder(plan, Path(d) / "m")
+        prog = json.loads((Path(d) / "m" / "program.json").read_text())
+    moves = [s for L in prog["layers"] for s in L["steps"] if s["kind"] == "radial_move"]
+    assert len(moves) == 2  # each head positioned once: one swathe
+    assert tot["motion_s"] == pytest.approx(2.5 * len(plan) + 1.5 * 2)
+    assert tot["time_s"] == pytest.approx(est + tot["motion_s"], rel=1e-12)
+
+
+def test_clock_ratio_at_360_dpi_and_2_to_the_20_counts_is_reported_below_a_tenth_of_a_step(coil):
+    _, _, prog_path = coil
+    prog = json.loads(prog_path.read_text())
+    assert prog["machine"]["encoder_counts_per_rev"] == 2**20
+    for h in prog["heads"]:
+        for s in h["swathes"]:
+            c = s["clock"]
+            want = 2 * math.pi / s["dphi_rad"]
+            assert c["clocked_firings_per_rev"] == pytest.approx(2**20 * c["multiplier"] / c["divider"])
+            err = want * abs(2 * math.pi * c["divider"] / (2**20 * c["multiplier"]) - s["dphi_rad"])
+            assert math.degrees(err) == pytest.approx(c["angle_error_per_rev_deg"], rel=1e-9)
+            assert c["angle_error_per_rev_steps"] < 0.1 and not c["flagged"]
+    # the preset's clock at other reference radii; a controller that only divides: flagged
+    for r in (60.0, 80.0, 113.8):
+        dphi = clock_dphi(360.0, r)
+        c = clock_ratio(dphi, 2**20)
+        assert c.error_per_rev_steps < 0.1 and not c.flagged
+        c1 = clock_ratio(dphi, 2**20, max_multiplier=1)
+        assert c1.multiplier == 1 and c1.divider == round(2**20 * dphi / (2 * math.pi))
+        assert c1.error_per_rev_steps > 1 and c1.flagged
+
+
+def test_flagged_clock_is_said_in_the_program(tmp_path):
+    job = _small_job(clock_max_multiplier=1)
+    plan = plan_job(job)
+    tot = write_machine_folder(plan, tmp_path / "m")
+    assert tot["flagged_clocks"] == ["head H1 swathe 0", "head H2 swathe 0"]
+    assert "FLAGGED" in (tmp_path / "m" / "program.txt").read_text()
+
+
+@pytest.mark.parametrize("bits,row_delays", [(1, "program"), (2, "baked"), (4, "program")])
+def test_replay_with_other_bit_depths_and_row_delays_in_the_program(tmp_path, bits, row_delays):
+    job = _small_job(nozzle_numbering={"odd_row": 1, "direction": "descending"})
+    plan = plan_job(job)
+    write_machine_folder(plan, tmp_path / "m", options=MachineOptions(bits=bits, row_delays=row_delays))
+    prog = json.loads((tmp_path / "m" / "program.json").read_text())
+    sw = prog["heads"][0]["swathes"][0]
+    if row_delays == "program":
+        assert sw["row_offsets_firings"][0] == 0 and sw["row_offsets_firings"][1] != 0
+    else:
+        assert sw["row_offsets_firings"] is None
+    rep = replay_program(tmp_path / "m" / "program.json")
+    for r in rep["images"]:
+        sched = plan.layer(r["layer"])
+        ref = plan.reference_image(r["material"], plan.sections(r["layer"])).astype(np.uint8) * 255
+        _same(r, simulate(sched.images[(r["material"], r["ink"])], ref).report.to_json())
+
+
+def test_machine_limits_are_checked_when_the_job_is_built(tmp_path):
+    from rotoprint.errors import ConfigError
+
+    for machine, msg in [({"radial_stage_mm": [0.0, 40.0]}, "machine.radial_stage_mm: head H1 swathe 0 needs the radial stage at"),
+                         ({"max_platform_rpm": 10.0}, "machine.max_platform_rpm: head H1 swathe 0 turns the platform at"),
+                         ({"head_frequency_hz": 4000.0}, "machine.head_frequency_hz: head H1 fires at 8000 Hz"),
+                         ({"encoder_counts_per_rev": 1000, "clock_max_multiplier": 1, "clock_max_divider": 1},
+                          "machine.encoder_counts_per_rev: head H1 swathe 0: no encoder multiplier")]:
+        with pytest.raises(ConfigError, match="^small.toml: " + msg.replace(".", r"\.")):
+            run_build(_small_job(**machine), tmp_path / "out", check=False, report=False)
+        assert not (tmp_path / "out").exists()
+    with pytest.raises(ConfigError, match=r"^small.toml: machine.*radial_stage_mm must be \[low, high\] with high > low"):
+        _small_job(radial_stage_mm=[50.0, 10.0])
+    with pytest.raises(ConfigError, match="machine.encoder_counts"):
+        _small_job(encoder_counts=5)
+
+
+@pytest.fixture
+def small_program(tmp_path):
+    plan = plan_job(_small_job())
+    write_machine_folder(plan, tmp_path / "m")
+    return tmp_path / "m" / "program.json"
+
+
+def _edit(path, fn):
+    prog = json.loads(path.read_text())
+    fn(prog)
+    path.write_text(json.dumps(prog))
+
+
+def test_replay_refuses_altered_and_missing_files_impossible_stage_and_unreachable_clock(small_program, run_cli, tmp_path):
+    p = small_program
+    code, out, err = run_cli("replay", p, "--out", tmp_path / "ok.png", "--json")
+    assert code == 0 and json.loads(out)["iou"] > 0.8 and (tmp_path / "ok.png").exists()
+    backup = tmp_path / "backup"
+    shutil.copytree(p.parent, backup)
+
+    def restore():
+        shutil.rmtree(p.parent)
+        shutil.copytree(backup, p.parent)
+
+    img = p.parent / "layers" / "layer_00000" / "plaster-ammonium_sulphate-s0.bin"
+    data = bytearray(img.read_bytes())
+    data[7] ^= 0x10
+    img.write_bytes(bytes(data))
+    code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
+    assert code == 2 and err.strip().count("\n") == 0 and "was altered" in err and "layer 0 image" in err
+    restore()
+    img.unlink()
+    code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
+    assert code == 2 and "is missing" in err and "plaster-ammonium_sulphate-s0.bin" in err
+    restore()
+
+    def stage(prog):
+        prog["layers"][1]["steps"][2]["radial_stage_mm"] = 250.0
+
+    _edit(p, stage)
+    code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
+    n = json.loads(backup.joinpath("program.json").read_text())["layers"][1]["steps"][2]["n"]
+    assert code == 2 and f"layer 1 step {n} (revolution of H" in err and "radial stage position 250.0 mm is outside" in err
+    restore()
+
+    def clock(prog):
+        prog["layers"][0]["steps"][0]["frequency_hz"] = 50_000.0
+
+    _edit(p, clock)
+    code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
+    assert code == 2 and "layer 0 step 0 (revolution of H1 swathe 0): firing clock 50000.0 Hz is beyond" in err
+    restore()
+
+    def ratio(prog):
+        prog["layers"][0]["steps"][1]["multiplier"] *= 2
+
+    _edit(p, ratio)
+    code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
+    assert code == 2 and "layer 0 step 1" in err and "the clock cannot be reached" in err
+    assert not (tmp_path / "o.png").exists()
+    code, out, err = run_cli("replay", p, "--layer", "9", "--out", tmp_path / "o.png")
+    assert code == 2 and "--layer 9" in err
+    code, out, err = run_cli("replay", tmp_path / "none.json", "--out", tmp_path / "o.png")
+    assert code == 2 and "none.json: no such file" in err
+    (tmp_path / "other.json").write_text('{"format": "rotoprint-build-plan"}')
+    code, out, err = run_cli("replay", tmp_path / "other.json", "--out", tmp_path / "o.png")
+    assert code == 2 and "not a rotoprint machine program" in err and err.strip().count("\n") == 0
+    assert not (tmp_path / "o.png").exists()
+
+
+def test_build_cli_options(tmp_path, run_cli):
+    job = tmp_path / "small.toml"
+    job.write_text("""
+[job]
+name = "small"
+layer_height_mm = 0.05
+[printer]
+device = "omnidot760"
+tilt_deg = 20.0
+[[printer.heads]]
+name = "H1"
+ink = "ammonium_sulphate"
+[[printer.heads]]
+name = "H2"
+ink = "calcium_chloride"
+mount_angle_deg = 90.0
+[placement]
+inner_radius_mm = 60.0
+[[parts]]
+name = "b"
+material = "plaster"
+priority = 1
+shape = { kind = "box", size_mm = [2, 2, 0.05] }
+[process]
+cycles_per_layer = { plaster = 1 }
+check = false
+[machine]
+encoder_counts_per_rev = 1048576
+radial_stage_mm = [20.0, 150.0]
+""")
+    code, out, err = run_cli("build", job, "--out", tmp_path / "b", "--no-report", "--row-delays", "program", "--bits", "2", "--json")
+    assert code == 0, err
+    s = json.loads(out)
+    assert s["machine"]["revolutions"] > 0
+    prog = json.loads((tmp_path / "b" / "machine" / "program.json").read_text())
+    assert prog["packing"]["bits_per_nozzle"] == 2 and prog["row_delays"] == "program"
+    assert prog["machine"]["radial_stage_mm"] == [20.0, 150.0]
+    import tifffile
+
+    from rotoprint.io.machine import nozzle_order, read_packed, unpack_levels
+
+    rec = prog["layers"][0]["images"][0]
+    folder = tmp_path / "b" / "machine"
+    lv = unpack_levels(read_packed((folder / rec["file"]).read_bytes(), rec["firings"], rec["nozzles"], 2), 2,
+                       nozzle_order(764, 2))
+    assert lv.any() and np.array_equal(tifffile.imread(folder / rec["tiff"]), lv[:, nozzle_order(764, 2)])
+    code, out, err = run_cli("build", job, "--out", tmp_path / "b2", "--no-report")
+    assert code == 0 and "machine: " in out and "program.json" in out
+    code, out, err = run_cli("build", job, "--out", tmp_path / "c", "--row-delays", "sideways")
+    assert code == 2 and "--row-delays must be 'baked' or 'program'" in err and not (tmp_path / "c").exists()
+    code, out, err = run_cli("build", job, "--out", tmp_path / "c", "--bits", "3")
+    assert code == 2 and "--bits must be 1, 2 or 4" in err
+    code, out, err = run_cli("build", job, "--out", tmp_path / "c", "--no-machine", "--no-report")
+    assert code == 0 and not (tmp_path / "c" / "machine").exists()
+    job.write_text(job.read_text().replace("radial_stage_mm = [20.0, 150.0]", "radial_stage_mm = [20.0, 150.0]\nspeed = 3"))
+    code, out, err = run_cli("build", job, "--out", tmp_path / "d")
+    assert code == 2 and "machine.speed" in err and err.strip().count("\n") == 0
