@@ -48,7 +48,7 @@ def _case(case: str, n_layers: int) -> dict:
 
     from rotoprint import load_device, slice_mesh
     from rotoprint.io.archives import JobInfo
-    from rotoprint.io.dlpjob import write_dlp_job
+    from rotoprint.pipeline import write_dlp_job
     from rotoprint.masks import MaskOptions, coverage_mask
 
     mesh = _model()

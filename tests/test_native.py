@@ -114,7 +114,7 @@ def test_sl1_member_bytes_the_same_with_and_without_the_window_path(tmp_path):
     """The DLP fast path (window) and the general path make the same archive."""
     from rotoprint import load_device, slice_mesh
     from rotoprint.io.archives import JobInfo
-    from rotoprint.io.dlpjob import write_dlp_job
+    from rotoprint.pipeline import write_dlp_job
     from rotoprint.masks import MaskOptions
 
     dev = load_device("prusa-sl1s")

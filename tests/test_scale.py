@@ -15,7 +15,8 @@ import pytest
 
 from rotoprint.devices import load_device
 from rotoprint.examples import write_binary_stl
-from rotoprint.io.layers import partial_path, write_layer_folder
+from rotoprint.io.layers import partial_path
+from rotoprint.pipeline import RunOptions, write_layer_folder
 from rotoprint.slicing import slice_mesh
 from rotoprint.testing import torus_mesh, uv_sphere_mesh
 
@@ -26,7 +27,8 @@ def folder_bytes(path: Path) -> dict[str, bytes]:
 
 def _write(job, out, **kw):
     dev = job.device
-    return write_layer_folder(job, out, device_name=dev.name, device=dev.model_dump(mode="json"), options={}, **kw)
+    return write_layer_folder(job, out, device_name=dev.name, device=dev.model_dump(mode="json"), options={},
+                              run=RunOptions(**kw))
 
 
 @pytest.fixture(scope="module")
@@ -55,9 +57,10 @@ def test_identical_bytes_on_a_dask_local_cluster(job, tmp_path):
 
 
 def test_unreachable_scheduler_is_a_clear_error(job, tmp_path, monkeypatch):
-    from rotoprint import ConfigError, runner
+    from rotoprint import ConfigError
+    from rotoprint.pipeline import producer
 
-    monkeypatch.setattr(runner, "DASK_CONNECT_TIMEOUT_S", 1.0)
+    monkeypatch.setattr(producer, "DASK_CONNECT_TIMEOUT_S", 1.0)
     with pytest.raises(ConfigError, match="cannot reach the Dask scheduler|did not answer within"):
         _write(job, tmp_path / "x", scheduler="tcp://127.0.0.1:9")
 
@@ -197,16 +200,17 @@ def test_sl1_resume_after_a_kill(tmp_path):
 
 def test_a_new_task_never_gets_an_old_tasks_job():
     """Regression: the worker-side job cache once keyed tasks by id(), which Python reuses."""
-    from rotoprint import runner
-    from rotoprint.io.layers import task_from_job
+    from rotoprint.pipeline.producer import LayerSource, render_one
+    from rotoprint.pipeline.tasks import MeshJob, PlainLayer, layer_source
 
     mesh = torus_mesh(6.0, 2.0, 24, 12)
     dev = load_device("perfactory-sxga")
     for lh, n in ((1.0, 4), (0.5, 8), (0.25, 16)):
-        task = task_from_job(slice_mesh(mesh, dev, layer_height_mm=lh))
-        bare = runner.LayerTask(task.vertices, task.faces, None, task.device, task.slice_options)
+        mj = MeshJob.of(slice_mesh(mesh, dev, layer_height_mm=lh))
+        task = layer_source(mj, PlainLayer())
+        bare = LayerSource(MeshJob(mj.vertices, mj.faces, None, mj.device, mj.slice_options), PlainLayer())  # no key
         for t in (task, bare):
-            assert runner.render_layer(t, n - 1).index == n - 1  # the last layer exists for this job
+            assert render_one(t, n - 1).index == n - 1  # the last layer exists for this job
         del task, bare
 
 

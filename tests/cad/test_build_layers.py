@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rotoprint.process import parse_job
-from rotoprint.process.build import run_build
+from rotoprint.pipeline import run_build
 from rotoprint.process.cad_examples import CAD_COIL, gerber_coil
 from rotoprint.process.plan import plan_job
 

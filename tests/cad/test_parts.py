@@ -11,7 +11,7 @@ import shapely
 
 from rotoprint.errors import CadError
 from rotoprint.io.cad import read_layer
-from rotoprint.process.build import _layer_printability
+from rotoprint.pipeline.build import _layer_printability
 from rotoprint.process.cad_examples import dxf_outline, excellon_holes
 from rotoprint.process.cadparts import LayerFile, layer_segments, load_layer_part
 from rotoprint.process.job import PartSpec

@@ -79,9 +79,9 @@ def silent():
 
 @pytest.mark.parametrize("cmd", ["slice", "dlp"])
 def test_scheduler_that_never_answers_times_out_and_leaves_no_partial(run_cli, monkeypatch, tmp_path, box, silent, cmd):
-    from rotoprint import runner
+    from rotoprint.pipeline import producer
 
-    monkeypatch.setattr(runner, "DASK_CONNECT_TIMEOUT_S", 2.0)
+    monkeypatch.setattr(producer, "DASK_CONNECT_TIMEOUT_S", 2.0)
     out = tmp_path / ("out" if cmd == "slice" else "out.sl1")
     t0 = time.perf_counter()
     code, _, err = run_cli(cmd, box, "-d", "perfactory-sxga", "--layer-height", "0.1", "-o", out,

@@ -31,7 +31,7 @@ def _need(what: str):
 @pytest.fixture(scope="module")
 def coil_report(tmp_path_factory):
     from rotoprint.process import load_job
-    from rotoprint.process.build import run_build
+    from rotoprint.pipeline import run_build
     from rotoprint.process.examples import write_example
 
     root = tmp_path_factory.mktemp("coil")

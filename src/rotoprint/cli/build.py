@@ -73,7 +73,8 @@ def build_command(
     thickness and resistance estimates, printability, and a self-contained report.html."""
     from ..process import load_job
     from ..io.atomic import check_output_path
-    from ..process.build import run_build, job_inputs
+    from ..pipeline import run_build
+    from ..pipeline.build import job_inputs
 
     from ..machine.program import MachineOptions
 

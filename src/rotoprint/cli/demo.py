@@ -18,7 +18,7 @@ def demo(
     """Build the bundled coil sensor (plaster body, silver coil, epoxy cover): the job file is
     written to OUT/job/, the build (print-ready images, plan.json, report.html) to OUT/build/."""
     from ..process import load_job
-    from ..process.build import run_build
+    from ..pipeline import run_build
     from ..process.examples import write_example
     from .build import report_summary
 

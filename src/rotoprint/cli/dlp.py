@@ -62,7 +62,7 @@ def dlp_command(
     """Slice MESH into DLP masks (white = expose) at the projector's own resolution."""
     from ..devices import ProjectorDevice, load_device
     from ..io.archives import JobInfo, creation_time, format_from_path, job_dir_name
-    from ..io.dlpjob import write_dlp_job
+    from ..pipeline import RunOptions, write_dlp_job
     from ..masks import MaskOptions, check_first_layer_offset
     from ..slicing import slice_mesh
 
@@ -71,7 +71,7 @@ def dlp_command(
     setup_logging(is_verbose(verbose))
     quiet = is_quiet(quiet)
     if scheduler is not None:  # a malformed address or port is refused before any work
-        from ..runner import check_scheduler_address
+        from ..pipeline.producer import check_scheduler_address
 
         check_scheduler_address(scheduler)
     kind = format_from_path(out, fmt)
@@ -122,8 +122,8 @@ def dlp_command(
     )
     with progress(quiet) as bar:
         task = bar.add_task(f"{mode} masks", total=info.mask_count)
-        summary = write_dlp_job(job, out, info, options, fmt=kind, workers=workers, scheduler=scheduler, resume=resume,
-                                on_mask=lambda i: bar.advance(task), force=force, inputs=inputs)
+        summary = write_dlp_job(job, out, info, options, fmt=kind, on_mask=lambda i: bar.advance(task),
+                                run=RunOptions(workers=workers, scheduler=scheduler, resume=resume, force=force, inputs=tuple(inputs)))
     if not quiet:
         vol = summary.get("volume_mm3", 0.0)
         console.print(

@@ -68,7 +68,7 @@ def slice_command(
     columns = nozzles, a sidecar layer_00000.json per layer and DIR/manifest.json.
     """
     from ..devices import load_device
-    from ..io.layers import write_layer_folder
+    from ..pipeline import RunOptions, write_layer_folder
     from ..slicing import slice_mesh
 
     from ..io.atomic import check_output_path
@@ -78,7 +78,7 @@ def slice_command(
     inputs = [mesh, device_input(device)]
     check_output_path(out, is_dir=True, inputs=inputs, force=force)  # before any work
     if scheduler is not None:  # a malformed address or port is refused before any work
-        from ..runner import check_scheduler_address
+        from ..pipeline.producer import check_scheduler_address
 
         check_scheduler_address(scheduler)
     overrides = {"dpi_y": dpi_y} if dpi_y is not None else {}
@@ -125,12 +125,8 @@ def slice_command(
             device_name=dev.name,
             device=dev.model_dump(mode="json"),
             options=options,
-            workers=workers,
-            scheduler=scheduler,
-            resume=resume,
+            run=RunOptions(workers=workers, scheduler=scheduler, resume=resume, force=force, inputs=tuple(inputs)),
             on_layer=lambda i: bar.advance(task),
-            force=force,
-            inputs=inputs,
         )
     if not quiet:
         g = job.grid
@@ -163,12 +159,13 @@ def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, rad
                   equalise, reference_images, fill, gap_radius, quiet, options, workers=1, scheduler=None, resume=False,
                   force=False, inputs=(), passes="1") -> None:
     from ..devices import InkjetDevice
-    from ..rotary.direct import slice_rotary, write_rotary_slices
+    from ..pipeline import RunOptions, write_rotary_slices
+    from ..rotary.direct import slice_rotary
 
     if not isinstance(dev, InkjetDevice):
         raise ConfigError(f"device {dev.name!r} is a projector; --rotary needs an inkjet device")
     if passes != "1":
-        from ..rotary.interlace import slice_rotary_passes
+        from ..pipeline.passes import slice_rotary_passes
 
         man = slice_rotary_passes(m, dev, out, passes=passes, layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius,
                                   angle_deg=angle, direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes,
@@ -192,7 +189,8 @@ def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, rad
         task = bar.add_task("slicing (rotary)", total=len(job))
         manifest = write_rotary_slices(job, out, device_name=dev.name, options=opts, mesh_info=mesh_info,
                                        reference_images=reference_images, on_layer=lambda i: bar.advance(task),
-                                       workers=workers, scheduler=scheduler, resume=resume, force=force, inputs=inputs)
+                                       run=RunOptions(workers=workers, scheduler=scheduler, resume=resume, force=force,
+                                                      inputs=tuple(inputs)))
     if not quiet:
         ds = manifest["density_spread"]
         console.print(

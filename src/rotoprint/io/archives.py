@@ -131,32 +131,26 @@ def _encoded(masks: Iterable, info: JobInfo, compress_level: int, workers: int):
     """Yield :class:`_Encoded` masks in order; PNG encoding (zlib, which releases the GIL)
     runs in ``workers`` threads while the next masks are computed. At most
     ``2 * workers + 1`` masks are held at once."""
-    from collections import deque
     from concurrent.futures import ThreadPoolExecutor
+
+    from .._window import ordered
 
     def done(m, data: bytes) -> _Encoded:
         return _Encoded(m.number, m.layer, m.copy, m.z_mm, data, int(m.plain.sum(dtype=np.uint64)), (0, 0, m.plain))
 
-    if workers <= 0:
+    def checked():
         for m in masks:
             _check_mask(m.image, info, m.number)
-            yield done(m, png_bytes(m.image, compress_level=compress_level))
+            yield m
+
+    def encode(m) -> _Encoded:
+        return done(m, png_bytes(m.image, compress_level=compress_level))
+
+    if workers <= 0:
+        yield from map(encode, checked())
         return
-    pending: deque = deque()
     with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rotoprint-png") as ex:
-        try:
-            for m in masks:
-                _check_mask(m.image, info, m.number)
-                pending.append((m, ex.submit(png_bytes, m.image, compress_level=compress_level)))
-                if len(pending) > 2 * workers:
-                    m0, fut = pending.popleft()
-                    yield done(m0, fut.result())
-            while pending:
-                m0, fut = pending.popleft()
-                yield done(m0, fut.result())
-        finally:
-            for _, fut in pending:
-                fut.cancel()
+        yield from ordered(lambda m: ex.submit(encode, m), checked(), 2 * workers + 1)
 
 
 def _default_workers() -> int:

@@ -1,6 +1,6 @@
 """Multi-material process planning: materials and inks, job files, pass plans, estimates.
 
-See ``docs/build.md``. The pipeline behind ``rotoprint build`` is :func:`run_build`.
+See ``docs/build.md``. The stages of ``rotoprint build`` are run by :func:`rotoprint.pipeline.run_build`.
 """
 
 from __future__ import annotations

@@ -111,7 +111,7 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
     overlays_dir : Path
         The output folder being written (overlays and print images are read from it).
     """
-    from ..process.build import material_colour
+    from .colours import material_colour
 
     order = plan.material_order
     colours = {m: material_colour(m, order) for m in order}

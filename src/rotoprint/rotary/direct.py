@@ -29,16 +29,14 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import json
 import logging
 import math
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from .. import __version__
+from .._version import __version__
 from .._resources import check_raster_fits
 from ..errors import ConfigError, GeometryError
 from ..mesh import Mesh
@@ -58,7 +56,8 @@ __all__ = [
     "DirectSliceJob",
     "slice_rotary",
     "rasterize_section",
-    "write_rotary_slices",
+    "rotary_layer_files",
+    "rotary_manifest",
     "KERNEL_NAMES",
     "MANIFEST_FORMAT",
 ]
@@ -522,115 +521,39 @@ def rotary_layer_files(job: DirectSliceJob, index: int, *, device_name: str,
     return files, record
 
 
-def write_rotary_slices(
-    job: DirectSliceJob,
-    out_dir: str | Path,
-    *,
-    device_name: str,
-    options: dict,
-    mesh_info: dict | None = None,
-    reference_images: bool = False,
-    on_layer: Callable[[int], None] | None = None,
-    workers: int = 1,
-    scheduler: str | None = None,
-    resume: bool = False,
-    force: bool = False,
-    inputs=(),
-) -> dict:
-    """Write every layer of ``job`` into ``out_dir``; returns the manifest.
-
-    Per layer ``layer_00000.png`` (one swathe) or ``layer_00000-s1.png``, ... (several), each
-    with the sidecar ``layer_00000.json`` that ``rotoprint simulate`` reads; with
-    ``reference_images`` also ``layer_00000-design.png``, the Cartesian cross-section on the
-    sidecar's design grid (named in the sidecar, so ``rotoprint simulate`` finds it).
-    ``manifest.json`` lists every image with its head, tilt, placement, swathe, angle per
-    firing and first firing index. Layers are made in threads, ``workers`` processes or on a
-    Dask ``scheduler``, journalled in ``<out>.partial`` (``resume`` continues a killed run)
-    and the folder is renamed into place only when complete; the bytes are the same whichever
-    way they were made.
+def rotary_manifest(job: DirectSliceJob, entries: list[dict], *, device_name: str, options: dict,
+                    mesh_info: dict | None = None) -> dict:
+    """The ``manifest.json`` of a folder of direct rotary slices (written by
+    :func:`rotoprint.pipeline.write_rotary_slices`).
 
     Parameters
     ----------
     job : DirectSliceJob
-        From :func:`slice_rotary`; each layer prints as ``(F_j, N) uint8`` swathe images.
-    out_dir : str or Path
-        The output folder; replaced only if it is provably an earlier rotoprint output.
+    entries : list of dict
+        Every layer's entry, in layer order (from :func:`rotary_layer_files`).
     device_name : str
-        Recorded in the sidecars and the manifest.
     options : dict
-        The command's options, recorded in the manifest (JSON-ready values).
+        The command's options (JSON-ready values).
     mesh_info : dict, optional
-        :meth:`~rotoprint.mesh.Mesh.info` of the source mesh, recorded in the manifest.
-    reference_images : bool
-        Also write each layer's Cartesian design image (``(H, W) uint8``, 255 = inside).
-    on_layer : callable, optional
-        Called with each finished layer's index (progress).
-    workers : int
-        Processes to make layers in (``>= 1``).
-    scheduler : str, optional
-        Address of a Dask distributed scheduler to run the layers on instead.
-    resume : bool
-        Continue an interrupted run from its ``<out>.partial`` journal.
-    force : bool
-        Replace an existing ``out_dir`` even if it is not provably ours.
-    inputs : iterable of path
-        Files the run read (the mesh, a device file): ``out_dir`` must not be or hold one.
+        :meth:`~rotoprint.mesh.Mesh.info` of the source mesh.
 
     Returns
     -------
     dict
-        The manifest written as ``manifest.json``.
-
-    Raises
-    ------
-    InputFileError
-        The output folder holds something that is not provably an earlier rotoprint output
-        (see :mod:`rotoprint.io.ownership`), is or holds an input, is in use by another run,
-        or cannot be written.
-    ResourceError
-        Not enough disk space for the run (checked before anything is written).
+        Format, head, heads, the job's placement, swathes and tracks, the mesh, the options,
+        the landing rule and the layers.
     """
-    import dataclasses
-
-    from ..io.layers import run_layers
-    from ..io.atomic import OutputClaim
-    from ..io.resumable import PartialOutput
-    from ..runner import LayerTask, task_fingerprint
-
-    out = Path(out_dir)
-    with OutputClaim(out, is_dir=True, kind="rotary-slices", inputs=inputs, force=force) as claim:
-        mesh = job.slice_job.mesh
-        task = LayerTask(
-            vertices=mesh.vertices, faces=mesh.faces, source=mesh.source,
-            device=job.slice_job.device.model_dump(mode="json"), slice_options={},
-            face_edges=mesh.topology.face_edges, suspect_edges=mesh.topology.suspect_edges,
-            rotary={"options": job.rotary_options, "device_name": device_name, "reference_images": bool(reference_images)},
-        )
-        task = dataclasses.replace(task, _key=task_fingerprint(task))
-        partial = PartialOutput(out, task._key, len(job), resume=resume)
-        px = sum(job.head.nozzles * t.firings for t in job.tracks)
-        with partial:  # a run that fails before finishing a layer leaves nothing
-            for i in partial.done:
-                if on_layer is not None:
-                    on_layer(i)
-            for res in run_layers(len(job), px, task, partial, workers=workers, scheduler=scheduler):
-                partial.record(res.index, res.files, entry=res.record)
-                if on_layer is not None:
-                    on_layer(res.index)
-            manifest = {
-                "format": MANIFEST_FORMAT,
-                "version": 1,
-                "rotoprint": __version__,
-                "device": device_name,
-                "head": job.head.model_dump(mode="json"),
-                "heads": [{"index": 0, "mount_angle_deg": job.plan.mount_angle_deg}],
-                **job.to_json(),
-                "mesh": mesh_info or {},
-                "options": options,
-                "landing": "nozzle k at firing i lands at (r_k, phi_k - direction * i * dphi_rad) in the platform frame; "
-                "row b of a swathe image is firing first_firing_index + b (rotary-geometry.md s. 3)",
-                "layers": [partial.done[i]["entry"] for i in range(len(job))],
-            }
-            (partial.dir / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
-        partial.finish_as_folder(claim)
-    return manifest
+    return {
+        "format": MANIFEST_FORMAT,
+        "version": 1,
+        "rotoprint": __version__,
+        "device": device_name,
+        "head": job.head.model_dump(mode="json"),
+        "heads": [{"index": 0, "mount_angle_deg": job.plan.mount_angle_deg}],
+        **job.to_json(),
+        "mesh": mesh_info or {},
+        "options": options,
+        "landing": "nozzle k at firing i lands at (r_k, phi_k - direction * i * dphi_rad) in the platform frame; "
+        "row b of a swathe image is firing first_firing_index + b (rotary-geometry.md s. 3)",
+        "layers": entries,
+    }
