@@ -15,15 +15,13 @@ import rotoprint
 from rotoprint.errors import ConfigError
 
 MAX_PARAMETERS = 8
-# writers the pipeline refactor (issue 13, branch 'pipe') replaces by pipeline/outputs.py; they
-# are gone once it lands, so the allowance names them one by one and no others
-_PENDING_PIPELINE = {"rotoprint.io.layers.write_layer_folder", "rotoprint.io.dlpjob.write_dlp_job",
-                     "rotoprint.rotary.direct.write_rotary_slices"}
+# the pipeline refactor replaced the three writers that were allowed here; none is left
+_PENDING_PIPELINE: set[str] = set()
 # interlaced passes, merged from branch 'film' after the option objects were made: still to be
-# given RotarySetup / RotarySliceOptions (they also write files from inside rotary/, which the
-# pipeline refactor moves); named one by one, with their counts today, so none may grow
+# given RotarySetup / RotarySliceOptions (slice_rotary_passes, which writes folders, moved to
+# pipeline/passes); named one by one, with their counts today, so none may grow
 _PENDING_INTERLACE = {"rotoprint.rotary.interlace.transform_passes": 17, "rotoprint.rotary.interlace.track_fractions": 10,
-                      "rotoprint.rotary.interlace.slice_rotary_passes": 19}
+                      "rotoprint.pipeline.passes.slice_rotary_passes": 19}
 
 
 def _public_functions():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 import math
 import logging
 import sys
@@ -141,10 +142,25 @@ def print_json(data: Any) -> None:
     sys.stdout.write(json.dumps(data, indent=2, sort_keys=False) + "\n")
 
 
-def _app_quiet(quiet: bool) -> bool:
-    from .options import is_quiet
+@dataclass
+class _AppFlags:
+    """The app-level ``--quiet`` / ``--verbose`` (set by :func:`rotoprint.cli.options.app_options`)."""
 
-    return is_quiet(quiet)
+    quiet: bool = False
+    verbose: bool = False
+
+
+_FLAGS = _AppFlags()
+
+
+def is_quiet(quiet: bool = False) -> bool:
+    """The command's ``--quiet`` or the app's."""
+    return bool(quiet) or _FLAGS.quiet
+
+
+def is_verbose(verbose: bool = False) -> bool:
+    """The command's ``--verbose`` or the app's."""
+    return bool(verbose) or _FLAGS.verbose
 
 
 def progress(quiet: bool = False) -> Progress:
@@ -155,7 +171,7 @@ def progress(quiet: bool = False) -> Progress:
         TimeElapsedColumn(),
         TimeRemainingColumn(),
         console=console,
-        disable=_app_quiet(quiet) or not console.is_terminal,
+        disable=is_quiet(quiet) or not console.is_terminal,
         transient=True,
     )
 

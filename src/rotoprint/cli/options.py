@@ -8,14 +8,13 @@ is not read as ``:b:``)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Annotated
 
 import typer
 
 from .. import ranges as R
 from ..constants import DEFAULT_GAP_RADIUS_MM
-from ._common import in_range
+from ._common import _FLAGS, in_range, is_quiet, is_verbose
 
 __all__ = [
     "QuietOpt", "VerboseOpt", "WorkersOpt", "SchedulerOpt", "ResumeOpt", "FillOpt", "GapRadiusOpt", "OffsetOpt",
@@ -37,15 +36,6 @@ DpiYOpt = Annotated[float | None, typer.Option("--dpi-y", help="Inkjet: drops pe
 FibreAngleOpt = Annotated[float | None, typer.Option("--fibre-angle", help="Fibre direction in the model's XY plane, degrees from +X (DLP: the model direction put along image rows). Default: the device's own direction.", callback=in_range(R.ANGLE_DEG))]
 
 
-@dataclass
-class _AppFlags:
-    quiet: bool = False
-    verbose: bool = False
-
-
-_FLAGS = _AppFlags()
-
-
 def app_options(
     verbose: VerboseOpt = False,
     quiet: QuietOpt = False,
@@ -56,13 +46,3 @@ def app_options(
     _FLAGS.quiet, _FLAGS.verbose = bool(quiet), bool(verbose)
     if verbose:
         setup_logging(True)
-
-
-def is_quiet(quiet: bool = False) -> bool:
-    """The command's ``--quiet`` or the app's."""
-    return bool(quiet) or _FLAGS.quiet
-
-
-def is_verbose(verbose: bool = False) -> bool:
-    """The command's ``--verbose`` or the app's."""
-    return bool(verbose) or _FLAGS.verbose
