@@ -21,10 +21,10 @@ from pathlib import Path
 
 from .._resources import available_memory_bytes, format_bytes
 from ..errors import InputFileError, ResourceError
-from .atomic import OutputClaim, check_output_path, disk_full, kill_point
+from .atomic import OutputClaim, disk_full, kill_point
 from .inputs import MAX_IMAGE_BYTES, MAX_JOURNAL_BYTES, read_input_bytes
 
-__all__ = ["PartialOutput", "check_target", "check_resources", "partial_path"]
+__all__ = ["PartialOutput", "check_resources", "partial_path"]
 
 log = logging.getLogger(__name__)
 JOURNAL = "journal.jsonl"
@@ -60,29 +60,6 @@ def partial_path(out: str | Path) -> Path:
     """
     out = Path(out)
     return out.parent / f"{out.name}.partial"
-
-
-def check_target(out: Path, *, is_dir: bool, inputs=(), force: bool = False) -> None:
-    """Refuse targets we must not replace (see :func:`rotoprint.io.atomic.check_output_path`).
-
-    Parameters
-    ----------
-    out : Path
-        The output file or folder.
-    is_dir : bool
-        Whether the output is a folder.
-    inputs : iterable of path
-        Files the run reads: the output must not be or hold one.
-    force : bool
-        Replace an existing output even if it is not provably ours.
-
-    Raises
-    ------
-    InputFileError
-        The parent folder does not exist, a file is where a folder goes (or the reverse), the
-        output is or holds an input, or it exists and is not provably ours (without ``force``).
-    """
-    check_output_path(out, is_dir=is_dir, inputs=inputs, force=force)
 
 
 def check_resources(*, n_layers: int, bytes_per_layer: float, copies_on_disk: int, per_process_bytes: int,
