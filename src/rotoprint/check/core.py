@@ -374,7 +374,6 @@ class _LayerChecker:
 
     def run(self, index: int) -> LayerCheck:
         job = self.job
-        g = self.grid
         seg, _ = job.segments(index)
         z = float(job.plan.z_slice_mm[index])
         findings: list[Finding] = []

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from ._common import FillHolesOpt, JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, out_console, print_json, print_table
+from ._common import FillHolesOpt, JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, print_json, print_table
 
 
 def info(

@@ -37,9 +37,6 @@ from .formats._common import (  # noqa: F401 - the names this module has always 
 )
 from .formats.png import read_folder
 from .images import png_bytes
-from .images import open_image
-from .inputs import (MAX_ARCHIVE_BYTES, MAX_IMAGE_BYTES, MAX_JSON_BYTES, parse_json, read_input_bytes,
-                     read_input_text, read_zip_members)
 
 __all__ = [
     "FORMATS",

@@ -32,7 +32,7 @@ import numpy as np
 
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, GeometryError
-from .head import Mount, nozzle_layout
+from .head import nozzle_layout
 from .swathes import SwathePlan
 
 __all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes"]
