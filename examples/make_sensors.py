@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rotoprint.process.examples import EXAMPLES, write_example
+from rotoprint.pipeline.examples import write_example
+from rotoprint.process.examples import EXAMPLES
 
 if __name__ == "__main__":
     here = Path(__file__).resolve().parent

@@ -112,7 +112,7 @@ def test_cli_outputs_are_byte_identical(run_cli, workdir, name, args):
 
 @pytest.mark.parametrize("name, example, check", [("build-coil-no-check", "coil-sensor", False), ("build-gas", "gas-sensor", None)])
 def test_build_outputs_are_byte_identical(run_cli, workdir, name, example, check):
-    from rotoprint.process.examples import write_example
+    from rotoprint.pipeline.examples import write_example
 
     job = write_example(example, Path("job"))
     args = ["build", job, "--out", "build"] + (["--no-check"] if check is False else [])

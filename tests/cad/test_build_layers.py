@@ -108,7 +108,7 @@ def test_round_aperture_coil_differs_only_at_corners(tmp_path):
 def test_bundled_cad_example_two_layers_build_and_report(tmp_path, run_cli):
     """Silver coil (Gerber) on a plaster body (DXF outline) with silver vias through the drill
     holes: builds; plan.json and the report list each layer part with its material."""
-    from rotoprint.process.examples import write_example
+    from rotoprint.pipeline.examples import write_example
 
     job = write_example("cad-coil", tmp_path / "ex")
     code, out, err = run_cli("build", job, "--out", tmp_path / "build", "--no-check")
@@ -131,7 +131,7 @@ def test_bundled_cad_example_two_layers_build_and_report(tmp_path, run_cli):
 
 
 def test_layer_part_bad_terminal_and_file_one_line(tmp_path, run_cli):
-    from rotoprint.process.examples import write_example
+    from rotoprint.pipeline.examples import write_example
 
     job = write_example("cad-coil", tmp_path / "ex")
     text = job.read_text()
@@ -154,7 +154,8 @@ def test_cad_example_files_are_reproducible(tmp_path):
     second run over an earlier copy is accepted as unchanged."""
     import time
 
-    from rotoprint.process.examples import example_files, write_example
+    from rotoprint.pipeline.examples import write_example
+    from rotoprint.process.examples import example_files
 
     a = example_files("cad-coil")
     time.sleep(1.1)

@@ -58,7 +58,7 @@ def test_check_into_any_folder_with_a_report_json_is_refused(run_cli, tmp_path, 
 
 
 def test_build_into_any_folder_with_a_plan_json_is_refused(run_cli, tmp_path):
-    from rotoprint.process.examples import write_example
+    from rotoprint.pipeline.examples import write_example
 
     job = write_example("gas-sensor", tmp_path / "job")
     b = tmp_path / "b"
@@ -72,7 +72,7 @@ def test_build_into_any_folder_with_a_plan_json_is_refused(run_cli, tmp_path):
 
 
 def test_build_output_must_not_hold_the_job(run_cli, tmp_path):
-    from rotoprint.process.examples import write_example
+    from rotoprint.pipeline.examples import write_example
 
     job = write_example("gas-sensor", tmp_path / "job")
     before = tree(tmp_path)

@@ -263,7 +263,7 @@ def test_device_fields_out_of_range(run_cli, work, field, value):
 
 @pytest.fixture
 def job_text(work) -> str:
-    from rotoprint.process.examples import write_example
+    from rotoprint.pipeline.examples import write_example
 
     return write_example("gas-sensor", work / "ex").read_text()
 

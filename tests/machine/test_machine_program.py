@@ -17,7 +17,7 @@ from rotoprint.machine.program import MachineOptions, write_machine_folder
 from rotoprint.machine.replay import replay_program
 from rotoprint.process import load_job, parse_job
 from rotoprint.pipeline import run_build
-from rotoprint.process.examples import write_example
+from rotoprint.pipeline.examples import write_example
 from rotoprint.process.plan import plan_job
 from rotoprint.rotary.printdata import clock_dphi
 from rotoprint.rotary.simulate import simulate

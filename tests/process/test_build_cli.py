@@ -12,7 +12,7 @@ from _build_helpers import box_part, job_dict
 from rotoprint.errors import ConfigError
 from rotoprint.io.images import read_grey_image
 from rotoprint.process import parse_job
-from rotoprint.process.examples import write_example
+from rotoprint.pipeline.examples import write_example
 from rotoprint.rotary.files import read_print
 
 

@@ -32,7 +32,7 @@ def _need(what: str):
 def coil_report(tmp_path_factory):
     from rotoprint.process import load_job
     from rotoprint.pipeline import run_build
-    from rotoprint.process.examples import write_example
+    from rotoprint.pipeline.examples import write_example
 
     root = tmp_path_factory.mktemp("coil")
     job = write_example("coil-sensor", root / "job")

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from rotoprint.errors import InputFileError
-from rotoprint.process.examples import EXAMPLES, example_files, write_example
+from rotoprint.pipeline.examples import write_example
+from rotoprint.process.examples import EXAMPLES, example_files
 
 
 def _snapshot(folder):

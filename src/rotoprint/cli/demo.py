@@ -19,7 +19,7 @@ def demo(
     written to OUT/job/, the build (print-ready images, plan.json, report.html) to OUT/build/."""
     from ..process import load_job
     from ..pipeline import run_build
-    from ..process.examples import write_example
+    from ..pipeline.examples import write_example
     from .build import report_summary
 
     from ..errors import ConfigError, InputFileError

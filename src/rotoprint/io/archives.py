@@ -41,6 +41,8 @@ from .images import png_bytes
 __all__ = [
     "FORMATS",
     "JobInfo",
+    "Encoded",
+    "write_encoded",
     "write_job",
     "format_from_path",
     "read_job",
@@ -107,7 +109,7 @@ def format_from_path(path: str | Path, fmt: str | None = None) -> str:
 
 
 @dataclass(frozen=True)
-class _Encoded:
+class Encoded:
     """One mask ready to store: its PNG bytes, the sum of its plain (unmirrored, uninverted)
     grey levels, and a footprint crop ``(row0, col0, array)`` to merge (or None)."""
 
@@ -125,22 +127,22 @@ class _Encoded:
 
 
 def _encoded(masks: Iterable, info: JobInfo, compress_level: int, workers: int):
-    """Yield :class:`_Encoded` masks in order; PNG encoding (zlib, which releases the GIL)
+    """Yield :class:`Encoded` masks in order; PNG encoding (zlib, which releases the GIL)
     runs in ``workers`` threads while the next masks are computed. At most
     ``2 * workers + 1`` masks are held at once."""
     from concurrent.futures import ThreadPoolExecutor
 
     from .._window import ordered
 
-    def done(m, data: bytes) -> _Encoded:
-        return _Encoded(m.number, m.layer, m.copy, m.z_mm, data, int(m.plain.sum(dtype=np.uint64)), (0, 0, m.plain))
+    def done(m, data: bytes) -> Encoded:
+        return Encoded(m.number, m.layer, m.copy, m.z_mm, data, int(m.plain.sum(dtype=np.uint64)), (0, 0, m.plain))
 
     def checked():
         for m in masks:
             _check_mask(m.image, info, m.number)
             yield m
 
-    def encode(m) -> _Encoded:
+    def encode(m) -> Encoded:
         return done(m, png_bytes(m.image, compress_level=compress_level))
 
     if workers <= 0:
@@ -198,7 +200,7 @@ def write_job(
     return write_encoded(path, items, info, fmt=fmt, on_mask=on_mask, force=force)
 
 
-def write_encoded(path: str | Path, items: Iterable[_Encoded], info: JobInfo, *, fmt: str,
+def write_encoded(path: str | Path, items: Iterable[Encoded], info: JobInfo, *, fmt: str,
                   on_mask: Callable[[int], None] | None = None, claim: OutputClaim | None = None,
                   force: bool = False) -> dict:
     """Write already-encoded masks (in projection order) as ``fmt``; see :func:`write_job`.

@@ -120,7 +120,7 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
     """
     from PIL import Image
 
-    from ..io.archives import _Encoded, format_from_path, write_encoded
+    from ..io.archives import Encoded, format_from_path, write_encoded
     from ..masks.pipeline import plain_from_image
 
     fmt = format_from_path(out, fmt)
@@ -150,13 +150,13 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
                     on_mask(i * copies + c)
 
         def finish(partial) -> dict:
-            def items() -> Iterator[_Encoded]:
+            def items() -> Iterator[Encoded]:
                 for i in range(len(job)):
                     rec = partial.done[i]
                     z = float(job.plan.z_slice_mm[i])
                     for c, (name, s) in enumerate(zip(rec["files"], rec["plain_sums"], strict=True)):
                         fp = (0, 0, footprint) if (i == 0 and c == 0) else None
-                        yield _Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp)
+                        yield Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp)
 
             try:
                 summary = write_encoded(out, items(), info, fmt=fmt, claim=claim)
