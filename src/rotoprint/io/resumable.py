@@ -23,6 +23,7 @@ from .._resources import available_memory_bytes, format_bytes
 from ..errors import InputFileError, ResourceError
 from .atomic import OutputClaim, disk_full, kill_point
 from .inputs import MAX_IMAGE_BYTES, MAX_JOURNAL_BYTES, read_input_bytes
+from .ownership import write_tracked
 
 __all__ = ["PartialOutput", "check_resources", "partial_path"]
 
@@ -198,9 +199,9 @@ class PartialOutput:
         rec = {"index": index, "files": list(files), "sha256s": [hashlib.sha256(d).hexdigest() for d in files.values()], **payload}
         where = self.dir / JOURNAL
         try:
-            for name, data in files.items():
+            for (name, data), sha in zip(files.items(), rec["sha256s"], strict=True):
                 where = self.dir / name
-                where.write_bytes(data)
+                write_tracked(where, data, sha256=sha)  # recorded for the output's ownership marker (not read again)
             where = self.dir / JOURNAL
             self._journal.write(json.dumps(rec) + "\n")
             self._journal.flush()
