@@ -8,9 +8,12 @@ are peaks of Python and numpy allocations above what the plan holds:
 - *streamed*: :class:`MachineWriter` (packed files, TIFFs, program.json and program.txt,
   layer by layer: the layer's images, its design regions and steps) into a plain folder;
   the acceptance is this peak within 20 % of the 10-layer job's;
-- *installed*: :func:`write_machine_folder`, the same plus the atomic install, whose
-  ownership marker (``rotoprint-output.json``, SHA-256 of every file) lists every file and so
-  grows with the file count (5 files per layer here).
+- *installed*: :func:`write_machine_folder`, the same plus the atomic install with its
+  ownership marker (``rotoprint-output.json``, SHA-256 of every file: 5 files per layer
+  here), which is made in bounded memory (``io/ownership.py``);
+- *slice*: a ``rotoprint slice`` layer folder (:func:`rotoprint.pipeline.write_layer_folder`,
+  journalled, one PNG per layer, installed with its marker) of a 3 x 3 x 3 mm box on the
+  perfactory-sxga, 10 or 1,000 layers, the first layer sliced before measuring.
 """
 
 from __future__ import annotations
@@ -65,8 +68,33 @@ _CHILD = textwrap.dedent("""
 """)
 
 
-def _measure(n: int) -> dict:
-    r = subprocess.run([sys.executable, "-c", _CHILD, str(n)], capture_output=True, text=True, check=True)
+_SLICE_CHILD = textwrap.dedent("""
+    import json, sys, tempfile, time, tracemalloc
+    from pathlib import Path
+    from rotoprint.devices import load_device
+    from rotoprint.pipeline import RunOptions, write_layer_folder
+    from rotoprint.slicing import slice_mesh
+    from rotoprint.testing import box_mesh
+    n = int(sys.argv[1])
+    dev = load_device("perfactory-sxga")
+    job = slice_mesh(box_mesh((3.0, 3.0, 3.0)), dev, layer_height_mm=3.0 / n)
+    assert len(job) == n, len(job)
+    job.layer(0)  # compile and warm the slicer before measuring
+    with tempfile.TemporaryDirectory() as tmp:
+        tracemalloc.start()
+        t0 = time.perf_counter()
+        write_layer_folder(job, Path(tmp) / "s", device_name=dev.name, device=dev.model_dump(mode="json"), options={},
+                           run=RunOptions())
+        dt = time.perf_counter() - t0
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        files = sum(1 for f in (Path(tmp) / "s").iterdir())
+    print(json.dumps({"layers": n, "peak_mib": peak / 2**20, "seconds": dt, "files": files}))
+""")
+
+
+def _measure(n: int, child: str = _CHILD) -> dict:
+    r = subprocess.run([sys.executable, "-c", child, str(n)], capture_output=True, text=True, check=True)
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
@@ -82,6 +110,12 @@ def run(quick: bool = False) -> list[dict]:
                      "streamed / 10 layers": round(m["peak_mib"] / small["peak_mib"], 3),
                      "installed peak (MiB)": round(m["installed_mib"], 2),
                      "installed / 10 layers": round(m["installed_mib"] / small["installed_mib"], 3)})
+    s_small = _measure(10, _SLICE_CHILD)
+    s_large = _measure(big, _SLICE_CHILD)
+    for m in (s_small, s_large):
+        rows.append({"layers": m["layers"], "slice layer folder: files": m["files"], "seconds": round(m["seconds"], 2),
+                     "slice peak (MiB)": round(m["peak_mib"], 2),
+                     "slice / 10 layers": round(m["peak_mib"] / s_small["peak_mib"], 3)})
     return rows
 
 

@@ -67,10 +67,12 @@ JSON_KEY = "rotoprint_output"
 _PNG_SIG = b"\x89PNG\r\n\x1a\n"
 _MAX_MARKER_BYTES = 64 * 2**20  # a marker of 64 MB would list ~400,000 files
 _HASH_CHUNK = 2**20
-#: records a spool keeps in memory before it writes a sorted run (about 150 KB of them)
-_SORT_CHUNK = 512
+#: records a spool keeps in memory before it writes a sorted run (about 100 KB of them)
+_SORT_CHUNK = 256
 #: runs merged at once (one open file and its read buffer each)
 _MERGE_FAN_IN = 64
+#: read / write buffer of a run, bytes
+_RUN_BUFFER = 2048
 
 
 def _canonical(obj) -> bytes:
@@ -113,10 +115,10 @@ class _Spool:
             self._spill()
 
     def _run_of(self, recs: Iterable[list]):
-        fh = tempfile.TemporaryFile("w+", encoding="ascii", newline="\n")
+        fh = tempfile.TemporaryFile("w+b", buffering=_RUN_BUFFER)
         try:
             for r in recs:
-                fh.write(json.dumps(r) + "\n")
+                fh.write(json.dumps(r).encode("ascii") + b"\n")
             fh.seek(0)
         except BaseException:
             fh.close()
