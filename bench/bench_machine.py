@@ -13,7 +13,9 @@ are peaks of Python and numpy allocations above what the plan holds:
   here), which is made in bounded memory (``io/ownership.py``);
 - *slice*: a ``rotoprint slice`` layer folder (:func:`rotoprint.pipeline.write_layer_folder`,
   journalled, one PNG per layer, installed with its marker) of a 3 x 3 x 3 mm box on the
-  perfactory-sxga, 10 or 1,000 layers, the first layer sliced before measuring.
+  perfactory-sxga, 10 or 1,000 layers, the first layer sliced before measuring; the highest
+  peak of three runs each (two slicing threads: whether both hold a layer at the same moment
+  varies from run to run).
 """
 
 from __future__ import annotations
@@ -93,6 +95,9 @@ _SLICE_CHILD = textwrap.dedent("""
 """)
 
 
+SLICE_RUNS = 3
+
+
 def _measure(n: int, child: str = _CHILD) -> dict:
     r = subprocess.run([sys.executable, "-c", child, str(n)], capture_output=True, text=True, check=True)
     return json.loads(r.stdout.strip().splitlines()[-1])
@@ -110,11 +115,17 @@ def run(quick: bool = False) -> list[dict]:
                      "streamed / 10 layers": round(m["peak_mib"] / small["peak_mib"], 3),
                      "installed peak (MiB)": round(m["installed_mib"], 2),
                      "installed / 10 layers": round(m["installed_mib"] / small["installed_mib"], 3)})
-    s_small = _measure(10, _SLICE_CHILD)
-    s_large = _measure(big, _SLICE_CHILD)
-    for m in (s_small, s_large):
-        rows.append({"layers": m["layers"], "slice layer folder: files": m["files"], "seconds": round(m["seconds"], 2),
-                     "slice peak (MiB)": round(m["peak_mib"], 2),
+    # two slicing threads: a run's peak depends on whether both hold a layer at once, which a
+    # 10-layer run may miss; each size runs SLICE_RUNS times, alternating, and its highest peak is kept
+    runs = {10: [], big: []}
+    for _ in range(SLICE_RUNS):
+        for n in runs:
+            runs[n].append(_measure(n, _SLICE_CHILD))
+    s_small = max(runs[10], key=lambda m: m["peak_mib"])
+    for n, ms in runs.items():
+        m = max(ms, key=lambda m: m["peak_mib"])
+        rows.append({"layers": n, "slice layer folder: files": m["files"], "seconds": round(min(x["seconds"] for x in ms), 2),
+                     "slice peak (MiB)": round(m["peak_mib"], 2), "slice peaks of the runs": [round(x["peak_mib"], 2) for x in ms],
                      "slice / 10 layers": round(m["peak_mib"] / s_small["peak_mib"], 3)})
     return rows
 
