@@ -36,6 +36,7 @@ import os
 import re
 import struct
 import tempfile
+import threading
 import zipfile
 import zlib
 from collections.abc import Iterable, Iterator
@@ -232,6 +233,7 @@ class FolderLedger:
     def __init__(self, root: str | Path) -> None:
         self.root = os.path.abspath(root)
         self._spool = _Spool()
+        self._lock = threading.Lock()  # writers in several threads may record at once
 
     def rel(self, path: str | Path) -> str:
         return Path(os.path.relpath(os.path.abspath(path), self.root)).as_posix()
@@ -239,7 +241,8 @@ class FolderLedger:
     def record(self, path: str | Path, sha256: str) -> None:
         """Record ``path`` (a file under the root, just written, with content hash ``sha256``)."""
         st = os.stat(path, follow_symlinks=False)
-        self._spool.add([self.rel(path), st.st_size, st.st_mtime_ns, st.st_ino, sha256])
+        with self._lock:
+            self._spool.add([self.rel(path), st.st_size, st.st_mtime_ns, st.st_ino, sha256])
 
     def entries(self) -> Iterator[list]:
         """``[rel, size, mtime_ns, inode, sha256]`` sorted by path, the last record of a path."""
