@@ -74,6 +74,8 @@ _SORT_CHUNK = 256
 _MERGE_FAN_IN = 64
 #: read / write buffer of a run, bytes
 _RUN_BUFFER = 2048
+#: directory entries listed at once by remove_ours (about 450 bytes each)
+_REMOVE_BATCH = 256
 
 
 def _canonical(obj) -> bytes:
@@ -820,7 +822,7 @@ def _remove_tree_ours(path: str, top: bool) -> None:
     memory does not grow with the entries of a folder; sub-folders once emptied."""
     while True:
         with os.scandir(path) as it:
-            batch = [e for e in islice(it, 1024)]
+            batch = list(islice(it, _REMOVE_BATCH))
         batch = [e for e in batch if not (top and e.name == MARKER_NAME)]
         if not batch:
             return
