@@ -67,7 +67,7 @@ PNG_KEY = b"rotoprint-output"
 JSON_KEY = "rotoprint_output"
 _PNG_SIG = b"\x89PNG\r\n\x1a\n"
 _MAX_MARKER_BYTES = 64 * 2**20  # a marker of 64 MB would list ~400,000 files
-_HASH_CHUNK = 2**20
+_HASH_CHUNK = 2**18
 #: records a spool keeps in memory before it writes a sorted run (about 100 KB of them)
 _SORT_CHUNK = 256
 #: runs merged at once (one open file and its read buffer each)
@@ -84,9 +84,11 @@ def _canonical(obj) -> bytes:
 
 def _sha_file(path: Path) -> str:
     h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        while chunk := fh.read(_HASH_CHUNK):
-            h.update(chunk)
+    buf = bytearray(_HASH_CHUNK)  # one buffer, read into: memory does not follow the file's size
+    view = memoryview(buf)
+    with open(path, "rb", buffering=0) as fh:
+        while n := fh.readinto(buf):
+            h.update(view[:n])
     return h.hexdigest()
 
 
