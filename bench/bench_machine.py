@@ -8,9 +8,15 @@ are peaks of Python and numpy allocations above what the plan holds:
 - *streamed*: :class:`MachineWriter` (packed files, TIFFs, program.json and program.txt,
   layer by layer: the layer's images, its design regions and steps) into a plain folder;
   the acceptance is this peak within 20 % of the 10-layer job's;
-- *installed*: :func:`write_machine_folder`, the same plus the atomic install, whose
-  ownership marker (``rotoprint-output.json``, SHA-256 of every file) lists every file and so
-  grows with the file count (5 files per layer here).
+- *installed*: :func:`write_machine_folder`, the same plus the atomic install with its
+  ownership marker (``rotoprint-output.json``, SHA-256 of every file: 5 files per layer
+  here), which is made in bounded memory (``io/ownership.py``);
+- *slice*: a ``rotoprint slice`` layer folder (:func:`rotoprint.pipeline.write_layer_folder`,
+  journalled, one PNG per layer, installed with its marker) of a 3 x 3 x 3 mm box on the
+  perfactory-sxga, 10 or 1,000 layers, the first layer sliced before measuring; with one
+  slicing thread (the process on one CPU) and with two (10, 100 and 1,000 layers: whether both
+  threads hold a layer at the same moment varies from run to run), the highest peak of three
+  runs each.
 """
 
 from __future__ import annotations
@@ -65,8 +71,38 @@ _CHILD = textwrap.dedent("""
 """)
 
 
-def _measure(n: int) -> dict:
-    r = subprocess.run([sys.executable, "-c", _CHILD, str(n)], capture_output=True, text=True, check=True)
+_SLICE_CHILD = textwrap.dedent("""
+    import json, os, sys, tempfile, time, tracemalloc
+    from pathlib import Path
+    from rotoprint.devices import load_device
+    from rotoprint.pipeline import RunOptions, write_layer_folder
+    from rotoprint.slicing import slice_mesh
+    from rotoprint.testing import box_mesh
+    n = int(sys.argv[1])
+    if sys.argv[2] == "1":  # one CPU: the producer slices in one thread
+        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    dev = load_device("perfactory-sxga")
+    job = slice_mesh(box_mesh((3.0, 3.0, 3.0)), dev, layer_height_mm=3.0 / n)
+    assert len(job) == n, len(job)
+    job.layer(0)  # compile and warm the slicer before measuring
+    with tempfile.TemporaryDirectory() as tmp:
+        tracemalloc.start()
+        t0 = time.perf_counter()
+        write_layer_folder(job, Path(tmp) / "s", device_name=dev.name, device=dev.model_dump(mode="json"), options={},
+                           run=RunOptions())
+        dt = time.perf_counter() - t0
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        files = sum(1 for f in (Path(tmp) / "s").iterdir())
+    print(json.dumps({"layers": n, "peak_mib": peak / 2**20, "seconds": dt, "files": files}))
+""")
+
+
+SLICE_RUNS = 3
+
+
+def _measure(n: int, child: str = _CHILD, *args: str) -> dict:
+    r = subprocess.run([sys.executable, "-c", child, str(n), *args], capture_output=True, text=True, check=True)
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
@@ -82,6 +118,22 @@ def run(quick: bool = False) -> list[dict]:
                      "streamed / 10 layers": round(m["peak_mib"] / small["peak_mib"], 3),
                      "installed peak (MiB)": round(m["installed_mib"], 2),
                      "installed / 10 layers": round(m["installed_mib"] / small["installed_mib"], 3)})
+    # one slicing thread (one CPU), then two: with two, a run's peak depends on whether both
+    # threads hold a layer's raster at the same moment, which a short run may never see; each
+    # size runs SLICE_RUNS times, alternating, and its highest peak is kept
+    for threads in ("1", "2"):
+        sizes = (10, big) if threads == "1" else (10, 100, big)
+        runs: dict[int, list] = {n: [] for n in sizes}
+        for _ in range(SLICE_RUNS):
+            for n in sizes:
+                runs[n].append(_measure(n, _SLICE_CHILD, threads))
+        s_small = max(runs[10], key=lambda m: m["peak_mib"])
+        for n, ms in runs.items():
+            m = max(ms, key=lambda m: m["peak_mib"])
+            rows.append({"layers": n, "slice threads": int(threads), "slice layer folder: files": m["files"],
+                         "seconds": round(min(x["seconds"] for x in ms), 2), "slice peak (MiB)": round(m["peak_mib"], 2),
+                         "slice peaks of the runs": [round(x["peak_mib"], 2) for x in ms],
+                         "slice / 10 layers": round(m["peak_mib"] / s_small["peak_mib"], 3)})
     return rows
 
 

@@ -1,7 +1,8 @@
 """machine/ of a build: the program's steps and times, clocks, limits, and its replay.
 
-The coil demo is built once (no printability check, no report): replay of its program must
-give the drops, IoU and coverage that ``simulate`` gives for the build's own images."""
+The coil demo is built once (no printability check, no report): replay of its program at
+the nominal angles must give the drops, IoU and coverage that ``simulate`` gives for the
+build's own images (at the machine clock's angles: tests/machine/test_replay_clock.py)."""
 
 from __future__ import annotations
 
@@ -58,7 +59,7 @@ def _same(a: dict, b: dict) -> None:
 
 def test_replay_of_the_coil_program_gives_simulates_figures_for_every_layer_and_head(coil):
     job, res, prog_path = coil
-    rep = replay_program(prog_path)
+    rep = replay_program(prog_path, angles="nominal")
     plan = plan_job(job)
     by = {(r["layer"], r["material"], r["ink"]): r for r in rep["images"]}
     n = 0
@@ -80,7 +81,7 @@ def test_replay_with_the_deposit_model_gives_the_builds_film_figures(coil):
     from rotoprint.rotary.deposit import deposit_film, ink_drops
 
     job, _, prog_path = coil
-    rep = replay_program(prog_path, layer=2, deposit=True)
+    rep = replay_program(prog_path, layer=2, deposit=True, angles="nominal")
     plan = plan_job(job)
     sched = plan.layer(2)
     secs = plan.sections(2)
@@ -174,7 +175,7 @@ def test_replay_with_other_bit_depths_and_row_delays_in_the_program(tmp_path, bi
         assert sw["row_offsets_firings"][0] == 0 and sw["row_offsets_firings"][1] != 0
     else:
         assert sw["row_offsets_firings"] is None
-    rep = replay_program(tmp_path / "m" / "program.json")
+    rep = replay_program(tmp_path / "m" / "program.json", angles="nominal")
     for r in rep["images"]:
         sched = plan.layer(r["layer"])
         ref = plan.reference_image(r["material"], plan.sections(r["layer"])).astype(np.uint8) * 255

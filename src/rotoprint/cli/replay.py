@@ -1,5 +1,6 @@
 """`rotoprint replay DIR/machine/program.json --out OVERLAY.png`: decode a machine program and
-place every drop as the machine would; the figures and JSON keys of `rotoprint simulate`."""
+place every drop as the machine would (at its clock's angles); the figures and JSON keys of
+`rotoprint simulate`, and how far the clock moves the drops off their nominal sites."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ def replay_command(
     layer: Annotated[int | None, typer.Option("--layer", help="Replay only this layer (every step is still checked).", callback=in_range(R.COUNT))] = None,
     scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.", callback=in_range(R.OVERLAY_SCALE))] = 2,
     deposit: Annotated[bool, typer.Option("--deposit", help="Also run the deposit model (film thickness, coverage) on every image; about a second each.")] = False,
+    angles: Annotated[str, typer.Option("--angles", help="Fire at the angles the machine's clock gives ('machine': index offset in whole encoder counts, integer multiplier/divider) or at the nominal ones ('nominal').")] = "machine",
     json_out: JsonOpt = False,
     force: ForceOpt = False,
 ) -> None:
@@ -33,6 +35,10 @@ def replay_command(
     from ..machine.replay import replay_program
     from ..rotary.simulate import render_overlay
 
+    from ..machine.replay import ANGLES
+
+    if angles not in ANGLES:
+        raise ConfigError(f"--angles must be one of {', '.join(ANGLES)}, got {angles!r}")
     if out.suffix.lower() != ".png":
         raise ConfigError(f"--out must end in .png, got {out.name!r}")
     root = program.parent
@@ -45,7 +51,7 @@ def replay_command(
 
         keep = 0 if layer is None else layer
         res = replay_program(program, layer=layer, on_step=on_step, keep_layer=keep, overlay_scale=scale,
-                             deposit=deposit)
+                             deposit=deposit, angles=angles)
     sims = res.pop("_sims")
     if sims:
         tiles = [render_overlay(sim, scale=scale) for _, sim in sims]
@@ -69,7 +75,9 @@ def replay_command(
         return
     out_console.print(f"{program}: {res['layers']} layers, {res['steps']} steps, {res['revolutions']} revolutions, "
                       f"{res['time_s']:.1f} s; clock error up to {res['clock']['max_angle_error_per_rev_deg']:.2g} deg/rev"
-                      + (f", FLAGGED: {', '.join(res['clock']['flagged'])}" if res["clock"]["flagged"] else ""))
+                      + (f", FLAGGED: {', '.join(res['clock']['flagged'])}" if res["clock"]["flagged"] else "")
+                      + (f"; drops at the machine's angles, up to {res['clock']['max_drop_displacement_um']:.3g} um off their "
+                         "nominal sites" if angles == "machine" else "; drops at the nominal angles"))
     for r in res["images"]:
         out_console.print(f"  layer {r['layer']:5d} {r['material']}/{r['ink']} on {r['head']}: {r['drops']} drops, "
                           f"IoU {r['iou']:.4f}, uncovered {100 * r['uncovered_fraction']:.2f} %, "

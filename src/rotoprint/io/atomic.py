@@ -36,7 +36,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from ..errors import InputFileError, ResourceError
-from .ownership import MARKER_NAME, folder_not_ours, mark_json, mark_png, mark_svg, path_not_ours, remove_ours, write_folder_marker
+from .ownership import MARKER_NAME, FolderLedger, folder_not_ours, mark_json, mark_png, mark_svg, path_not_ours, remove_ours, write_folder_marker
 
 try:  # POSIX
     import fcntl
@@ -198,6 +198,7 @@ class OutputClaim:
         self.partial = parent / f"{self.out.name}.partial"
         self.lock_path = parent / f".{self.out.name}.lock"
         self._fd: int | None = None
+        self._ledgers: contextlib.ExitStack | None = None
 
     # ------------------------------------------------------------ lock
     def _acquire(self) -> bool:
@@ -295,9 +296,15 @@ class OutputClaim:
         except BaseException:
             self._release()
             raise
+        if self.is_dir:  # files written into the temporaries are recorded as they are written (ownership.FolderLedger)
+            self._ledgers = contextlib.ExitStack()
+            self._ledgers.enter_context(FolderLedger.opened(self.part, self.partial))
         return self
 
     def __exit__(self, exc_type, exc, tb) -> None:
+        if self._ledgers is not None:
+            self._ledgers.close()
+            self._ledgers = None
         try:
             if exc_type is not None:
                 with contextlib.suppress(OSError):
@@ -315,7 +322,8 @@ class OutputClaim:
     def install(self, src: Path | None = None) -> None:
         """Put the complete output ``src`` (default: ``self.part``) in place under ``self.out``.
 
-        A folder gets its ownership marker first. An existing folder output is renamed to
+        A folder gets its ownership marker first (the hashes of the files recorded while
+        they were written are not computed again, see :class:`~rotoprint.io.ownership.FolderLedger`). An existing folder output is renamed to
         ``.old``, the new one renamed into place, then the old one removed (marker last); a
         kill at any point leaves either output complete at ``self.out`` (or in ``.old``, put
         back by the next run).

@@ -16,15 +16,20 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
+import os
 import shutil
+import weakref
+from array import array
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from .._resources import available_memory_bytes, format_bytes
 from ..errors import InputFileError, ResourceError
 from .atomic import OutputClaim, disk_full, kill_point
 from .inputs import MAX_IMAGE_BYTES, MAX_JOURNAL_BYTES, read_input_bytes
+from .ownership import write_tracked
 
-__all__ = ["PartialOutput", "check_resources", "partial_path"]
+__all__ = ["PartialOutput", "JournalRecords", "check_resources", "partial_path"]
 
 log = logging.getLogger(__name__)
 JOURNAL = "journal.jsonl"
@@ -111,15 +116,63 @@ def check_resources(*, n_layers: int, bytes_per_layer: float, copies_on_disk: in
     return {"estimated_output_bytes": est_disk, "estimated_memory_bytes": est_mem}
 
 
+class JournalRecords(Mapping):
+    """The journalled layers, ``index -> record``, read from the journal when asked.
+
+    Only a table of the records' byte offsets in the journal is held (8 bytes a layer), so
+    memory does not grow with the layer count; a record is read (one line) each time it is
+    looked up. Iteration gives the indices in increasing order.
+    """
+
+    def __init__(self, path: Path, n_layers: int) -> None:
+        self.path = path
+        self._off = array("q", [-1]) * n_layers
+        self._n = 0
+        self._fh = None
+
+    def put(self, index: int, offset: int) -> None:
+        """The record of layer ``index`` is the line at byte ``offset`` of the journal."""
+        if self._off[index] < 0:
+            self._n += 1
+        self._off[index] = offset
+
+    def __getitem__(self, index: int) -> dict:
+        if not (isinstance(index, int) and 0 <= index < len(self._off)) or self._off[index] < 0:
+            raise KeyError(index)
+        if self._fh is None:
+            self._fh = open(self.path, "rb")  # noqa: SIM115 - closed by close() or with the object
+            self._closer = weakref.finalize(self, self._fh.close)
+        self._fh.seek(self._off[index])
+        return json.loads(self._fh.readline())
+
+    def __contains__(self, index: object) -> bool:
+        return isinstance(index, int) and 0 <= index < len(self._off) and self._off[index] >= 0
+
+    def __iter__(self) -> Iterator[int]:
+        return (i for i, o in enumerate(self._off) if o >= 0)
+
+    def __len__(self) -> int:
+        return self._n
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._closer()
+            self._fh = None
+
+
 class PartialOutput:
-    """The ``<out>.partial`` folder of a run and its journal (see module doc)."""
+    """The ``<out>.partial`` folder of a run and its journal (see module doc).
+
+    ``done`` (:class:`JournalRecords`) maps every journalled layer to its record.
+    """
 
     def __init__(self, out: str | Path, fingerprint: str, n_layers: int, *, resume: bool) -> None:
         self.out = Path(out)
         self.dir = partial_path(self.out)
         self.fingerprint = fingerprint
         self.n_layers = n_layers
-        self.done: dict[int, dict] = {}
+        self.done = JournalRecords(self.dir / JOURNAL, n_layers)
+        self._jpos = 0
         if self.dir.exists():
             if not (self.dir / JOURNAL).is_file():
                 raise InputFileError(f"{self.dir.name} exists but holds no {JOURNAL}: not a run of ours; refusing to delete it",
@@ -131,7 +184,7 @@ class PartialOutput:
                 shutil.rmtree(self.dir)
         self._journal = None
 
-    def _verified(self) -> dict[int, dict]:
+    def _verified(self) -> JournalRecords:
         """The journalled layers whose files are intact (see the module doc for what is trusted).
 
         The journal is read bounded (:data:`~rotoprint.io.inputs.MAX_JOURNAL_BYTES`). A record
@@ -141,19 +194,21 @@ class PartialOutput:
         leading out) or a file that is not a regular file is a corrupt journal: refused.
         """
         jpath = self.dir / JOURNAL
+        done = JournalRecords(jpath, self.n_layers)
         if not jpath.exists():
-            return {}
-        text = read_input_bytes(jpath, what="resume journal", limit_bytes=MAX_JOURNAL_BYTES).decode("utf-8", "replace")
-        lines = text.split("\n")
+            return done
+        lines = read_input_bytes(jpath, what="resume journal", limit_bytes=MAX_JOURNAL_BYTES).split(b"\n")
         try:
-            head = json.loads(lines[0])
+            head = json.loads(lines[0].decode("utf-8", "replace"))
         except (json.JSONDecodeError, RecursionError):
-            return {}
+            return done
         if not isinstance(head, dict) or head.get("fingerprint") != self.fingerprint:
-            return {}
+            return done
         root = self.dir.resolve()
-        done: dict[int, dict] = {}
-        for line in lines[1:]:
+        pos = len(lines[0]) + 1
+        for raw in lines[1:]:
+            offset, pos = pos, pos + len(raw) + 1
+            line = raw.decode("utf-8", "replace")
             if not line.strip():
                 continue
             try:
@@ -181,7 +236,7 @@ class PartialOutput:
                     ok = False
                     break
             if ok:
-                done[rec["index"]] = rec
+                done.put(rec["index"], offset)
         return done
 
     def open(self) -> None:
@@ -192,26 +247,29 @@ class PartialOutput:
         if fresh:
             self._journal.write(json.dumps({"fingerprint": self.fingerprint, "layers": self.n_layers}) + "\n")
             self._journal.flush()
+        self._jpos = os.fstat(self._journal.fileno()).st_size
 
     def record(self, index: int, files: dict[str, bytes], **payload) -> dict:
         """Write a layer's files, then journal them; returns the journal record."""
         rec = {"index": index, "files": list(files), "sha256s": [hashlib.sha256(d).hexdigest() for d in files.values()], **payload}
         where = self.dir / JOURNAL
         try:
-            for name, data in files.items():
+            for (name, data), sha in zip(files.items(), rec["sha256s"], strict=True):
                 where = self.dir / name
-                where.write_bytes(data)
+                write_tracked(where, data, sha256=sha)  # recorded for the output's ownership marker (not read again)
             where = self.dir / JOURNAL
-            self._journal.write(json.dumps(rec) + "\n")
+            line = json.dumps(rec) + "\n"  # ASCII: its length is its size in bytes
+            self._journal.write(line)
             self._journal.flush()
         except OSError as exc:
             full = disk_full(exc, where)
             if full is None:
                 raise
             self.discard()
-            self.done = {}
+            self.done = JournalRecords(self.dir / JOURNAL, self.n_layers)
             raise full from None
-        self.done[index] = rec
+        self.done.put(index, self._jpos)
+        self._jpos += len(line)
         kill_point(f"layer-{index}")
         return rec
 
@@ -219,6 +277,7 @@ class PartialOutput:
         if self._journal is not None:
             self._journal.close()
             self._journal = None
+        self.done.close()
 
     def finish_as_folder(self, claim: OutputClaim) -> None:
         """Drop the journal, mark the folder as ours and put it in place of the output

@@ -29,6 +29,7 @@ from .. import __version__
 from ..errors import ConfigError
 from ..io.machine import bits_for_levels, nozzle_order, pack_levels, packed_bytes, tiff_bytes
 from ..io.machine.packing import WORD_BYTE_ORDER, max_level
+from ..io.ownership import open_tracked, write_tracked
 from ..rotary.head import Mount, nozzle_layout
 from ..rotary.printdata import _runs
 from .clock import FLAG_FRACTION, clock_ratio
@@ -158,8 +159,9 @@ class MachineWriter:
         self._index = {h.index: r for h, r in zip(plan.heads, self._heads)}
         self.folder.mkdir(parents=True, exist_ok=True)
         (self.folder / "layers").mkdir(exist_ok=True)
-        self._json = open(self.folder / "program.json", "w", encoding="utf-8")
-        self._txt = open(self.folder / "program.txt", "w", encoding="utf-8")
+        # hashed as they are written (the output's ownership marker does not read them again)
+        self._json = open_tracked(self.folder / "program.json")
+        self._txt = open_tracked(self.folder / "program.txt")
         self._n_step = 0
         self._layers = 0
         self._total = 0.0
@@ -241,9 +243,7 @@ class MachineWriter:
         self._txt.write(s + "\n")
 
     def _write(self, rel: str, data: bytes) -> str:
-        p = self.folder / rel
-        p.write_bytes(data)
-        return _sha(data)
+        return write_tracked(self.folder / rel, data)
 
     def _step(self, steps: list, d: dict) -> dict:
         d = {"n": self._n_step, **d}

@@ -2,11 +2,14 @@
 land every drop as the machine would and compare with the layer's design region.
 
 The drops are placed by :func:`rotoprint.rotary.simulate.simulate` from the decoded images
-and the program's geometry (head model, tilt, mount, direction, stage position, angle per
-firing, first firing), so a replay of a build's program gives the figures ``simulate`` gives
-for the build's images. Firings are placed at the program's angle per firing (``dphi_rad``);
-the integer clock ratio's drift from it is reported per swathe (``angle_error_per_rev_deg``),
-not added to the drops.
+and the program's geometry (head model, tilt, mount, direction, stage position, first
+firing) at the angles the machine fires them (``angles="machine"``, the default): an
+image's first firing when the encoder has counted ``index_offset_counts`` after the index
+pulse, each next one ``divider / multiplier`` counts later (:func:`machine_clock`). The
+integer ratio and the whole counts move each drop off its nominal site (``i * dphi_rad``);
+the largest such displacement is reported per image, swathe and revolution step. With an
+exact clock the figures are those ``simulate`` gives for the build's images;
+``angles="nominal"`` places the drops at the nominal angles (the figures of ``simulate``).
 
 Refused, with one line naming the step: a file that is missing or whose SHA-256 differs, a
 radial stage position outside the machine's stage, a clock the head or the controller cannot
@@ -27,15 +30,20 @@ import numpy as np
 from pydantic import ValidationError
 
 from ..devices.models import InkjetHead
-from ..errors import InputFileError, RotoprintError
+from ..errors import ConfigError, InputFileError, RotoprintError
 from ..io.inputs import parse_json, read_input_bytes
 from ..io.machine import nozzle_order, read_packed, unpack_levels
 from ..rotary.placement import Placement
 from ..rotary.printdata import RotaryPrint, SwatheImage, runs_to_mask
+from ..rotary.simulate import FiringClock
 from .program import PROGRAM_FORMAT, PROGRAM_VERSION, unshift_rows
 from .spec import MachineSpec
 
-__all__ = ["load_program", "ReplayImage", "replay_layers", "replay_program", "MAX_PROGRAM_BYTES", "MAX_IMAGE_BYTES"]
+__all__ = ["load_program", "ReplayImage", "replay_layers", "replay_program", "machine_clock", "MAX_PROGRAM_BYTES",
+           "MAX_IMAGE_BYTES", "ANGLES", "EXACT_RAD", "clock_is_exact"]
+
+#: Where a replay places the firings: the machine's clock, or the nominal ``i * dphi``.
+ANGLES = ("machine", "nominal")
 
 #: Largest program.json read (a 1,000-layer coil program is about 200 MB).
 MAX_PROGRAM_BYTES = 2 * 2**30
@@ -125,9 +133,49 @@ def _check_swathe(spec: MachineSpec, head: dict, sw: dict, step: dict, where: st
                              f"{spec.max_platform_rpm:g} rpm", path=p)
 
 
+def machine_clock(counts_per_rev: int, multiplier: int, divider: int, index_offset_counts: int, first_firing: int) -> FiringClock:
+    """The angles an image's firings fire at on the machine.
+
+    The controller fires the image's first firing ``index_offset_counts`` encoder counts after
+    the index pulse and every ``divider / multiplier`` counts after that: firing ``i`` at
+    ``2 pi (index_offset_counts + (i - first_firing) * divider / multiplier) / counts_per_rev``.
+
+    Examples
+    --------
+    >>> c = machine_clock(4000, 1, 4, 8, 2)  # 1000 firings per revolution, exact
+    >>> float(c.turn_rad(np.array([3]))[0]) == 2 * math.pi * 12 / 4000
+    True
+    """
+    step = 2 * math.pi / counts_per_rev
+    return FiringClock(ref_firing=int(first_firing), turn_at_ref_rad=index_offset_counts * step,
+                       dphi_rad=step * divider / multiplier)
+
+
+#: A machine angle within this of the nominal one over a whole image (rad; a picometre at
+#: 100 mm) is float rounding of an exact clock: the drops stay on their nominal sites.
+EXACT_RAD = 1e-12
+
+
+def clock_is_exact(clock: FiringClock, sw: SwatheImage) -> bool:
+    """Whether ``clock`` fires every firing of ``sw`` at its nominal angle ``i * dphi_rad``
+    (within :data:`EXACT_RAD`, modulo a turn): an exact ratio and a whole index offset."""
+    f = sw.levels.shape[0]
+    lo, hi = sw.first_firing, sw.first_firing + max(f - 1, 0)
+    worst = 0.0
+    for i in (lo, hi):
+        d = float(clock.turn_rad(np.array([i]))[0]) - i * sw.dphi_rad
+        worst = max(worst, abs(math.remainder(d, 2 * math.pi)))
+    return worst < EXACT_RAD
+
+
 @dataclass(frozen=True, eq=False)
 class ReplayImage:
-    """One head's image of one material in one layer, decoded: the print and the design."""
+    """One head's image of one material in one layer, decoded: the print and the design.
+
+    ``clocks``: per swathe index, the machine's firing angles (:func:`machine_clock`);
+    ``files``: per swathe index, the packed file; ``steps``: the numbers of the revolution
+    steps that print it.
+    """
 
     layer: int
     material: str
@@ -135,6 +183,9 @@ class ReplayImage:
     head: str
     print: RotaryPrint
     design: np.ndarray  # (H, W) uint8, 0 / 255
+    clocks: dict
+    files: dict
+    steps: dict
 
 
 class _Files:
@@ -186,6 +237,7 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
         recs = {}
         for r in lay["images"]:
             recs[r["file"]] = r
+        printed_by: dict[str, list[int]] = {}
         for st in lay["steps"]:
             where = f"layer {i} step {st['n']} ({st['kind']}" + (f" of {st['head']} swathe {st['swathe']})" if st["kind"] == "revolution" else ")")
             t = st.get("time_s")
@@ -199,6 +251,15 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
             _check_swathe(spec, h, h["swathes"][st["swathe"]], st, where, p)
             if st["image"] is not None and st["image"] not in recs:
                 raise InputFileError(f"{where}: image {st['image']} is not listed in layer {i}'s images", path=p)
+            if st["image"] is not None:
+                c = h["swathes"][st["swathe"]]["clock"]
+                r = recs[st["image"]]
+                if (st["multiplier"], st["divider"], st["index_offset_counts"]) != (c["multiplier"], c["divider"],
+                                                                                      r["index_offset_counts"]):
+                    raise InputFileError(f"{where}: clock x{st['multiplier']}/{st['divider']} index {st['index_offset_counts']} "
+                                         f"is not the one of its swathe and image (x{c['multiplier']}/{c['divider']} index "
+                                         f"{r['index_offset_counts']})", path=p)
+                printed_by.setdefault(st["image"], []).append(st["n"])
         if want is not None and i not in want:
             continue
         designs = {}
@@ -220,8 +281,14 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
             order = nozzle_order(model.nozzles, model.rows, odd_row=nn["odd_row"], descending=nn["direction"] == "descending")
             rows_of = np.arange(model.nozzles) % model.rows
             sws = []
+            clocks, files_of, steps = {}, {}, {}
             for r in sorted(rs, key=lambda r: r["swathe"]):
                 where = f"layer {i} image {r['file']}"
+                c = h["swathes"][r["swathe"]]["clock"]
+                clocks[r["swathe"]] = machine_clock(spec.encoder_counts_per_rev, c["multiplier"], c["divider"],
+                                                    r["index_offset_counts"], r["first_firing_index"])
+                steps[r["swathe"]] = printed_by.get(r["file"], [])
+                files_of[r["swathe"]] = r["file"]
                 data = files.read(r["file"], r["sha256"], where)
                 try:
                     lv = unpack_levels(read_packed(data, r["firings"], r["nozzles"], bits), bits, order)
@@ -244,12 +311,14 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
                              dpi_y=float(r0["dpi_y"]), placement=Placement.from_json(r0["placement"]), swathes=tuple(sws))
             if mname not in designs:
                 raise InputFileError(f"layer {i}: no design region of {mname} for its images", path=p)
-            out.append(ReplayImage(layer=i, material=mname, ink=ink, head=h["name"], print=pr, design=designs[mname]))
+            out.append(ReplayImage(layer=i, material=mname, ink=ink, head=h["name"], print=pr, design=designs[mname],
+                                   clocks=clocks, files=files_of, steps=steps))
         yield lay, out
 
 
 def replay_program(path: str | Path, *, layer: int | None = None, on_step: Callable[[str, int, int], None] | None = None,
-                   keep_layer: int | None = None, overlay_scale: int | None = None, deposit: bool = False) -> dict:
+                   keep_layer: int | None = None, overlay_scale: int | None = None, deposit: bool = False,
+                   angles: str = "machine") -> dict:
     """Replay a program: the simulator's figures for every image of every (or one) layer.
 
     Parameters
@@ -269,18 +338,26 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
         Also run the deposit model (:func:`rotoprint.rotary.deposit.deposit_film`, the film
         figures a build gives for its overlays) on every image: ``deposit`` per image, without
         the radial bins. About a second per image.
+    angles : {'machine', 'nominal'}
+        Place the firings at the machine clock's angles (:func:`machine_clock`) or at the
+        nominal ``i * dphi_rad``.
 
     Returns
     -------
     dict
-        ``images``: per image ``layer, material, ink, head, swathes`` and the keys of
-        ``simulate``'s report (``iou``, ``uncovered_fraction``, ``drops``, ...); ``iou`` the
-        lowest and ``uncovered_fraction`` the highest over them; ``drops`` and
-        ``drops_outside`` summed; ``time_s``, ``steps``, the program's totals; ``clock`` the
-        largest angle error per revolution and the flagged swathes.
+        ``images``: per image ``layer, material, ink, head, swathes``, the keys of
+        ``simulate``'s report (``iou``, ``uncovered_fraction``, ``drops``, ...),
+        ``max_drop_displacement_um`` (the largest distance of a drop from its nominal site)
+        and ``swathe_clocks`` (per swathe: ``swathe, image, steps`` (the revolution steps
+        printing it), ``max_drop_displacement_um``); ``iou`` the lowest and
+        ``uncovered_fraction`` the highest over them; ``drops`` and ``drops_outside`` summed;
+        ``time_s``, ``steps``, the program's totals; ``clock``: the largest angle error per
+        revolution, the flagged swathes, ``angles`` and the largest drop displacement.
     """
-    from ..rotary.simulate import check_overlay_fits, simulate
+    from ..rotary.simulate import check_overlay_fits, place_drops, simulate
 
+    if angles not in ANGLES:
+        raise ConfigError(f"angles must be one of {', '.join(ANGLES)}, got {angles!r}")
     p = Path(path)
     prog = load_program(p)
     if overlay_scale is not None:
@@ -299,12 +376,24 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
     for k, (lay, imgs) in enumerate(replay_layers(prog, p, layers=None if layer is None else [layer])):
         step("replay", k, nl)
         for im in imgs:
-            sim = simulate(im.print, im.design)
+            clocks = None
+            if angles == "machine":  # exact clocks leave their swathes' drops on the nominal sites, bit for bit
+                clocks = {sw.index: im.clocks[sw.index] for sw in im.print.swathes
+                          if not clock_is_exact(im.clocks[sw.index], sw)} or None
+            sim = simulate(im.print, im.design, clocks=clocks)
+            nominal = place_drops(im.print) if clocks else sim.drops
+            moved_um = 1e3 * np.hypot(sim.drops.x_mm - nominal.x_mm, sim.drops.y_mm - nominal.y_mm)
+            per_sw = []
+            for sw in im.print.swathes:
+                sel = sim.drops.swathe == sw.index
+                per_sw.append({"swathe": sw.index, "image": im.files[sw.index], "steps": im.steps[sw.index],
+                               "max_drop_displacement_um": float(moved_um[sel].max()) if sel.any() else 0.0})
             if keep_layer is not None and im.layer == keep_layer:
                 sims.append((im, sim))
             r = {"layer": im.layer, "material": im.material, "ink": im.ink, "head": im.head,
                  "method": im.print.method, "tilt_deg": im.print.tilt_deg, "swathes": len(im.print.swathes),
-                 **sim.report.to_json()}
+                 **sim.report.to_json(),
+                 "max_drop_displacement_um": max(s_["max_drop_displacement_um"] for s_ in per_sw), "swathe_clocks": per_sw}
             if deposit:
                 from ..rotary.deposit import deposit_film, ink_drops
 
@@ -322,7 +411,8 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
         "drops": sum(r["drops"] for r in results),
         "drops_outside": sum(r["drops_outside"] for r in results),
         "time_s": tot["time_s"], "steps": tot["steps"], "revolutions": tot["revolutions"],
-        "clock": {"max_angle_error_per_rev_deg": max(errs, default=0.0), "flagged": tot["flagged_clocks"]},
+        "clock": {"max_angle_error_per_rev_deg": max(errs, default=0.0), "flagged": tot["flagged_clocks"], "angles": angles,
+                  "max_drop_displacement_um": max((r["max_drop_displacement_um"] for r in results), default=0.0)},
     }
     if keep_layer is not None:
         out["_sims"] = sims

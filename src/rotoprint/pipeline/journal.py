@@ -10,6 +10,7 @@ into place, or an archive assembled from it).
 
 from __future__ import annotations
 
+from array import array
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -105,7 +106,7 @@ def write_journalled(
 def _run_layers(plan: LayerPlan, partial: PartialOutput, run: RunOptions) -> Iterator[Rendered]:
     """Size the run (three sample layers made first), then yield every layer not already
     done, in order. Nothing is written before the size check passes."""
-    todo = [i for i in range(plan.n_layers) if i not in partial.done]
+    todo = array("q", (i for i in range(plan.n_layers) if i not in partial.done))  # 8 bytes a layer
     sample_idx = sorted({todo[0], todo[len(todo) // 2], todo[-1]}) if todo else []
     samples = {i: render_one(plan.source, i) for i in sample_idx}
     sizes = [r.nbytes for r in samples.values()]
@@ -120,7 +121,7 @@ def _run_layers(plan: LayerPlan, partial: PartialOutput, run: RunOptions) -> Ite
         where=partial.dir.parent,
     )
     partial.open()
-    rest = [i for i in todo if i not in samples]
+    rest = array("q", (i for i in todo if i not in samples))
     it = iter(produce_layers(plan.source, rest, run))
     for i in todo:
         yield samples[i] if i in samples else next(it)

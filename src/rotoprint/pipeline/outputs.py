@@ -48,7 +48,8 @@ def write_layer_folder(job, out_dir: str | Path, *, device_name: str, device: di
     Returns
     -------
     dict
-        The manifest, as written to ``manifest.json``.
+        The manifest, as written to ``manifest.json``; its ``layers`` a sequence read back
+        from a temporary file (:class:`rotoprint.io.layers.SpooledRecords`).
 
     Raises
     ------
@@ -60,7 +61,7 @@ def write_layer_folder(job, out_dir: str | Path, *, device_name: str, device: di
         The run would need more disk or memory than is available (checked before any layer is
         written).
     """
-    from ..io.layers import layer_folder_manifest
+    from ..io.layers import write_layer_folder_manifest
 
     out = Path(out_dir)
     run = run or RunOptions()
@@ -69,8 +70,8 @@ def write_layer_folder(job, out_dir: str | Path, *, device_name: str, device: di
         plan = LayerPlan(layer_source(mj, PlainLayer()), len(job), job.grid.width * job.grid.height, mj.nbytes)
 
         def finish(partial) -> dict:
-            manifest = layer_folder_manifest(job, partial.done, device_name=device_name, device=device, options=options)
-            (partial.dir / MANIFEST_NAME).write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+            manifest = write_layer_folder_manifest(partial.dir / MANIFEST_NAME, job, partial.done, device_name=device_name,
+                                                   device=device, options=options)  # streamed, layer by layer
             partial.finish_as_folder(claim)
             return manifest
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import os
 import re
 import threading
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from multiprocessing import get_context
@@ -161,7 +161,7 @@ def produce_layers(source: LayerSource, indices: Iterable[int], run: RunOptions 
         ConfigError) when this is called, before the first layer.
     """
     run = run or RunOptions()
-    indices = list(indices)
+    indices = indices if isinstance(indices, Sequence) else list(indices)  # an array of indices stays one
     if run.scheduler is not None:
         if indices:  # connect now, not at the first next(): a dead scheduler fails before any layer is kept
             check_scheduler_address(run.scheduler)

@@ -36,7 +36,26 @@ from ..errors import ConfigError, ImageError
 from .head import Mount, nozzle_layout
 from .printdata import RotaryPrint, design_kind, design_levels
 
-__all__ = ["Drops", "SimulationReport", "Simulation", "place_drops", "simulate", "render_overlay", "design_mask"]
+__all__ = ["Drops", "FiringClock", "SimulationReport", "Simulation", "place_drops", "simulate", "render_overlay", "design_mask"]
+
+
+@dataclass(frozen=True)
+class FiringClock:
+    """When a swathe's firings fire, as a machine's clock gives it (not the nominal ``i * dphi``).
+
+    Firing ``i`` fires when the platform has turned ``turn_at_ref_rad + (i - ref_firing) *
+    dphi_rad`` (rad, from the index pulse); e.g. a firing clock made from an encoder by an
+    integer multiplier and divider, started a whole number of encoder counts after the index
+    (:mod:`rotoprint.machine.replay`).
+    """
+
+    ref_firing: int
+    turn_at_ref_rad: float
+    dphi_rad: float
+
+    def turn_rad(self, firing: np.ndarray) -> np.ndarray:
+        """``(M,) float64``: the angle turned at each of ``firing`` ``(M,) int64``."""
+        return self.turn_at_ref_rad + (firing - self.ref_firing) * self.dphi_rad
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,7 +77,8 @@ class Drops:
         return int(self.x_mm.size)
 
 
-def place_drops(pr: RotaryPrint, *, jitter_um: float = 0.0, dead_nozzles: tuple[int, ...] = (), seed: int = 0) -> Drops:
+def place_drops(pr: RotaryPrint, *, jitter_um: float = 0.0, dead_nozzles: tuple[int, ...] = (), seed: int = 0,
+                clocks: dict[int, FiringClock] | None = None) -> Drops:
     """Land every drop of ``pr`` with the forward formula (no knowledge of the transform used).
 
     Nozzle ``k`` of swathe ``s`` fired at firing ``i`` lands at radius ``r_k`` and angle
@@ -75,6 +95,8 @@ def place_drops(pr: RotaryPrint, *, jitter_um: float = 0.0, dead_nozzles: tuple[
         Nozzle indices (``0 <= k < nozzles``) that do not fire.
     seed : int
         Seed of the jitter's random generator.
+    clocks : dict of int to FiringClock, optional
+        Per swathe index, the angle each firing really fires at (instead of ``i * dphi_rad``).
 
     Returns
     -------
@@ -108,7 +130,8 @@ def place_drops(pr: RotaryPrint, *, jitter_um: float = 0.0, dead_nozzles: tuple[
         b, k = np.nonzero(lev)
         lay = nozzle_layout(pr.head, Mount(sw.pivot_radius_mm, tilt_deg=pr.tilt_deg, mount_angle_deg=pr.mount_angle_deg, direction=pr.direction))
         i = b.astype(np.int64) + sw.first_firing
-        ang = lay.phi_rad[k] - pr.direction * i * sw.dphi_rad
+        clk = clocks.get(sw.index) if clocks else None
+        ang = lay.phi_rad[k] - pr.direction * (i * sw.dphi_rad if clk is None else clk.turn_rad(i))
         x = lay.r_mm[k] * np.cos(ang)
         y = lay.r_mm[k] * np.sin(ang)
         if jitter_um > 0:
@@ -301,6 +324,7 @@ def simulate(
     jitter_um: float = 0.0,
     dead_nozzles: tuple[int, ...] = (),
     seed: int = 0,
+    clocks: dict[int, FiringClock] | None = None,
 ) -> Simulation:
     """Place the drops of ``pr`` and compare them with ``design`` ``(H, W) uint8``.
 
@@ -312,8 +336,9 @@ def simulate(
         The design the print was made from (binary 0/255 or grey levels).
     drop_diameter_um : float, optional
         Dot diameter for the disc model, um (default: the head's ``drop_diameter_um``).
-    jitter_um, dead_nozzles, seed
-        As in :func:`place_drops`.
+    jitter_um, dead_nozzles, seed, clocks
+        As in :func:`place_drops`. Drops moved off their sites (jitter, ``clocks``) print the
+        cells of their sites from where they land.
 
     Returns
     -------
@@ -352,11 +377,11 @@ def simulate(
     check_range(jitter_um, JITTER_UM, "jitter (um)")
     # the cell model and the disc model keep about 14 float64 arrays per design pixel
     check_raster_fits(pl.width_px, pl.height_px, 112, what="the simulation of a design")
-    drops = place_drops(pr, jitter_um=jitter_um, dead_nozzles=dead_nozzles, seed=seed)
+    drops = place_drops(pr, jitter_um=jitter_um, dead_nozzles=dead_nozzles, seed=seed, clocks=clocks)
     inked = design_mask(design, pr.head.grey_levels)
     px, py = pl.pitch_x_mm, pl.pitch_y_mm
     printed_disc = _printed_mask(drops, inked.shape, px, py, d_um * 1e-3 / 2)
-    printed = _cell_mask(pr, inked.shape, dead_nozzles, drops, jitter_um > 0)
+    printed = _cell_mask(pr, inked.shape, dead_nozzles, drops, jitter_um > 0 or bool(clocks))
     h, w = inked.shape
     c0 = np.clip(np.floor(drops.col).astype(np.int64), 0, w - 1)
     r0 = np.clip(np.floor(drops.row).astype(np.int64), 0, h - 1)
