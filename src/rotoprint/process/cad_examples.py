@@ -163,8 +163,8 @@ device = "omnidot760"
 tilt_deg = 20.0
 equalise = true
 
-[printer.clock]
-dpi_y = 360.0
+passes = "auto"          # interlaced passes at the planner's radial offsets (docs/build.md)
+# no [printer.clock] dpi_y: the drop spacing along the track follows from the pass plan, so the drops merge
 
 [[printer.heads]]
 name = "H1"
