@@ -240,10 +240,9 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
     entries: the headline is the deposit model (:func:`rotoprint.rotary.deposit.deposit_film`)
     of the layer's planned drops, every interlaced pass of every ink weighted by how often it
     prints (``deposit``: the first ink's film, ``inks``: each ink's, ``reagent_pairs``), the
-    secondary the simulator's cell model (``iou``, ``uncovered_fraction``: pixels of the design
-    whose nearest lattice site fired in some pass of the first ink)."""
-    import dataclasses
-
+    secondary the simulator's cell model of the first ink's pass 0 (``iou``,
+    ``uncovered_fraction``: pixels of the design whose nearest site of that pass's lattice
+    fired; each pass's lattice tiles the design by itself)."""
     from ..rotary.deposit import InkDrops, deposit_film, ink_drops
     from ..rotary.simulate import place_drops, render_overlay, simulate
 
@@ -264,12 +263,7 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
                 prints[(mname, ink)] = [plan.material_print(mname, h, sections, i, pass_index=q) for q in range(h.passes)]
             cycles = plan.estimates[mname].cycles
             weighted = _weighted_passes(job, mname, prints, cycles)
-            sims = [simulate(pr, ref8) for pr, _ in weighted[inks[0]]]
-            printed = np.logical_or.reduce([s.printed for s in sims])
-            design = sims[0].inked
-            union = int((printed | design).sum())
-            iou = float((printed & design).sum() / union) if union else 1.0
-            unc = float((design & ~printed).sum() / design.sum()) if design.any() else 0.0
+            sim = simulate(weighted[inks[0]][0][0], ref8)  # the cell model of pass 0 (each pass's lattice tiles the design)
             sets = []
             for ink in inks:
                 parts = []
@@ -281,14 +275,13 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
                                pairs=[(0, 1)] if len(sets) == 2 else [])
             films = {ink: {k: v for k, v in f.to_json().items() if k != "radial_bins"} for ink, f in zip(inks, dep.films)}
             name = f"overlays/layer_{i:05d}-{mname}.png"
-            (tmp / name).write_bytes(_png_rgb(render_overlay(dataclasses.replace(sims[0], printed=printed), scale=2)))
+            (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))
             overlays.append({"layer": i, "material": mname, "ink": inks[0], "head": plan.head(inks[0]).name, "file": name,
-                             "interlace_passes": len(sims), "cycles": cycles,
+                             "interlace_passes": len(weighted[inks[0]]), "cycles": cycles,
                              "deposit": films[inks[0]], "inks": films, "reagent_pairs": list(dep.pairs),
                              "uncovered_fraction_worst_ink": max(f["uncovered_fraction"] for f in films.values()),
-                             "iou": iou, "uncovered_fraction": unc,
-                             "drops_outside": sum(s.report.drops_outside for s in sims),
-                             "mean_error_um": float(np.mean([s.report.mean_error_um for s in sims]))})
+                             "cell_model": "pass 0", "iou": sim.report.iou, "uncovered_fraction": sim.report.uncovered_fraction,
+                             "drops_outside": sim.report.drops_outside, "mean_error_um": sim.report.mean_error_um})
     step("simulate", total, total)
     return overlays
 

@@ -29,6 +29,14 @@ from .estimates import solve_resistance
 __all__ = ["pixel_centres_model", "terminal_mask", "thickness_map_um", "solid_thickness_um", "deposited_thickness_um",
            "resistance_from_masks", "resistance_from_thickness", "coil_hand_check"]
 
+def _resistance_deposit():
+    """The deposit grid of the printed film's resistance: 3 cells per footprint (the film is
+    averaged over each design pixel, so a coarser grid than the coverage figures' does)."""
+    from ..rotary.deposit import DepositOptions
+
+    return DepositOptions(cells_per_footprint=3.0)
+
+
 #: A right-angle corner of a uniform track counts this many squares (conformal mapping; the
 #: centreline counts it as one).
 CORNER_SQUARES = 0.559
@@ -160,7 +168,7 @@ def deposited_thickness_um(plan, material: str, prints: dict[str, list[tuple[obj
         for pr, w in prints[ink.name]:
             d = ink_drops(place_drops(pr), head)
             parts.append(InkDrops(d.col, d.row, d.volume_pl * float(w)))
-        dep = deposit_film(mask, grid, head, [InkDrops.concat(parts)], keep_map=True)
+        dep = deposit_film(mask, grid, head, [InkDrops.concat(parts)], keep_map=True, options=_resistance_deposit())
         (nx, ny), (ox, oy) = dep.cells_per_pixel, dep.origin_cells
         t = dep.thickness[oy: oy + grid.height_px * ny, ox: ox + grid.width_px * nx]
         wet[ink.name] = t.reshape(grid.height_px, ny, grid.width_px, nx).mean(axis=(1, 3))

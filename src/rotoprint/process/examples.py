@@ -102,7 +102,7 @@ max_passes_per_layer = 200
 # coil is a thin film of 24 cycles per layer (the plan warns how far short of the layer it is;
 # 24 is a multiple of 2, 3 and 4 interlaced passes, so every pass prints equally often)
 cycles_per_layer = { silver = 24 }
-simulate_layers = 3
+simulate_layers = 2
 
 [[resistance]]
 part = "coil"

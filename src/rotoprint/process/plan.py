@@ -20,8 +20,9 @@ How a plan is made:
    (:func:`~rotoprint.rotary.interlace.plan_passes`) chooses radial pivot offsets whose union of
    live tracks leaves no gap the drops' footprints cannot close (dead nozzles' tracks covered by
    live ones), and the clock along the track (unless ``printer.clock.dpi_y`` is set); with
-   ``printer.equalise`` the clock is made ``ceil(1 / smallest kept share)`` times finer so
-   that no thinned track's kept drops are farther apart than planned. Every pass has its own
+   ``printer.equalise`` the tracks are then thinned as always (a kept share ``f`` of a track's
+   drops, at most ``ceil(1 / f)`` firings apart), which widens the planned lattice locally: the
+   build's deposit figures (``coverage`` in ``plan.json``) measure the film that results. Every pass has its own
    lattice (the direct slicer with the pass's pivot offset), so its own exact images. Cycle
    ``c`` of a material is printed at pass ``c mod N`` of each ink's head.
 5. Cycles: per material, one *cycle* is every ink in order, each ``repeats`` times; the
@@ -95,7 +96,7 @@ class HeadSetup:
         The planner's result (None with ``printer.passes = 1``).
     interlace : dict
         How the clock was chosen (``clock``: ``"pass plan"`` or ``"job"``,
-        ``thinning_clock_factor``), for ``plan.json``.
+        ``dpi_y``, the gaps and dead-track cover in um), for ``plan.json``.
     """
 
     index: int
@@ -591,8 +592,10 @@ def _estimate(plan: BuildPlan, mat: Material, band: tuple[float, float], v_pl: f
         warn.append(f"{name}: {cycles} cycle(s) per layer print only {cycles} of the {n_inter} interlaced passes: "
                     "the film has the gaps of fewer passes")
     if t_max > (1 + THICKNESS_SPREAD_WARN) * t_min:
+        why = ("the drops per area measured in its first layer, per 1 mm radial bin" if job.spec.printer.equalise else
+               "1/r drop density of one angular clock; set printer.equalise = true")
         warn.append(f"{name}: the thickness per cycle varies by {100 * (t_max / t_min - 1):.0f} % over radii "
-                    f"{band[0]:.1f}-{band[1]:.1f} mm (1/r drop density of one angular clock); set printer.equalise = true")
+                    f"{band[0]:.1f}-{band[1]:.1f} mm ({why})")
     for ink in mat.inks:
         if ink.warning:
             warn.append(f"{name}: {ink.warning}")
@@ -665,8 +668,7 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
             lat = slice_rotary(union, device, dpi_y=clk.dpi_y, **common)
             if sp.printer.passes == 1:
                 lats, pp, offsets = [lat], None, (0.0,)
-                info = {"passes": 1, "clock": "job" if clk.dpi_y is not None else "head", "dpi_y": lat.dpi_y,
-                        "thinning_clock_factor": 1}
+                info = {"passes": 1, "clock": "job" if clk.dpi_y is not None else "head", "dpi_y": lat.dpi_y}
             else:
                 if tilt not in interlace_cache:
                     interlace_cache[tilt] = _interlace(union, device, lat, common, sp, warnings)
@@ -720,15 +722,8 @@ def _interlace(union: Mesh, device, lat: DirectSliceJob, common: dict, sp, warni
     except GeometryError as exc:
         raise ConfigError(f"printer.passes: {exc.problem}") from None
     clk = sp.printer.clock
-    factor = 1
     if clk.dpi_y is None:
         clock = pp.dpi_y
-        if sp.printer.equalise:  # thinned tracks keep a share f of their drops: a clock 1/f finer keeps them within b
-            la = slice_rotary(union, device, dpi_y=clock, **common)
-            apd = [t.area_per_drop_mm2 for t in la.tracks if t.r_mm.size]
-            f_min = min(float(a.min()) for a in apd) / max(float(a.max()) for a in apd)
-            factor = math.ceil(1.0 / f_min - 1e-9)
-            clock *= factor
         src = "pass plan"
     else:
         clock = float(clk.dpi_y)
@@ -737,7 +732,7 @@ def _interlace(union: Mesh, device, lat: DirectSliceJob, common: dict, sp, warni
             warnings.append(f"printer.clock.dpi_y: {clock:g} dpi spaces drops {25.4e3 / clock:.1f} um along the track, "
                             f"more than the {pp.along_track_mm * 1e3:.1f} um the {d_um:.1f} um footprints close with "
                             f"{pp.passes} interlaced pass(es): the film will have gaps (leave dpi_y out to use the plan's clock)")
-    info = {"passes": pp.passes, "clock": src, "dpi_y": clock, "plan_dpi_y": pp.dpi_y, "thinning_clock_factor": factor,
+    info = {"passes": pp.passes, "clock": src, "dpi_y": clock, "plan_dpi_y": pp.dpi_y,
             "footprint_um": d_um, "largest_gap_um": pp.largest_gap_mm * 1e3,
             "single_pass_largest_gap_um": pp.single_pass_largest_gap_mm * 1e3,
             "dead_nozzles": list(pp.dead_nozzles), "dead_track_cover_um": [c * 1e3 for c in pp.dead_track_cover_mm]}
