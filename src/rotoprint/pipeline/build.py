@@ -307,7 +307,7 @@ def coverage_summary(overlays: list[dict]) -> dict:
 def stage_resistance(job, plan, layers: LayerOutputs, step: Step) -> list[dict]:
     """Resistance estimates (design and printed masks, and a hand check) of every
     ``[[resistance]]`` entry of the job."""
-    from ..process.conductance import coil_hand_check, resistance_from_masks, resistance_from_thickness
+    from ..process.conductance import coil_hand_check, resistance_from_masks, resistance_from_thickness, thickness_map_um
 
     sp = job.spec
     grid1 = plan.design_grid()
@@ -330,7 +330,9 @@ def stage_resistance(job, plan, layers: LayerOutputs, step: Step) -> list[dict]:
         if sh is not None and sh.kind == "square_coil":
             lh = sp.job.layer_height_mm
             track_layers = max(1, round(sh.height_mm / lh))
-        hand = coil_hand_check(plan, r, track_layers=track_layers)
+        region = np.logical_or.reduce(layers.design_masks[m]) if layers.design_masks[m] else None
+        t_mean = float(thickness_map_um(plan, m, gridr)[region].mean()) if region is not None and region.any() else None
+        hand = coil_hand_check(plan, r, track_layers=track_layers, per_layer_um=t_mean)
         resistance.append({"part": r.part, "material": m, "between": list(r.between),
                            "design": {**d, "oversample": RESISTANCE_OVERSAMPLE}, "printed": p, "hand_check": hand})
     step("resistance", len(sp.resistance), len(sp.resistance))

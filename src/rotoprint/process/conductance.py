@@ -219,7 +219,7 @@ def resistance_from_thickness(plan, spec, total_um: np.ndarray, grid: Placement,
     return out, res
 
 
-def coil_hand_check(plan, spec, *, track_layers: int) -> dict | None:
+def coil_hand_check(plan, spec, *, track_layers: int, per_layer_um: float | None = None) -> dict | None:
     """``R = R_s (L / w - (1 - 0.559) corners)`` for a built-in square coil, with the sheet
     thickness of ``track_layers`` layers (the track's own layers; the pads are terminals).
 
@@ -229,8 +229,11 @@ def coil_hand_check(plan, spec, *, track_layers: int) -> dict | None:
     spec : ResistanceSpec
         Its part and its two terminals.
     track_layers : int
-        Layers of the track; the thickness is ``track_layers`` times the material's smallest
-        planned thickness per layer.
+        Layers of the track; the thickness is ``track_layers`` times ``per_layer_um``.
+    per_layer_um : float, optional
+        Thickness per layer, um; default the material's smallest planned thickness per layer
+        (the build gives the mean of the planned thickness over the part's pixels, the sheet
+        the exact-region solution sees).
 
     Returns
     -------
@@ -246,7 +249,7 @@ def coil_hand_check(plan, spec, *, track_layers: int) -> dict | None:
         return None
     mat = plan.job.materials[part_spec.material]
     est = plan.estimates[part_spec.material]
-    t_um = track_layers * est.per_layer_um[0]
+    t_um = track_layers * (est.per_layer_um[0] if per_layer_um is None else float(per_layer_um))
     rs = 1.0 / (mat.conductivity_s_per_m * t_um * 1e-6)
     L, w, n = sh.track_length_mm(), sh.track_width_mm, sh.corners()
     squares = L / w - (1 - CORNER_SQUARES) * n
