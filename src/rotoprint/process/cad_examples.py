@@ -211,7 +211,7 @@ layer = { file = "coil-F_Cu.gbr", z_mm = [0.12, 0.16], tolerance_mm = 0.005 }
 
 [process]
 order = ["plaster", "silver"]
-cycles_per_layer = { silver = 30 }
+cycles_per_layer = { silver = 24 }   # a multiple of 2, 3 and 4 interlaced passes
 simulate_layers = 2
 
 [[resistance]]
