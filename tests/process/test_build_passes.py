@@ -120,7 +120,11 @@ def test_build_in_passes_headline_coverage_machine_and_sidecars(tmp_path):
     for p in im["passes"]:
         side = json.loads((tmp_path / "out" / p["sidecar"]).read_text())
         assert all(s["pass_offset_mm"] == p["pass_offset_mm"] for s in side["swathes"])
-    assert "film" in (tmp_path / "out" / "report.html").read_text()
+    html = (tmp_path / "out" / "report.html").read_text()
+    table = html[html.index("<table id='coverage'>"):]
+    table = table[: table.index("</table>")]
+    assert "<td>plaster</td>" in table and f"<b>{100 * cov['uncovered_fraction']:.2f} %</b>" in table
+    assert "true volume per area of the planned drops" in html
     prog = json.loads((tmp_path / "out" / "machine" / "program.json").read_text())
     rev = [s for L in prog["layers"] for s in L["steps"] if s["kind"] == "revolution"]
     assert [s["interlace"] for s in rev if s["head"] == "H1" and s["repeat"] == 0] == [c % n for c in range(4)]
