@@ -264,7 +264,7 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
         w(f"<h3>{_e(r['part'])}: {_e(r['between'][0])} to {_e(r['between'][1])}</h3><table>"
           "<tr><th>estimate</th><th>resistance</th><th>pixels solved</th></tr>"
           f"<tr><td>exact region, grid / {d['oversample']}</td><td>{_fmt(d['resistance_ohm'])} ohm</td><td>{d['unknowns']}</td></tr>"
-          f"<tr><td>printed pixels (simulated drops)</td><td>{_fmt(p['resistance_ohm'])} ohm</td><td>{p['unknowns']}</td></tr>")
+          f"<tr><td>deposited film (the planned drops of every pass)</td><td>{_fmt(p['resistance_ohm'])} ohm</td><td>{p['unknowns']}</td></tr>")
         if hc:
             w(f"<tr><td>hand check: {_e(hc['formula'])}; L = {hc['track_length_mm']:.2f} mm, w = {hc['track_width_mm']:g} mm, "
               f"{hc['corners']} corners, t = {hc['thickness_um']:.3g} um, R_s = {hc['sheet_resistance_ohm']:.4g} ohm/sq</td>"
