@@ -4,9 +4,7 @@ area, the deposit model's coverage as the headline, dead nozzles covered by the 
 
 from __future__ import annotations
 
-import dataclasses
 import json
-import math
 
 import numpy as np
 import pytest
