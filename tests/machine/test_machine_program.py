@@ -239,7 +239,7 @@ def test_replay_refuses_altered_and_missing_files_impossible_stage_and_unreachab
         shutil.rmtree(p.parent)
         shutil.copytree(backup, p.parent)
 
-    img = p.parent / "layers" / "layer_00000" / "plaster-ammonium_sulphate-s0.bin"
+    img = p.parent / "layers" / "layer_00000" / "plaster-ammonium_sulphate-p1-s0.bin"  # interlaced pass 1 of N
     data = bytearray(img.read_bytes())
     data[7] ^= 0x10
     img.write_bytes(bytes(data))
@@ -248,15 +248,18 @@ def test_replay_refuses_altered_and_missing_files_impossible_stage_and_unreachab
     restore()
     img.unlink()
     code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
-    assert code == 2 and "is missing" in err and "plaster-ammonium_sulphate-s0.bin" in err
+    assert code == 2 and "is missing" in err and "plaster-ammonium_sulphate-p1-s0.bin" in err
     restore()
 
+    steps1 = json.loads(backup.joinpath("program.json").read_text())["layers"][1]["steps"]
+    k = next(j for j, st in enumerate(steps1) if j >= 2 and st["kind"] == "revolution")
+
     def stage(prog):
-        prog["layers"][1]["steps"][2]["radial_stage_mm"] = 250.0
+        prog["layers"][1]["steps"][k]["radial_stage_mm"] = 250.0
 
     _edit(p, stage)
     code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
-    n = json.loads(backup.joinpath("program.json").read_text())["layers"][1]["steps"][2]["n"]
+    n = steps1[k]["n"]
     assert code == 2 and f"layer 1 step {n} (revolution of H" in err and "radial stage position 250.0 mm is outside" in err
     restore()
 
