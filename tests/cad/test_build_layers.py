@@ -127,7 +127,8 @@ def test_bundled_cad_example_two_layers_build_and_report(tmp_path, run_cli):
     for part, mat in (("body", "plaster"), ("vias", "silver"), ("coil", "silver")):
         assert f"<td>{part}</td>" in table and mat in table
     r = plan["resistance"][0]
-    assert r["between"] == ["COIL_OUT", "COIL_IN"] and 2000 < r["design"]["resistance_ohm"] < 5000
+    # one 20 um layer of 24 cycles at the pass plan's clock: about 2.5 um of silver, 2.8 ohm/sq, about 470 squares
+    assert r["between"] == ["COIL_OUT", "COIL_IN"] and 900 < r["design"]["resistance_ohm"] < 2000
 
 
 def test_layer_part_bad_terminal_and_file_one_line(tmp_path, run_cli):

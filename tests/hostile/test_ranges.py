@@ -271,7 +271,7 @@ def job_text(work) -> str:
 @pytest.mark.parametrize(
     "old,new,names",
     [
-        ("cycles_per_layer = { silver = 30 }", f"cycles_per_layer = {{ silver = {2**63 - 1} }}", ["cycles_per_layer"]),
+        ("cycles_per_layer = { silver = 24 }", f"cycles_per_layer = {{ silver = {2**63 - 1} }}", ["cycles_per_layer"]),
         ("inner_radius_mm = 70.0", "inner_radius_mm = 1e300", ["inner_radius_mm"]),
         ("\nangle_deg = 0.0", "\nangle_deg = inf", ["placement.angle_deg"]),
         ("mount_angle_deg = 60.0", "mount_angle_deg = 1e300", ["mount_angle_deg"]),

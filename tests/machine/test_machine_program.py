@@ -61,18 +61,22 @@ def test_replay_of_the_coil_program_gives_simulates_figures_for_every_layer_and_
     job, res, prog_path = coil
     rep = replay_program(prog_path, angles="nominal")
     plan = plan_job(job)
-    by = {(r["layer"], r["material"], r["ink"]): r for r in rep["images"]}
+    by = {(r["layer"], r["material"], r["ink"], r["interlace"]): r for r in rep["images"]}
     n = 0
     for i in range(len(plan)):
         sched = plan.layer(i)
         secs = plan.sections(i)
-        for (m, ink), pr in sched.images.items():
+        for (m, ink), prs in sched.pass_images.items():
             ref = plan.reference_image(m, secs).astype(np.uint8) * 255
-            sim = simulate(pr, ref).report.to_json()
-            _same(by[(i, m, ink)], sim)
-            assert by[(i, m, ink)]["head"] == plan.head(ink).name
-            n += 1
-    assert n == len(rep["images"]) and n > 15
+            for q, pr in enumerate(prs):  # every interlaced pass is its own print in the program
+                if q > 1 and i % 5:
+                    continue  # every pass of every fifth layer, passes 0 and 1 of the others (time)
+                sim = simulate(pr, ref).report.to_json()
+                _same(by[(i, m, ink, q)], sim)
+                assert by[(i, m, ink, q)]["head"] == plan.head(ink).name
+                n += 1
+    assert len(rep["images"]) == sum(len(prs) for i in range(len(plan)) for prs in plan.layer(i).pass_images.values())
+    assert n > 15 and {r["interlace"] for r in rep["images"]} == set(range(plan.heads[0].passes))
     assert {r["head"] for r in rep["images"]} == {h.name for h in plan.heads}
     assert rep["iou"] == min(r["iou"] for r in rep["images"])
 
@@ -85,9 +89,9 @@ def test_replay_with_the_deposit_model_gives_the_builds_film_figures(coil):
     plan = plan_job(job)
     sched = plan.layer(2)
     secs = plan.sections(2)
-    assert len(rep["images"]) == len(sched.images) > 0
+    assert len(rep["images"]) == sum(len(p) for p in sched.pass_images.values()) > 0
     for r in rep["images"][:2]:
-        pr = sched.images[(r["material"], r["ink"])]
+        pr = sched.pass_images[(r["material"], r["ink"])][r["interlace"]]
         sim = simulate(pr, plan.reference_image(r["material"], secs).astype(np.uint8) * 255)
         film = deposit_film(sim.inked, pr.placement, pr.head, [ink_drops(sim.drops, pr.head)]).films[0].to_json()
         _same(r["deposit"], {k: v for k, v in film.items() if k not in ("radial_bins", "grid_um")})
@@ -112,8 +116,21 @@ def test_program_time_is_the_sum_of_its_steps_and_the_plans_estimate(coil):
     rev = [s for s in steps if s["kind"] == "revolution"]
     assert prog["totals"]["revolutions"] == len(rev)
     for s in rev[:50]:
-        assert {"layer", "pass", "head", "ink", "swathe", "radial_stage_mm", "multiplier", "divider",
-                "angle_error_per_rev_deg", "index_offset_counts", "firings", "image", "sha256", "time_s"} <= s.keys()
+        assert {"layer", "pass", "interlace", "pass_offset_mm", "head", "ink", "swathe", "radial_stage_mm", "multiplier",
+                "divider", "angle_error_per_rev_deg", "index_offset_counts", "firings", "image", "sha256", "time_s"} <= s.keys()
+    # one revolution per interlaced pass: cycle c at pass c mod N, the stage at the swathe's pivot plus the pass's offset
+    heads = {h["name"]: h for h in prog["heads"]}
+    images = {im["file"]: im for L in prog["layers"] for im in L["images"]}
+    assert {s["interlace"] for s in rev} == set(range(heads["H1"]["passes"])) and heads["H1"]["passes"] > 1
+    for s in rev:
+        h = heads[s["head"]]
+        assert s["interlace"] == s["cycle"] % h["passes"]
+        assert s["pass_offset_mm"] == h["pass_offsets_mm"][s["interlace"]]
+        sw = h["swathes"][s["swathe"]]
+        assert s["radial_stage_mm"] == pytest.approx(sw["radial_stage_mm"] + s["pass_offset_mm"], abs=1e-9)
+        if s["image"]:
+            im = images[s["image"]]
+            assert im["interlace"] == s["interlace"] and im["pivot_radius_mm"] == pytest.approx(s["radial_stage_mm"], abs=1e-12)
     txt = (prog_path.parent / "program.txt").read_text()
     assert txt.count(" rev ") == len(rev) and "flash heat at 150 C for 60 s" in txt
 
@@ -179,13 +196,13 @@ def test_replay_with_other_bit_depths_and_row_delays_in_the_program(tmp_path, bi
     for r in rep["images"]:
         sched = plan.layer(r["layer"])
         ref = plan.reference_image(r["material"], plan.sections(r["layer"])).astype(np.uint8) * 255
-        _same(r, simulate(sched.images[(r["material"], r["ink"])], ref).report.to_json())
+        _same(r, simulate(sched.pass_images[(r["material"], r["ink"])][r["interlace"]], ref).report.to_json())
 
 
 def test_machine_limits_are_checked_when_the_job_is_built(tmp_path):
     from rotoprint.errors import ConfigError
 
-    for machine, msg in [({"radial_stage_mm": [0.0, 40.0]}, "machine.radial_stage_mm: head H1 swathe 0 needs the radial stage at"),
+    for machine, msg in [({"radial_stage_mm": [0.0, 40.0]}, "machine.radial_stage_mm: head H1 swathe 0 pass 0 needs the radial stage at"),
                          ({"max_platform_rpm": 10.0}, "machine.max_platform_rpm: head H1 swathe 0 turns the platform at"),
                          ({"head_frequency_hz": 4000.0}, "machine.head_frequency_hz: head H1 fires at 8000 Hz"),
                          ({"encoder_counts_per_rev": 1000, "clock_max_multiplier": 1, "clock_max_divider": 1},
@@ -223,7 +240,7 @@ def test_replay_refuses_altered_and_missing_files_impossible_stage_and_unreachab
         shutil.rmtree(p.parent)
         shutil.copytree(backup, p.parent)
 
-    img = p.parent / "layers" / "layer_00000" / "plaster-ammonium_sulphate-s0.bin"
+    img = p.parent / "layers" / "layer_00000" / "plaster-ammonium_sulphate-p1-s0.bin"  # interlaced pass 1 of N
     data = bytearray(img.read_bytes())
     data[7] ^= 0x10
     img.write_bytes(bytes(data))
@@ -232,15 +249,18 @@ def test_replay_refuses_altered_and_missing_files_impossible_stage_and_unreachab
     restore()
     img.unlink()
     code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
-    assert code == 2 and "is missing" in err and "plaster-ammonium_sulphate-s0.bin" in err
+    assert code == 2 and "is missing" in err and "plaster-ammonium_sulphate-p1-s0.bin" in err
     restore()
 
+    steps1 = json.loads(backup.joinpath("program.json").read_text())["layers"][1]["steps"]
+    k = next(j for j, st in enumerate(steps1) if j >= 2 and st["kind"] == "revolution")
+
     def stage(prog):
-        prog["layers"][1]["steps"][2]["radial_stage_mm"] = 250.0
+        prog["layers"][1]["steps"][k]["radial_stage_mm"] = 250.0
 
     _edit(p, stage)
     code, out, err = run_cli("replay", p, "--out", tmp_path / "o.png")
-    n = json.loads(backup.joinpath("program.json").read_text())["layers"][1]["steps"][2]["n"]
+    n = steps1[k]["n"]
     assert code == 2 and f"layer 1 step {n} (revolution of H" in err and "radial stage position 250.0 mm is outside" in err
     restore()
 

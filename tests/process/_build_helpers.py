@@ -14,8 +14,9 @@ HEADS = [
 ]
 
 
-def job_dict(parts, *, layer_height_mm=0.05, tilt_deg=20.0, equalise=True, heads=None, **extra) -> dict:
-    """A small job as a dict (the parsed TOML)."""
+def job_dict(parts, *, layer_height_mm=0.05, tilt_deg=20.0, equalise=True, heads=None, passes=None, **extra) -> dict:
+    """A small job as a dict (the parsed TOML); ``passes`` sets ``printer.passes`` (default:
+    left out, i.e. ``"auto"``)."""
     d = {
         "job": {"name": "test", "layer_height_mm": layer_height_mm},
         "printer": {"device": "omnidot760", "tilt_deg": tilt_deg, "equalise": equalise,
@@ -23,6 +24,8 @@ def job_dict(parts, *, layer_height_mm=0.05, tilt_deg=20.0, equalise=True, heads
         "placement": {"inner_radius_mm": 60.0, "angle_deg": 0.0},
         "parts": copy.deepcopy(parts),
     }
+    if passes is not None:
+        d["printer"]["passes"] = passes
     d.update(copy.deepcopy(extra))
     return d
 

@@ -37,9 +37,11 @@ def test_build_pass_order_repeats_and_post_steps():
     assert kinds[n_pl:n_pl + 2] == [("pass", "silver_nitrate"), ("pass", "ascorbate")]
     assert kinds[-1][0] == "post" and "flash heat" in kinds[-1][1]
     assert sum(1 for k in kinds if k[0] == "pass") == n_pl + 6
-    # cycles: the fewest that reach the layer height at the thinnest point
+    # cycles: the fewest that reach the layer height at the thinnest point, a multiple of the interlaced passes
     est = plan.estimates["plaster"]
-    assert est.cycles * est.per_cycle_um[0] >= 50.0 > (est.cycles - 1) * est.per_cycle_um[0]
+    n = est.interlace_passes
+    assert n == plan.heads[0].passes > 1 and est.cycles % n == 0
+    assert est.cycles * est.per_cycle_um[0] >= 50.0 > (est.cycles - n) * est.per_cycle_um[0]
     assert any("crystallises" in w for w in plan.warnings)
     assert any("silver: 3 cycle(s) per layer" in w for w in plan.warnings)
 
@@ -74,7 +76,7 @@ def test_build_single_part_images_equal_the_direct_slicer(equalise):
     slice_rotary's for the part at angle (placement angle - mount angle)."""
     parts = [{"name": "ring", "material": "plaster", "priority": 1,
               "shape": {"kind": "cylinder", "radius_mm": 4.0, "height_mm": 0.15, "segments": 40}}]
-    job = parse_job(job_dict(parts, equalise=equalise))
+    job = parse_job(job_dict(parts, equalise=equalise, passes=1))  # interlaced passes: tests/process/test_build_passes.py
     plan = plan_job(job)
     dev = load_device("omnidot760")
     mesh = Mesh.from_triangles(job.spec.parts[0].shape.triangles())

@@ -33,7 +33,7 @@ def report_summary(res, *, label: str = "") -> None:
         console.print(styled(("warning:", "yellow"), f" {w}"), soft_wrap=True)
     if s["resistance"]:
         t = Table(title="Resistance estimates", title_justify="left")
-        for c in ("part", "terminals", "exact region", "printed pixels", "hand check"):
+        for c in ("part", "terminals", "exact region", "deposited film", "hand check"):
             t.add_column(c)
         for r in s["resistance"]:
             if "error" in r:

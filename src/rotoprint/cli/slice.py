@@ -165,13 +165,15 @@ def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, rad
     if not isinstance(dev, InkjetDevice):
         raise ConfigError(f"device {dev.name!r} is a projector; --rotary needs an inkjet device")
     if passes != "1":
+        from ..constants import DEFAULT_GAP_RADIUS_MM
         from ..pipeline.passes import slice_rotary_passes
+        from ..rotary.options import RotarySliceOptions
 
-        man = slice_rotary_passes(m, dev, out, passes=passes, layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius,
-                                  angle_deg=angle, direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes,
-                                  fill=fill, gap_radius_mm=gap_radius, reference_images=reference_images,
-                                  options={"equalise": equalise, **options}, mesh_path=mesh_path, equalise=equalise,
-                                  force=force, inputs=inputs)
+        ro = RotarySliceOptions(layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius, angle_deg=angle,
+                                direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes, equalise=equalise,
+                                fill=fill, gap_radius_mm=DEFAULT_GAP_RADIUS_MM if gap_radius is None else gap_radius)
+        man = slice_rotary_passes(m, dev, out, ro, passes=passes, reference_images=reference_images,
+                                  record={"equalise": equalise, **options}, run=RunOptions(force=force, inputs=tuple(inputs)))
         if not quiet:
             pp = man["pass_plan"]
             console.print(f"{pp['passes']} interlaced pass(es), offsets {', '.join(f'{o * 1000:.1f}' for o in pp['offsets_mm'])} um, "

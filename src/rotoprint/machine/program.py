@@ -195,7 +195,9 @@ class MachineWriter:
         for r in self._heads:
             for s in r["swathes"]:
                 c = s["clock"]
-                self._line(f"head {r['name']} ({r['ink']}) swathe {s['swathe']}: stage {s['radial_stage_mm']:.4f} mm, "
+                stage = (f"stage {s['radial_stage_mm']:.4f} mm" if len(s["pass_stage_mm"]) == 1 else
+                         "stage " + " / ".join(f"{v:.4f}" for v in s["pass_stage_mm"]) + " mm (interlaced passes)")
+                self._line(f"head {r['name']} ({r['ink']}) swathe {s['swathe']}: {stage}, "
                            f"clock x{c['multiplier']}/{c['divider']}, angle error {c['angle_error_per_rev_deg']:.3g} deg/rev "
                            f"({c['angle_error_per_rev_steps']:.3g} firing steps){'  FLAGGED' if c['flagged'] else ''}, "
                            f"{s['platform_rpm']:.2f} rpm, {s['revolution_s']:.4f} s/rev"
@@ -213,10 +215,12 @@ class MachineWriter:
         for j, t in enumerate(h.lattice.tracks):
             where = f"head {h.name} swathe {j}"
             pivot = float(t.pivot_radius_mm)
+            stages = [float(la.tracks[j].pivot_radius_mm) for la in h.pass_lattices]  # pass q: pivot + its offset
             lo, hi = m.radial_stage_mm
-            if not lo <= pivot <= hi:
-                raise ConfigError(f"machine.radial_stage_mm: {where} needs the radial stage at {pivot:.4f} mm, outside "
-                                  f"[{lo:g}, {hi:g}] mm")
+            for q, st in enumerate(stages):
+                if not lo <= st <= hi:
+                    raise ConfigError(f"machine.radial_stage_mm: {where}" + (f" pass {q}" if len(stages) > 1 else "")
+                                      + f" needs the radial stage at {st:.4f} mm, outside [{lo:g}, {hi:g}] mm")
             rev_s = 2 * math.pi / t.dphi_rad / h.frequency_hz
             rpm = 60.0 / rev_s
             if rpm > m.max_platform_rpm:
@@ -227,7 +231,8 @@ class MachineWriter:
                                 max_divider=m.clock_max_divider)
             except ConfigError as exc:
                 raise ConfigError(f"machine.encoder_counts_per_rev: {where}: {exc.problem}") from None
-            sws.append({"swathe": j, "radial_stage_mm": pivot, "dphi_rad": float(t.dphi_rad),
+            sws.append({"swathe": j, "radial_stage_mm": pivot, "pass_stage_mm": stages,
+                        "pass_offsets_mm": [float(o) for o in h.pass_offsets_mm], "dphi_rad": float(t.dphi_rad),
                         "frequency_hz": h.frequency_hz, "revolution_s": rev_s, "platform_rpm": rpm,
                         "clock": c.to_json(), "clocked_dphi_rad": c.clocked_dphi_rad,
                         "row_offsets_firings": row_offsets_firings(
@@ -235,6 +240,7 @@ class MachineWriter:
                             direction=self.plan.job.spec.printer.direction, dphi_rad=t.dphi_rad)
                         if self.opts.row_delays == "program" else None})
         return {"index": h.index, "name": h.name, "ink": h.ink, "tilt_deg": h.tilt_deg, "mount_angle_deg": h.mount_angle_deg,
+                "passes": h.passes, "pass_offsets_mm": [float(o) for o in h.pass_offsets_mm],
                 "direction": self.plan.job.spec.printer.direction, "frequency_hz": h.frequency_hz,
                 "model": self.plan.device.head.model_dump(mode="json"), "swathes": sws}
 
@@ -278,7 +284,8 @@ class MachineWriter:
         (self.folder / rel_dir).mkdir()
         images = []
         by_key = {}
-        for (mname, ink), pr in sched.images.items():
+        every = [(mname, ink, q, pr, len(prs)) for (mname, ink), prs in sched.pass_images.items() for q, pr in enumerate(prs)]
+        for mname, ink, q, pr, n_pass in every:
             hrec = self._index[self.plan.head(ink).index]
             for j, sw in enumerate(pr.swathes):
                 lv = sw.levels
@@ -289,10 +296,12 @@ class MachineWriter:
                     lv, dfirst = shift_rows(lv, self.rows_of, offs)
                     first += dfirst
                 words = pack_levels(lv, self.bits, self.order)
-                name = f"{rel_dir}/{mname}-{ink}-s{j}"
+                key = f"{mname}-{ink}-s{j}" if n_pass == 1 else f"{mname}-{ink}-p{q + 1}-s{j}"
+                name = f"{rel_dir}/{key}"
                 sha = self._write(name + ".bin", packed_bytes(words))
-                rec = {"key": f"{mname}-{ink}-s{j}", "material": mname, "ink": ink, "head": hrec["name"], "head_index": hrec["index"],
-                       "swathe": j, "interlace": 0, "file": name + ".bin", "sha256": sha, "firings": int(lv.shape[0]),
+                rec = {"key": key, "material": mname, "ink": ink, "head": hrec["name"], "head_index": hrec["index"],
+                       "swathe": j, "interlace": q, "pass_offset_mm": hrec["pass_offsets_mm"][q],
+                       "file": name + ".bin", "sha256": sha, "firings": int(lv.shape[0]),
                        "nozzles": int(lv.shape[1]), "words_per_row": int(words.shape[1]), "first_firing_index": int(first),
                        "row_offsets_firings": offs, "drops": int(np.count_nonzero(lv)),
                        "enabled_nozzles": sw.enabled_nozzles,
@@ -307,11 +316,12 @@ class MachineWriter:
                 rec["index_error_deg"] = (round(exact) - exact) * 360.0 / n_counts
                 if self.opts.tiff:
                     desc = json.dumps({"rotoprint": "machine", "layer": i, "material": mname, "ink": ink, "swathe": j,
+                                       **({"pass": q} if n_pass > 1 else {}),
                                        "bits": self.bits, "rows": "firings", "columns": "nozzles in the head's order"})
                     rec["tiff"] = name + ".tif"
                     rec["tiff_sha256"] = self._write(name + ".tif", tiff_bytes(lv, self.bits, self.order, description=desc))
                 images.append(rec)
-                by_key[(mname, ink, j)] = rec
+                by_key[(mname, ink, q, j)] = rec
         design_recs = []
         for mname in sorted(designs):
             d = np.asarray(designs[mname], bool)
@@ -329,11 +339,12 @@ class MachineWriter:
             for c in range(b.cycles):
                 for ps in b.passes:
                     hrec = self._index[ps.head_index]
+                    q = b.interlace_of(ps.ink, c)  # the interlaced pass of this cycle
                     for rep in range(ps.repeats):
                         for s in hrec["swathes"]:
                             j = s["swathe"]
-                            rec = by_key.get((b.material, ps.ink, j))
-                            stage = s["radial_stage_mm"]
+                            rec = by_key.get((b.material, ps.ink, q, j))
+                            stage = s["pass_stage_mm"][q]
                             if self._stage.get(hrec["name"]) != stage:
                                 prev = self._stage.get(hrec["name"])
                                 if prev is not None or m.radial_move_s:
@@ -344,7 +355,8 @@ class MachineWriter:
                                 self._stage[hrec["name"]] = stage
                             c_ = s["clock"]
                             st = self._step(steps, {
-                                "kind": "revolution", "layer": i, "pass": p, "cycle": c, "repeat": rep, "interlace": 0,
+                                "kind": "revolution", "layer": i, "pass": p, "cycle": c, "repeat": rep, "interlace": q,
+                                "pass_offset_mm": hrec["pass_offsets_mm"][q],
                                 "material": b.material, "ink": ps.ink, "head": hrec["name"], "swathe": j,
                                 "radial_stage_mm": stage, "frequency_hz": s["frequency_hz"],
                                 "multiplier": c_["multiplier"], "divider": c_["divider"],
@@ -357,7 +369,8 @@ class MachineWriter:
                             self._printing += st["time_s"]
                             if c_["flagged"]:
                                 self._flagged.add((hrec["name"], j))
-                            self._line(f"  {st['n']:7d} rev    pass {p} cycle {c} {b.material}/{ps.ink} on {hrec['name']} "
+                            self._line(f"  {st['n']:7d} rev    pass {p} cycle {c}" + (f" interlace {q}" if hrec["passes"] > 1 else "")
+                                       + f" {b.material}/{ps.ink} on {hrec['name']} "
                                        f"swathe {j}  stage {stage:.4f} mm  clock x{c_['multiplier']}/{c_['divider']} "
                                        f"(err {c_['angle_error_per_rev_deg']:.2g} deg/rev{' FLAGGED' if c_['flagged'] else ''})  "
                                        + (f"index {rec['index_offset_counts']}  {rec['firings']} firings  {rec['file']} "

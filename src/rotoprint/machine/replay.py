@@ -186,6 +186,7 @@ class ReplayImage:
     clocks: dict
     files: dict
     steps: dict
+    interlace: int = 0
 
 
 class _Files:
@@ -271,11 +272,11 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
                 designs[d["material"]] = unpack_levels(w, 1, np.arange(d["width_px"])) * np.uint8(255)
             except RotoprintError as exc:
                 raise InputFileError(f"{where}: {exc.problem}", path=p) from None
-        groups: dict[tuple[str, str], list[dict]] = {}
-        for r in lay["images"]:
-            groups.setdefault((r["material"], r["ink"]), []).append(r)
+        groups: dict[tuple[str, str, int], list[dict]] = {}
+        for r in lay["images"]:  # one print per interlaced pass
+            groups.setdefault((r["material"], r["ink"], int(r.get("interlace", 0))), []).append(r)
         out = []
-        for (mname, ink), rs in groups.items():
+        for (mname, ink, q), rs in groups.items():
             h = heads[rs[0]["head"]]
             model: InkjetHead = h["_model"]
             order = nozzle_order(model.nozzles, model.rows, odd_row=nn["odd_row"], descending=nn["direction"] == "descending")
@@ -312,7 +313,7 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
             if mname not in designs:
                 raise InputFileError(f"layer {i}: no design region of {mname} for its images", path=p)
             out.append(ReplayImage(layer=i, material=mname, ink=ink, head=h["name"], print=pr, design=designs[mname],
-                                   clocks=clocks, files=files_of, steps=steps))
+                                   clocks=clocks, files=files_of, steps=steps, interlace=q))
         yield lay, out
 
 
@@ -390,7 +391,7 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
                                "max_drop_displacement_um": float(moved_um[sel].max()) if sel.any() else 0.0})
             if keep_layer is not None and im.layer == keep_layer:
                 sims.append((im, sim))
-            r = {"layer": im.layer, "material": im.material, "ink": im.ink, "head": im.head,
+            r = {"layer": im.layer, "material": im.material, "ink": im.ink, "head": im.head, "interlace": im.interlace,
                  "method": im.print.method, "tilt_deg": im.print.tilt_deg, "swathes": len(im.print.swathes),
                  **sim.report.to_json(),
                  "max_drop_displacement_um": max(s_["max_drop_displacement_um"] for s_ in per_sw), "swathe_clocks": per_sw}

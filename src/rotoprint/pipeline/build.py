@@ -12,7 +12,8 @@ output, see :mod:`rotoprint.io.ownership`, or with ``force``)::
                                    warnings, printability, resistance, and per layer the
                                    ordered passes with their image files and SHA-256
     report.html                    self-contained report (no network)
-    layers/layer_00000/MATERIAL-INK.png (+ .json sidecar; -s1, -s2 for several swathes)
+    layers/layer_00000/MATERIAL-INK.png (+ .json sidecar; -s1, -s2 for several swathes;
+                                   MATERIAL-INK-p1.png, -p2, ... per interlaced pass)
     machine/                       packed firing data, TIFF planes, program.json/.txt (docs/machine.md)
     overlays/layer_00000-MATERIAL.png   simulator overlays of a few layers
 """
@@ -62,7 +63,7 @@ class LayerOutputs:
     composites: list[bytes] = field(default_factory=list)
     present: dict[str, list[int]] = field(default_factory=dict)
     design_masks: dict[str, list[np.ndarray]] = field(default_factory=dict)
-    printed_masks: dict[str, list[np.ndarray]] = field(default_factory=dict)
+    printed_thickness: dict[str, list[np.ndarray]] = field(default_factory=dict)
     total_time_s: float = 0.0
 
 
@@ -149,9 +150,9 @@ def stage_layers(job, plan, tmp: Path, step: Step, mw=None) -> LayerOutputs:
     design and printed masks of the materials with a resistance estimate; with ``mw`` (the
     machine writer of :func:`rotoprint.machine.program.machine_stage`) every layer is also
     streamed into ``machine/`` (progress as the ``machine`` step)."""
+    from ..process.conductance import deposited_thickness_um
     from ..report.colours import composite_image
     from ..rotary.files import print_files
-    from ..rotary.simulate import simulate
 
     sp = job.spec
     n = len(plan)
@@ -159,7 +160,7 @@ def stage_layers(job, plan, tmp: Path, step: Step, mw=None) -> LayerOutputs:
     grid1 = plan.design_grid()
     res_materials = {job.part(r.part).material for r in sp.resistance}
     out = LayerOutputs(present={m: [] for m in order}, design_masks={m: [] for m in res_materials},
-                       printed_masks={m: [] for m in res_materials})
+                       printed_thickness={m: [] for m in res_materials})
     for i in range(n):
         step("layers", i, n)
         sched = plan.layer(i)
@@ -167,17 +168,24 @@ def stage_layers(job, plan, tmp: Path, step: Step, mw=None) -> LayerOutputs:
         ldir = tmp / "layers" / f"layer_{i:05d}"
         ldir.mkdir()
         images = []
-        for (mname, ink), pr in sched.images.items():
+        for (mname, ink), prs in sched.pass_images.items():
             h = plan.head(ink)
-            blobs, side = print_files(pr, f"{mname}-{ink}.png", device_name=plan.device.name,
-                                      design={"source": f"{mname} in layer {i} (overlaps resolved by priority)", "layer": i})
-            for name, data in blobs.items():
-                (ldir / name).write_bytes(data)
-            images.append({"material": mname, "ink": ink, "head": h.name, "head_index": h.index,
-                           "mount_angle_deg": h.mount_angle_deg,
-                           "sidecar": f"layers/layer_{i:05d}/{mname}-{ink}.json",
-                           "swathes": [{"file": f"layers/layer_{i:05d}/{s['file']}", "sha256": s["sha256"],
-                                        "drops": s["drops"], "firings": s["firings"]} for s in side["swathes"]]})
+            passes = []
+            for q, pr in enumerate(prs):
+                stem = f"{mname}-{ink}" if len(prs) == 1 else f"{mname}-{ink}-p{q + 1}"
+                blobs, side = print_files(pr, f"{stem}.png", device_name=plan.device.name,
+                                          design={"source": f"{mname} in layer {i} (overlaps resolved by priority)", "layer": i})
+                for name, data in blobs.items():
+                    (ldir / name).write_bytes(data)
+                passes.append({"pass": q, "pass_offset_mm": h.pass_offsets_mm[q], "sidecar": f"layers/layer_{i:05d}/{stem}.json",
+                               "swathes": [{"file": f"layers/layer_{i:05d}/{s['file']}", "sha256": s["sha256"],
+                                            "drops": s["drops"], "firings": s["firings"],
+                                            "pivot_radius_mm": s["pivot_radius_mm"]} for s in side["swathes"]]})
+            entry = {"material": mname, "ink": ink, "head": h.name, "head_index": h.index,
+                     "mount_angle_deg": h.mount_angle_deg, "sidecar": passes[0]["sidecar"], "swathes": passes[0]["swathes"]}
+            if len(prs) > 1:
+                entry["passes"] = passes
+            images.append(entry)
         sections = plan.sections(i)
         masks = {}
         for b in sched.blocks:
@@ -190,13 +198,9 @@ def stage_layers(job, plan, tmp: Path, step: Step, mw=None) -> LayerOutputs:
         for m in res_materials:
             if m in masks:
                 out.design_masks[m].append(plan.reference_image(m, sections, oversample=RESISTANCE_OVERSAMPLE))
-                cov = None
-                for ink in job.materials[m].inks:
-                    pr = plan.material_print(m, plan.head(ink.name), sections, i, thinned=False)
-                    ref = masks[m].astype(np.uint8) * 255
-                    p = simulate(pr, ref).printed
-                    cov = p if cov is None else (cov & p)
-                out.printed_masks[m].append(cov)
+                blk = next(b for b in sched.blocks if b.material == m)
+                out.printed_thickness[m].append(
+                    deposited_thickness_um(plan, m, _weighted_passes(job, m, sched.pass_images, blk.cycles), grid1))
         if mw is not None:
             step("machine", i, n)
             mw.add_layer(sched, masks)
@@ -205,6 +209,17 @@ def stage_layers(job, plan, tmp: Path, step: Step, mw=None) -> LayerOutputs:
             "blocks": [b.to_json() for b in sched.blocks], "images": images,
         })
     step("layers", n, n)
+    return out
+
+
+def _weighted_passes(job, material: str, prints: dict, cycles: int) -> dict[str, list[tuple[object, float]]]:
+    """Per ink of ``material``: each interlaced pass's print (``prints[(material, ink)]``) and
+    how often it prints in the layer (the cycles at that pass x the ink's repeats)."""
+    out = {}
+    for ink in job.materials[material].inks:
+        prs = prints[(material, ink.name)]
+        n = len(prs)
+        out[ink.name] = [(pr, (cycles // n + (q < cycles % n)) * ink.repeats) for q, pr in enumerate(prs)]
     return out
 
 
@@ -221,37 +236,78 @@ def _simulate_layers(present: dict[str, list[int]], k: int) -> dict[str, list[in
 
 
 def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: Step) -> list[dict]:
-    """Simulator overlays of a few layers per material (coverage before density thinning)
-    into ``tmp/overlays``; returns their ``overlays`` entries."""
-    from ..rotary.deposit import deposit_film, ink_drops
-    from ..rotary.simulate import render_overlay, simulate
+    """The film of a few layers per material into ``tmp/overlays`` and their ``overlays``
+    entries: the headline is the deposit model (:func:`rotoprint.rotary.deposit.deposit_film`)
+    of the layer's planned drops, every interlaced pass of every ink weighted by how often it
+    prints (``deposit``: the first ink's film, ``inks``: each ink's, ``reagent_pairs``), the
+    secondary the simulator's cell model of the first ink's pass 0 (``iou``,
+    ``uncovered_fraction``: pixels of the design whose nearest site of that pass's lattice
+    fired; each pass's lattice tiles the design by itself)."""
+    from ..rotary.deposit import InkDrops, deposit_film, ink_drops
+    from ..rotary.simulate import place_drops, render_overlay, simulate
 
     pick = _simulate_layers(present, job.spec.process.simulate_layers)
     total = sum(len(v) for v in pick.values())
     overlays = []
+    head = plan.device.head
     for mname, idx in pick.items():
-        ink0 = job.materials[mname].inks[0].name
+        inks = [ink.name for ink in job.materials[mname].inks]
         for i in idx:
             step("simulate", len(overlays), total)
             sections = plan.sections(i)
-            pr = plan.material_print(mname, plan.head(ink0), sections, i, thinned=False)
-            ref = plan.reference_image(mname, sections).astype(np.uint8) * 255
-            sim = simulate(pr, ref)
-            film = deposit_film(sim.inked, pr.placement, pr.head, [ink_drops(sim.drops, pr.head)]).films[0].to_json()
+            ref = plan.reference_image(mname, sections)
+            ref8 = ref.astype(np.uint8) * 255
+            prints = {}
+            for ink in inks:
+                h = plan.head(ink)
+                prints[(mname, ink)] = [plan.material_print(mname, h, sections, i, pass_index=q) for q in range(h.passes)]
+            cycles = plan.estimates[mname].cycles
+            weighted = _weighted_passes(job, mname, prints, cycles)
+            sim = simulate(weighted[inks[0]][0][0], ref8)  # the cell model of pass 0 (each pass's lattice tiles the design)
+            sets = []
+            for ink in inks:
+                parts = []
+                for pr, w in weighted[ink]:
+                    d = ink_drops(place_drops(pr), head)
+                    parts.append(InkDrops(d.col, d.row, d.volume_pl * float(w)))
+                sets.append(InkDrops.concat(parts))
+            dep = deposit_film(ref, weighted[inks[0]][0][0].placement, head, sets,
+                               pairs=[(0, 1)] if len(sets) == 2 else [])
+            films = {ink: {k: v for k, v in f.to_json().items() if k != "radial_bins"} for ink, f in zip(inks, dep.films)}
             name = f"overlays/layer_{i:05d}-{mname}.png"
             (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))
-            overlays.append({"layer": i, "material": mname, "ink": ink0, "head": plan.head(ink0).name, "file": name,
-                             "deposit": {k: v for k, v in film.items() if k != "radial_bins"},
-                             "iou": sim.report.iou, "uncovered_fraction": sim.report.uncovered_fraction,
+            overlays.append({"layer": i, "material": mname, "ink": inks[0], "head": plan.head(inks[0]).name, "file": name,
+                             "interlace_passes": len(weighted[inks[0]]), "cycles": cycles,
+                             "deposit": films[inks[0]], "inks": films, "reagent_pairs": list(dep.pairs),
+                             "uncovered_fraction_worst_ink": max(f["uncovered_fraction"] for f in films.values()),
+                             "cell_model": "pass 0", "iou": sim.report.iou, "uncovered_fraction": sim.report.uncovered_fraction,
                              "drops_outside": sim.report.drops_outside, "mean_error_um": sim.report.mean_error_um})
     step("simulate", total, total)
     return overlays
 
 
+def coverage_summary(overlays: list[dict]) -> dict:
+    """Per material, the headline coverage of ``plan.json`` and the report: the deposit
+    model's worst uncovered fraction of the interior over the simulated layers and inks, the
+    thinnest-to-mean ratio, and the cell model's lowest IoU (secondary)."""
+    out: dict[str, dict] = {}
+    for o in overlays:
+        m = out.setdefault(o["material"], {"model": "deposit", "layers": [], "uncovered_fraction": 0.0, "thinnest_to_mean": None,
+                                            "band_uncovered_fraction": 0.0, "mean_um": [], "cell_model_iou": None})
+        m["layers"].append(o["layer"])
+        m["uncovered_fraction"] = max(m["uncovered_fraction"], o["uncovered_fraction_worst_ink"])
+        m["band_uncovered_fraction"] = max(m["band_uncovered_fraction"], max(f["band_uncovered_fraction"] for f in o["inks"].values()))
+        ttm = min(f["thinnest_to_mean"] for f in o["inks"].values())
+        m["thinnest_to_mean"] = ttm if m["thinnest_to_mean"] is None else min(m["thinnest_to_mean"], ttm)
+        m["mean_um"].append(o["deposit"]["mean_um"])
+        m["cell_model_iou"] = o["iou"] if m["cell_model_iou"] is None else min(m["cell_model_iou"], o["iou"])
+    return out
+
+
 def stage_resistance(job, plan, layers: LayerOutputs, step: Step) -> list[dict]:
     """Resistance estimates (design and printed masks, and a hand check) of every
     ``[[resistance]]`` entry of the job."""
-    from ..process.conductance import coil_hand_check, resistance_from_masks
+    from ..process.conductance import coil_hand_check, resistance_from_masks, resistance_from_thickness, thickness_map_um
 
     sp = job.spec
     grid1 = plan.design_grid()
@@ -262,7 +318,10 @@ def stage_resistance(job, plan, layers: LayerOutputs, step: Step) -> list[dict]:
         m = job.part(r.part).material
         try:
             d, _ = resistance_from_masks(plan, r, layers.design_masks[m], gridr)
-            p, _ = resistance_from_masks(plan, r, layers.printed_masks[m], grid1)
+            films = layers.printed_thickness[m]
+            total = np.sum(films, axis=0) if films else np.zeros((grid1.height_px, grid1.width_px))
+            p, _ = resistance_from_thickness(plan, r, total, grid1, layers=len(films))
+            p["model"] = "deposit: the film the planned drops of every pass deposit (process/conductance.py)"
         except RotoprintError as exc:
             resistance.append({"part": r.part, "between": list(r.between), "error": exc.problem})
             continue
@@ -271,7 +330,9 @@ def stage_resistance(job, plan, layers: LayerOutputs, step: Step) -> list[dict]:
         if sh is not None and sh.kind == "square_coil":
             lh = sp.job.layer_height_mm
             track_layers = max(1, round(sh.height_mm / lh))
-        hand = coil_hand_check(plan, r, track_layers=track_layers)
+        region = np.logical_or.reduce(layers.design_masks[m]) if layers.design_masks[m] else None
+        t_mean = float(thickness_map_um(plan, m, gridr)[region].mean()) if region is not None and region.any() else None
+        hand = coil_hand_check(plan, r, track_layers=track_layers, per_layer_um=t_mean)
         resistance.append({"part": r.part, "material": m, "between": list(r.between),
                            "design": {**d, "oversample": RESISTANCE_OVERSAMPLE}, "printed": p, "hand_check": hand})
     step("resistance", len(sp.resistance), len(sp.resistance))
@@ -383,6 +444,7 @@ def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: b
             "printability": checks,
             "resistance": resistance,
             "interdigitated": _interdigitated(job),
+            "coverage": coverage_summary(overlays),
             "overlays": overlays,
             "timings_s": timings,
             "layers_detail": layers.layers_json,
@@ -394,6 +456,7 @@ def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: b
     summary = {
         "layers": len(plan), "heads": len(plan.heads), "warnings": plan.warnings, "resistance": resistance,
         "printability_ok": all(c["ok"] for c in checks) if checks else None,
+        "coverage": plan_json["coverage"],
         "estimated_print_time_s": layers.total_time_s,
         "timings_s": all_timings, "plan_sha256": hashlib.sha256(text.encode()).hexdigest(),
         "machine": machine_totals,

@@ -6,58 +6,78 @@ from __future__ import annotations
 __all__ = ["slice_rotary_passes"]
 
 
-def slice_rotary_passes(mesh, device, out_dir, *, passes: str | int = "auto", layer_height_mm: float, tilt_deg: float,
-                        inner_radius_mm: float, angle_deg: float = 0.0, direction: int = 1, ref_radius_mm: float | None = None,
-                        max_swathes: int | None = None, fill: str = "nonzero", gap_radius_mm: float | None = None,
-                        reference_images: bool = False, options: dict | None = None, mesh_path=None,
-                        equalise: bool = False, force: bool = False, inputs=()) -> dict:
+def slice_rotary_passes(mesh, device, out_dir, options, *, passes: str | int = "auto", reference_images: bool = False,
+                        record: dict | None = None, run=None) -> dict:
     """Direct rotary slicing in interlaced passes: ``DIR-p1/``, ``DIR-p2/``, ... (each a complete
     rotary slice folder of :func:`~rotoprint.pipeline.write_rotary_slices`, its swathes'
     pivots moved by the pass's offset, at the plan's clock) and ``DIR-passes.json`` listing the
-    plan and the folders. ``equalise`` thins each pass's tracks as the direct slicer does.
+    plan and the folders.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Its ``source`` is recorded as the mesh's path.
+    device : InkjetDevice
+    out_dir : str or Path
+        ``DIR``: the folders are made beside it.
+    options : RotarySliceOptions
+        Layer height, tilt, placement, clock, direction, swathe limit, fill, gap radius,
+        equalisation (each pass's tracks thinned as the direct slicer does); its
+        ``pivot_offset_mm`` is replaced by each pass's offset and its ``dpi_y``, when None, by
+        the plan's clock.
+    passes : int or 'auto'
+    reference_images : bool
+        Also write each layer's Cartesian design image.
+    record : dict, optional
+        More options to record in every folder's manifest (JSON values).
+    run : RunOptions, optional
+        ``force`` and ``inputs`` (and the workers) of the writes.
 
     Returns
     -------
     dict
         The passes manifest as written.
     """
+    import dataclasses
     import json
     from pathlib import Path
 
     from ..io.atomic import write_owned_file
     from ..rotary.deposit import DepositOptions
-    from ..constants import DEFAULT_GAP_RADIUS_MM
     from ..rotary.direct import PartPlacement, slice_rotary
     from ..rotary.interlace import PASSES_FORMAT, parse_passes, plan_passes
+    from ..rotary.options import RotarySliceOptions, options_from
     from ..rotary.swathes import plan_swathes
     from .outputs import write_rotary_slices
     from .producer import RunOptions
 
+    opts = options_from(RotarySliceOptions, options, {}, what="slice_rotary_passes")
+    run = run or RunOptions()
     head = device.head
     n = parse_passes(passes)
-    part = PartPlacement.for_mesh(mesh, inner_radius_mm=inner_radius_mm, angle_deg=angle_deg)
+    part = PartPlacement.for_mesh(mesh, inner_radius_mm=opts.inner_radius_mm, angle_deg=opts.angle_deg)
     design = part.design_placement(head.pitch_mm, 25.4 / head.dpi_y)
     r_in, r_out = design.radial_range_mm()
-    sp = plan_swathes(head, tilt_deg=float(tilt_deg), inner_radius_mm=r_in, outer_radius_mm=r_out,
-                      mount_angle_deg=0.0, direction=int(direction), max_swathes=max_swathes)
+    sp = plan_swathes(head, tilt_deg=float(opts.tilt_deg), inner_radius_mm=r_in, outer_radius_mm=r_out,
+                      mount_angle_deg=0.0, direction=int(opts.direction), max_swathes=opts.max_swathes)
     pp = plan_passes(head, sp, footprint_um=DepositOptions().full_footprint_um(head), passes=n)
+    clock = pp.dpi_y if opts.dpi_y is None else float(opts.dpi_y)
     out = Path(out_dir)
     folders = [out.with_name(f"{out.name}-p{q + 1}") for q in range(pp.passes)]
-    gap = DEFAULT_GAP_RADIUS_MM if gap_radius_mm is None else gap_radius_mm
     for q, (off, folder) in enumerate(zip(pp.offsets_mm, folders)):
-        job = slice_rotary(mesh, device, layer_height_mm=layer_height_mm, tilt_deg=tilt_deg, inner_radius_mm=inner_radius_mm,
-                           angle_deg=angle_deg, dpi_y=pp.dpi_y, ref_radius_mm=ref_radius_mm, direction=direction,
-                           max_swathes=max_swathes, equalise=equalise, fill=fill, gap_radius_mm=gap, pivot_offset_mm=off)
-        opts = {"layer_height_mm": layer_height_mm, "tilt_deg": tilt_deg, "radius_mm": inner_radius_mm, "angle_deg": angle_deg,
-                "direction": direction, "ref_radius_mm": ref_radius_mm, "max_swathes": max_swathes, "fill": fill,
-                "gap_radius_mm": gap, "reference_images": reference_images, "pass": q, "passes": pp.passes,
-                "pass_offset_mm": off, "dpi_y": pp.dpi_y, **(options or {})}
-        mesh_info = {"path": str(mesh_path or ""), "triangles": int(mesh.faces.shape[0])}
-        write_rotary_slices(job, folder, device_name=device.name, options=opts, mesh_info=mesh_info,
-                            reference_images=reference_images, run=RunOptions(force=force, inputs=tuple(inputs)))
-    manifest = {"format": PASSES_FORMAT, "version": 1, "device": device.name, "tilt_deg": float(tilt_deg), "dpi_y": pp.dpi_y,
+        job = slice_rotary(mesh, device, dataclasses.replace(opts, dpi_y=clock, pivot_offset_mm=off))
+        rec = {"layer_height_mm": opts.layer_height_mm, "tilt_deg": opts.tilt_deg, "radius_mm": opts.inner_radius_mm,
+               "angle_deg": opts.angle_deg, "direction": opts.direction, "ref_radius_mm": opts.ref_radius_mm,
+               "max_swathes": opts.max_swathes, "fill": opts.fill, "gap_radius_mm": opts.gap_radius_mm,
+               "reference_images": reference_images, "pass": q, "passes": pp.passes, "pass_offset_mm": off, "dpi_y": clock,
+               **(record or {})}
+        mesh_info = {"path": str(getattr(mesh, "source", None) or ""), "triangles": int(mesh.faces.shape[0])}
+        write_rotary_slices(job, folder, device_name=device.name, options=rec, mesh_info=mesh_info,
+                            reference_images=reference_images, run=run)
+    manifest = {"format": PASSES_FORMAT, "version": 1, "device": device.name, "tilt_deg": float(opts.tilt_deg), "dpi_y": clock,
                 "pass_plan": pp.to_json(), "folders": [f.name for f in folders],
                 "files": [], "layer_sidecars": "FOLDER/layer_NNNNN.json in each folder: the passes of layer NNNNN"}
     mp = out.with_name(out.name + "-passes.json")
-    write_owned_file(mp, (json.dumps(manifest, indent=2) + "\n").encode("utf-8"), kind="passes", inputs=inputs, force=force)
+    write_owned_file(mp, (json.dumps(manifest, indent=2) + "\n").encode("utf-8"), kind="passes", inputs=run.inputs,
+                     force=run.force)
     return manifest

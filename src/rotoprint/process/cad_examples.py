@@ -163,8 +163,8 @@ device = "omnidot760"
 tilt_deg = 20.0
 equalise = true
 
-[printer.clock]
-dpi_y = 360.0
+passes = "auto"          # interlaced passes at the planner's radial offsets (docs/build.md)
+# no [printer.clock] dpi_y: the drop spacing along the track follows from the pass plan, so the drops merge
 
 [[printer.heads]]
 name = "H1"
@@ -211,7 +211,7 @@ layer = { file = "coil-F_Cu.gbr", z_mm = [0.12, 0.16], tolerance_mm = 0.005 }
 
 [process]
 order = ["plaster", "silver"]
-cycles_per_layer = { silver = 30 }
+cycles_per_layer = { silver = 24 }   # a multiple of 2, 3 and 4 interlaced passes
 simulate_layers = 2
 
 [[resistance]]

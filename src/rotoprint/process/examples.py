@@ -67,8 +67,8 @@ tilt_deg = 20.0
 direction = 1
 equalise = true          # the same drops per mm2 at every radius (inner tracks thinned)
 
-[printer.clock]
-dpi_y = 360.0            # drops per inch along each swathe's outermost track
+passes = "auto"          # interlaced passes at the planner's radial offsets (docs/build.md)
+# no [printer.clock] dpi_y: the drop spacing along the track follows from the pass plan, so the drops merge
 """ + _HEADS.format(ink5="polyepoxide", ink6="diamine") + """
 [placement]
 inner_radius_mm = 60.0   # the assembly's inner edge (smallest X) on the platform
@@ -96,9 +96,10 @@ shape = { kind = "box", size_mm = [22.0, 22.0, 0.1], origin_mm = [-3.0, -3.0, 0.
 order = ["plaster", "silver", "epoxy"]
 max_passes_per_layer = 200
 # silver forms about 17 nm per cycle: a full 20 um layer would need over 1000 cycles, so the
-# coil is a thin film of 30 cycles per layer (the plan warns how far short of the layer it is)
-cycles_per_layer = { silver = 30 }
-simulate_layers = 3
+# coil is a thin film of 24 cycles per layer (the plan warns how far short of the layer it is;
+# 24 is a multiple of 2, 3 and 4 interlaced passes, so every pass prints equally often)
+cycles_per_layer = { silver = 24 }
+simulate_layers = 2
 
 [[resistance]]
 part = "coil"
@@ -118,8 +119,8 @@ device = "omnidot760"
 tilt_deg = 20.0
 equalise = true
 
-[printer.clock]
-dpi_y = 360.0
+passes = "auto"          # interlaced passes at the planner's radial offsets (docs/build.md)
+# no [printer.clock] dpi_y: the drop spacing along the track follows from the pass plan, so the drops merge
 """ + _HEADS.format(ink5="acyl_thiol", ink6="polyamine") + """
 [placement]
 inner_radius_mm = 70.0
@@ -145,7 +146,7 @@ mesh = "gas-well.stl"    # a 14 x 14 mm frame, 1 mm wall, 0.1 mm high, on the su
 
 [process]
 order = ["plaster", "silver", "polyamide"]
-cycles_per_layer = { silver = 30 }
+cycles_per_layer = { silver = 24 }
 simulate_layers = 2
 
 [[resistance]]

@@ -10,6 +10,7 @@
     device = "omnidot760"      # preset or device .toml (relative: from the job file's folder)
     tilt_deg = 20.0
     equalise = true            # thin inner tracks: the same drops per mm2 at every radius
+    passes = "auto"            # interlaced passes per layer (1..64 or "auto", the default)
     [printer.clock]
     dpi_y = 360.0              # drops per inch along the track at the reference radius
     [[printer.heads]]
@@ -40,7 +41,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
@@ -116,10 +117,18 @@ class HeadSpec(_Strict):
 
 
 class PrinterSpec(_Strict):
+    """The printer. ``passes``: interlaced passes per layer (docs/build.md): each layer's
+    cycles of a material are printed in turn at the pass plan's radial offsets
+    (:func:`rotoprint.rotary.interlace.plan_passes`); ``"auto"`` (the default) lets the planner
+    choose up to :data:`~rotoprint.rotary.interlace.MAX_PASSES` so that the drops' footprints
+    close the film, and then the clock follows from the plan unless ``clock.dpi_y`` is set;
+    ``1`` prints every cycle at the planned pivots with the job's clock (no interlace)."""
+
     device: str = "omnidot760"
     tilt_deg: Annotated[float, R.field(R.TILT_DEG)] = 0.0
     direction: int = 1
     equalise: bool = True
+    passes: Annotated[int, Field(ge=1, le=64)] | Literal["auto"] = "auto"
     max_swathes: Annotated[int, R.field(R.SWATHES)] | None = None
     clock: ClockSpec = ClockSpec()
     heads: tuple[HeadSpec, ...] = Field(min_length=1)

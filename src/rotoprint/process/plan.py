@@ -16,9 +16,21 @@ How a plan is made:
 3. Overlaps: a drop of a part is removed where its landing point is inside a part of another
    material with a higher priority (the same exact inside rule, on the same lattice, without
    density thinning), so every drop site belongs to at most one material.
-4. Passes: per material, one *cycle* is every ink in order, each ``repeats`` times; the
-   cycles per layer are the fewest that make the thinnest point of the material (lowest drop
-   density over its radial band) reach the layer height, from :mod:`.estimates`. More passes
+4. Interlaced passes (``printer.passes``, default ``"auto"``): per head the pass planner
+   (:func:`~rotoprint.rotary.interlace.plan_passes`) chooses radial pivot offsets whose union of
+   live tracks leaves no gap the drops' footprints cannot close (dead nozzles' tracks covered by
+   live ones), and the clock along the track (unless ``printer.clock.dpi_y`` is set); with
+   ``printer.equalise`` the tracks are then thinned as always (a kept share ``f`` of a track's
+   drops, at most ``ceil(1 / f)`` firings apart), which widens the planned lattice locally: the
+   build's deposit figures (``coverage`` in ``plan.json``) measure the film that results. Every pass has its own
+   lattice (the direct slicer with the pass's pivot offset), so its own exact images. Cycle
+   ``c`` of a material is printed at pass ``c mod N`` of each ink's head.
+5. Cycles: per material, one *cycle* is every ink in order, each ``repeats`` times; the
+   cycles per layer are the fewest that make the thinnest 1 mm radial bin of the material
+   reach the layer height, with the *true* volume per area of the planned drops: the drops
+   of every pass of the material's first layer, counted per track radius, over the design
+   area in that bin (:func:`measured_drop_density`). With interlace the computed cycles are
+   rounded up to a multiple of the passes (every offset printed equally often). More passes
    than ``process.max_passes_per_layer`` give a warning and are capped.
 """
 
@@ -36,6 +48,7 @@ from ..devices import InkjetDevice, load_device
 from ..errors import ConfigError, RotoprintError
 from ..mesh import Mesh
 from ..rotary.direct import DirectSliceJob, PartPlacement, rasterize_section, slice_rotary
+from ..rotary.interlace import PassPlan
 from ..rotary.placement import Placement
 from ..rotary.printdata import RotaryPrint
 from ..slicing import slice_mesh
@@ -66,13 +79,24 @@ class HeadSetup:
     Attributes
     ----------
     lattice : DirectSliceJob
-        Direct slicer for the assembly in the head's frame (with the job's equalisation).
+        Direct slicer for the assembly in the head's frame (with the job's equalisation), of
+        pass 0 (``pass_lattices[0]``).
     inside : DirectSliceJob
         The same lattice without thinning: "landing point inside" for priority masks.
     r_mm, density_per_mm2 : (M,) float64
-        Track radii and drops per mm^2 (after equalisation when on).
+        Track radii and drops per mm^2 of pass 0's lattice (after equalisation when on).
     revolution_s : tuple of float
         Time of one revolution per swathe at the clock frequency.
+    pass_lattices, pass_inside : tuple of DirectSliceJob
+        One per interlaced pass: the lattice with that pass's pivot offset (and without
+        thinning).
+    pass_offsets_mm : tuple of float
+        Radial pivot offset of each pass (pass 0: 0).
+    pass_plan : PassPlan or None
+        The planner's result (None with ``printer.passes = 1``).
+    interlace : dict
+        How the clock was chosen (``clock``: ``"pass plan"`` or ``"job"``,
+        ``dpi_y``, the gaps and dead-track cover in um), for ``plan.json``.
     """
 
     index: int
@@ -86,6 +110,21 @@ class HeadSetup:
     density_per_mm2: np.ndarray
     frequency_hz: float
     revolution_s: tuple[float, ...]
+    pass_lattices: tuple[DirectSliceJob, ...] = ()
+    pass_inside: tuple[DirectSliceJob, ...] = ()
+    pass_offsets_mm: tuple[float, ...] = (0.0,)
+    pass_plan: PassPlan | None = None
+    interlace: dict = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not self.pass_lattices:
+            object.__setattr__(self, "pass_lattices", (self.lattice,))
+            object.__setattr__(self, "pass_inside", (self.inside,))
+
+    @property
+    def passes(self) -> int:
+        """Interlaced passes of this head."""
+        return len(self.pass_lattices)
 
     def density_at(self, r_mm) -> np.ndarray:
         """Drops per mm^2 at radii ``r_mm`` (linear between tracks, held beyond them)."""
@@ -96,6 +135,10 @@ class HeadSetup:
             "index": self.index, "name": self.name, "ink": self.ink, "mount_angle_deg": self.mount_angle_deg,
             "tilt_deg": self.tilt_deg, "frequency_hz": self.frequency_hz,
             "revolution_s": list(self.revolution_s), "swathes": len(self.lattice.tracks),
+            "passes": self.passes, "pass_offsets_mm": list(self.pass_offsets_mm),
+            "pass_plan": self.pass_plan.to_json() if self.pass_plan is not None else None,
+            "interlace": self.interlace,
+            "pass_pivots_mm": [[float(t.pivot_radius_mm) for t in lat.tracks] for lat in self.pass_lattices],
             "density_per_mm2": {"min": float(self.density_per_mm2.min()), "max": float(self.density_per_mm2.max())},
             "lattice": self.lattice.to_json(),
         }
@@ -122,7 +165,9 @@ class MaterialEstimate:
 
     ``per_pass_wet_um`` per ink: wet film of one pass at the band's lowest and highest
     density; ``per_cycle_um``: solid of one cycle (min, max over the band); ``cycles``: per
-    layer; ``per_layer_um``: ``cycles * per_cycle`` (min, max)."""
+    layer; ``per_layer_um``: ``cycles * per_cycle`` (min, max). The densities are the true
+    volume per area of the planned drops (``density_source``, :func:`measured_drop_density`):
+    ``drops_per_mm2`` per ink, the mean over the interlaced passes, per profile bin."""
 
     material: str
     band_mm: tuple[float, float]
@@ -135,10 +180,14 @@ class MaterialEstimate:
     profile_r_mm: np.ndarray
     profile_per_layer_um: np.ndarray
     warnings: tuple[str, ...]
+    interlace_passes: int = 1
+    density_source: dict = field(default_factory=dict)
+    drops_per_mm2: dict = field(default_factory=dict)
 
     def to_json(self) -> dict:
-        d = {k: v for k, v in dataclasses.asdict(self).items() if not k.startswith("profile")}
-        d["profile"] = {"r_mm": self.profile_r_mm.round(4).tolist(), "per_layer_um": self.profile_per_layer_um.round(5).tolist()}
+        d = {k: v for k, v in dataclasses.asdict(self).items() if not k.startswith("profile") and k != "drops_per_mm2"}
+        d["profile"] = {"r_mm": self.profile_r_mm.round(4).tolist(), "per_layer_um": self.profile_per_layer_um.round(5).tolist(),
+                        "drops_per_mm2": {k: np.asarray(v).round(4).tolist() for k, v in self.drops_per_mm2.items()}}
         return d
 
 
@@ -152,14 +201,21 @@ class MaterialBlock:
     post_steps: tuple[str, ...]
     drops: dict[str, int]
     thickness_um: tuple[float, float]
+    interlace: dict[str, int] = field(default_factory=dict)
+    drops_by_pass: dict[str, tuple[int, ...]] = field(default_factory=dict)
 
     @property
     def pass_count(self) -> int:
         return self.cycles * sum(p.repeats for p in self.passes)
 
+    def interlace_of(self, ink: str, cycle: int) -> int:
+        """The interlaced pass cycle ``cycle`` of ``ink`` is printed at: ``cycle mod N``."""
+        return cycle % self.interlace.get(ink, 1)
+
     def to_json(self) -> dict:
         return {"material": self.material, "cycles": self.cycles, "passes_per_cycle": [p.to_json() for p in self.passes],
                 "passes": self.pass_count, "post_steps": list(self.post_steps), "drops_per_pass": self.drops,
+                "interlace_passes": dict(self.interlace), "drops_by_interlace_pass": {k: list(v) for k, v in self.drops_by_pass.items()},
                 "thickness_um": list(self.thickness_um)}
 
 
@@ -168,7 +224,9 @@ class LayerSchedule:
     """Layer ``index``: the material blocks in print order and the print-ready images.
 
     ``images[(material, ink)]`` is the :class:`RotaryPrint` for that ink's head (one
-    ``(F, N) uint8`` image per swathe); ``time_s`` the estimated printing time."""
+    ``(F, N) uint8`` image per swathe) of interlaced pass 0, ``pass_images[(material, ink)]``
+    those of every pass (``pass_images[k][0] is images[k]``); ``time_s`` the estimated
+    printing time."""
 
     index: int
     z_bottom_mm: float
@@ -176,6 +234,7 @@ class LayerSchedule:
     blocks: tuple[MaterialBlock, ...]
     images: dict[tuple[str, str], RotaryPrint] = field(repr=False)
     time_s: float
+    pass_images: dict[tuple[str, str], tuple[RotaryPrint, ...]] = field(default_factory=dict, repr=False)
 
     def sequence(self) -> list[dict]:
         """The layer's steps in order, cycles expanded: ``{"kind": "pass"|"post", ...}``."""
@@ -183,7 +242,7 @@ class LayerSchedule:
         for b in self.blocks:
             for c in range(b.cycles):
                 for p in b.passes:
-                    out.append({"kind": "pass", "cycle": c, **p.to_json()})
+                    out.append({"kind": "pass", "cycle": c, "interlace": b.interlace_of(p.ink, c), **p.to_json()})
             for s in b.post_steps:
                 out.append({"kind": "post", "material": b.material, "step": s})
         return out
@@ -284,12 +343,17 @@ class BuildPlan:
         return [q.name for q in self.job.spec.parts if q.material != part.material and q.priority > part.priority]
 
     def material_print(self, material: str, head: HeadSetup, sections: dict[str, Segments], index: int, *,
-                       thinned: bool = True) -> RotaryPrint:
-        """The print of ``material`` on ``head`` in layer ``index``, overlaps resolved.
+                       thinned: bool = True, pass_index: int = 0) -> RotaryPrint:
+        """The print of ``material`` on ``head`` in layer ``index``, overlaps resolved, of
+        interlaced pass ``pass_index`` (its own lattice, the pivots moved by its offset).
 
         ``thinned=False`` gives every lattice site inside the region (no density
-        equalisation): the coverage the drops' film makes, for the simulator's cell model."""
-        lat = head.lattice if thinned else head.inside
+        equalisation)."""
+        qp = int(pass_index)
+        if not 0 <= qp < head.passes:
+            raise IndexError(f"pass {qp} out of range 0..{head.passes - 1}")
+        lat = head.pass_lattices[qp] if thinned else head.pass_inside[qp]
+        inside = head.pass_inside[qp]
         A = self.job.spec.placement.angle_deg
         levels = None
         pr0 = None
@@ -301,14 +365,15 @@ class BuildPlan:
             blocks = [sections[q] for q in self._higher(part) if len(sections[q])]
             lv = [s.levels.copy() for s in pr.swathes]
             for q in blocks:
-                ins = head.inside.print_from_segments(q, layer_index=index)
+                ins = inside.print_from_segments(q, layer_index=index)
                 for j, s in enumerate(ins.swathes):
                     lv[j][s.levels > 0] = 0
             levels = lv if levels is None else [np.maximum(a, b) for a, b in zip(levels, lv)]
             pr0 = pr
         if pr0 is None:
             raise ConfigError(f"no part is made of {material!r}")
-        sw = tuple(dataclasses.replace(s, levels=lv) for s, lv in zip(pr0.swathes, levels))
+        extra = {} if head.passes == 1 else {"pass": qp, "passes": head.passes, "pass_offset_mm": head.pass_offsets_mm[qp]}
+        sw = tuple(dataclasses.replace(s, levels=lv, extra={**s.extra, **extra}) for s, lv in zip(pr0.swathes, levels))
         return dataclasses.replace(pr0, swathes=sw, mount_angle_deg=head.mount_angle_deg,
                                    placement=dataclasses.replace(pr0.placement, angle_deg=A))
 
@@ -318,21 +383,26 @@ class BuildPlan:
             raise IndexError(f"layer {index} out of range 0..{len(self) - 1}")
         sections = self.sections(index)
         images: dict[tuple[str, str], RotaryPrint] = {}
+        pass_images: dict[tuple[str, str], tuple[RotaryPrint, ...]] = {}
         blocks = []
         t = 0.0
         for mname in self.material_order:
             mat: Material = self.job.materials[mname]
             if not any(len(sections[p.name]) for p in self.job.spec.parts if p.material == mname):
                 continue
-            drops = {}
+            drops, by_pass, inter = {}, {}, {}
             for ink in mat.inks:
                 h = self.head(ink.name)
-                pr = self.material_print(mname, h, sections, index)
-                images[(mname, ink.name)] = pr
-                drops[ink.name] = int(sum(np.count_nonzero(s.levels) for s in pr.swathes))
-            if not any(drops.values()):
+                prs = tuple(self.material_print(mname, h, sections, index, pass_index=q) for q in range(h.passes))
+                images[(mname, ink.name)] = prs[0]
+                pass_images[(mname, ink.name)] = prs
+                by_pass[ink.name] = tuple(int(sum(np.count_nonzero(s.levels) for s in pr.swathes)) for pr in prs)
+                drops[ink.name] = by_pass[ink.name][0]
+                inter[ink.name] = h.passes
+            if not any(any(v) for v in by_pass.values()):
                 for ink in mat.inks:
                     images.pop((mname, ink.name), None)
+                    pass_images.pop((mname, ink.name), None)
                 continue
             est = self.estimates[mname]
             passes = tuple(
@@ -342,14 +412,16 @@ class BuildPlan:
             )
             blk = MaterialBlock(material=mname, cycles=est.cycles, passes=passes,
                                 post_steps=tuple(s.describe() for s in mat.post_steps), drops=drops,
-                                thickness_um=est.per_layer_um)
+                                thickness_um=est.per_layer_um, interlace=inter,
+                                drops_by_pass=by_pass if any(n > 1 for n in inter.values()) else {})
             blocks.append(blk)
             for p in passes:
                 h = self.heads[p.head_index]
                 t += est.cycles * p.repeats * (sum(h.revolution_s) + p.wait_s)
             t += sum(s.duration_s for s in mat.post_steps)
         return LayerSchedule(index=index, z_bottom_mm=float(self.layers.z_bottom_mm[index]),
-                             z_top_mm=float(self.layers.z_top_mm[index]), blocks=tuple(blocks), images=images, time_s=t)
+                             z_top_mm=float(self.layers.z_top_mm[index]), blocks=tuple(blocks), images=images, time_s=t,
+                             pass_images=pass_images)
 
     def __iter__(self) -> Iterator[LayerSchedule]:
         for i in range(len(self)):
@@ -399,24 +471,114 @@ def _band(plan_part: PartPlacement, meshes: list[Mesh]) -> tuple[float, float]:
     return r_in, r_out
 
 
-def _estimate(job: ResolvedJob, mat: Material, heads: dict[str, HeadSetup], band: tuple[float, float], v_pl: float,
-              layer_um: float) -> MaterialEstimate:
+#: Width of the radial bins of the measured drop density, mm.
+DENSITY_BIN_MM = 1.0
+#: Smallest share of the median bin's design area for a bin to count (slivers at the ends).
+DENSITY_BIN_MIN_SHARE = 0.1
+
+
+def measured_drop_density(plan: BuildPlan, material: str, band: tuple[float, float]) -> tuple[np.ndarray, dict[str, np.ndarray], dict]:
+    """The true drops per mm^2 of one pass of each of the material's inks, per radial bin.
+
+    The material's first layer with a cross-section is printed on every interlaced pass of
+    each ink's head (the planned, thinned images); every drop (a level ``L`` of ``G`` counts
+    ``L / G`` of a full drop) is counted at its track's radius, and the design area of the
+    material (its pixels on the design grid) in the same 1 mm radial bins; drops over area,
+    divided by the passes, is one pass's density.
+
+    Parameters
+    ----------
+    plan : BuildPlan
+    material : str
+    band : (float, float)
+        The material's radial band, mm (the bins' range).
+
+    Returns
+    -------
+    r_mm : (B,) float64
+        Centres of the bins that hold at least :data:`DENSITY_BIN_MIN_SHARE` of the median
+        bin's area.
+    density : dict of str to (B,) float64
+        Drops per mm^2 of one pass, per ink.
+    source : dict
+        ``layer``, ``bin_mm``, ``drops`` (per ink, all passes) and ``area_mm2`` (design area of
+        that layer), for ``plan.json``.
+    """
+    parts = [p.name for p in plan.job.spec.parts if p.material == material]
+    layer, secs = None, None
+    for i in range(len(plan)):
+        sc = plan.sections(i)
+        if any(len(sc[n]) for n in parts):
+            layer, secs = i, sc
+            break
+    lo, hi = band
+    nb = max(1, math.ceil((hi - lo) / DENSITY_BIN_MM - 1e-9))
+    edges = lo + DENSITY_BIN_MM * np.arange(nb + 1)
+    if layer is None:
+        return np.zeros(0), {ink.name: np.zeros(0) for ink in plan.job.materials[material].inks}, {"layer": None}
+    from .conductance import pixel_centres_model
+
+    grid = plan.design_grid()
+    ref = plan.reference_image(material, secs)
+    x, y = pixel_centres_model(grid, plan.placement)
+    xl, yl = plan.placement.model_to_local(x, y)
+    rr = np.hypot(xl[None, :], yl[:, None])[ref]
+    area = np.histogram(rr, bins=edges)[0] * (grid.pitch_x_mm * grid.pitch_y_mm)
+    keep = area > 0
+    if keep.any():
+        keep &= area >= DENSITY_BIN_MIN_SHARE * float(np.median(area[keep]))
+    dens, drops = {}, {}
+    g = plan.device.head.grey_levels
+    for ink in plan.job.materials[material].inks:
+        h = plan.head(ink.name)
+        counts = np.zeros(nb)
+        total = 0.0
+        for q in range(h.passes):
+            pr = plan.material_print(material, h, secs, layer, pass_index=q)
+            for sw, ts in zip(pr.swathes, h.pass_lattices[q].tracks):
+                per_col = sw.levels.sum(axis=0, dtype=np.float64) / g
+                counts += np.histogram(ts.r_mm, bins=edges, weights=per_col[ts.nozzle])[0]
+                total += float(per_col.sum())
+        with np.errstate(invalid="ignore", divide="ignore"):
+            dens[ink.name] = (counts / h.passes / area)[keep]
+        drops[ink.name] = total
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    return centres[keep], dens, {"layer": layer, "bin_mm": DENSITY_BIN_MM, "bins": int(keep.sum()), "drops": drops,
+                                 "area_mm2": float(area.sum()),
+                                 "rule": "drops of every interlaced pass of the material's first layer per track radius, "
+                                         "over its design area per radial bin, divided by the passes"}
+
+
+def _estimate(plan: BuildPlan, mat: Material, band: tuple[float, float], v_pl: float, layer_um: float) -> MaterialEstimate:
+    job = plan.job
     sp = job.spec.process
-    r = np.linspace(band[0], band[1], _PROFILE_SAMPLES)
-    dens = {ink.name: heads[ink.name].density_at(r) for ink in mat.inks}
+    r, dens, source = measured_drop_density(plan, mat.name, band)
+    if not r.size:  # no drop at all (a part thinner than the lattice): the lattice's nominal density
+        r = np.linspace(band[0], band[1], _PROFILE_SAMPLES)
+        dens = {ink.name: plan.head(ink.name).density_at(r) for ink in mat.inks}
+        source = {**source, "rule": "no drop in the material's first layer: the lattice's nominal density"}
     t_cyc = np.asarray(cycle_thickness_um(mat, v_pl, dens), np.float64)
     t_min, t_max = float(t_cyc.min()), float(t_cyc.max())
     wet = {k: (float(wet_film_um(v_pl, d.min())), float(wet_film_um(v_pl, d.max()))) for k, d in dens.items()}
+    n_inter = max(plan.head(ink.name).passes for ink in mat.inks)
+    name = mat.name
+    if not t_min > 0:
+        raise ConfigError(f"{name}: its first layer gets no drop on some inks ({', '.join(k for k, d in dens.items() if not (d > 0).all())}); "
+                          "a larger part, a finer clock or another placement", path=job.source)
     needed = cycles_for_height(layer_um, t_min)
+    if n_inter > 1:  # every interlaced pass printed equally often
+        needed = n_inter * math.ceil(needed / n_inter)
     ppc = mat.passes_per_cycle
     warn = []
-    name = mat.name
     if name in sp.cycles_per_layer:
         cycles = sp.cycles_per_layer[name]
         if cycles * t_min < (1 - SHORTFALL_WARN) * layer_um:
             warn.append(f"{name}: {cycles} cycle(s) per layer (set in the job) make {cycles * t_min:.3g} um at the "
                         f"thinnest point, {100 * (1 - cycles * t_min / layer_um):.0f} % short of the {layer_um:g} um "
                         f"layer; {needed} cycles would reach it")
+        if n_inter > 1 and cycles % n_inter:
+            warn.append(f"{name}: {cycles} cycle(s) per layer (set in the job) are not a multiple of the {n_inter} "
+                        f"interlaced passes: some passes print {cycles // n_inter + 1} times, others {cycles // n_inter}")
     elif needed * ppc > sp.max_passes_per_layer:
         cycles = max(1, sp.max_passes_per_layer // ppc)
         warn.append(f"{name}: reaching the {layer_um:g} um layer needs {needed} cycles ({needed * ppc} passes) at "
@@ -426,9 +588,14 @@ def _estimate(job: ResolvedJob, mat: Material, heads: dict[str, HeadSetup], band
                     f"set process.cycles_per_layer.{name}")
     else:
         cycles = needed
+    if n_inter > 1 and cycles < n_inter:
+        warn.append(f"{name}: {cycles} cycle(s) per layer print only {cycles} of the {n_inter} interlaced passes: "
+                    "the film has the gaps of fewer passes")
     if t_max > (1 + THICKNESS_SPREAD_WARN) * t_min:
+        why = ("the drops per area measured in its first layer, per 1 mm radial bin" if job.spec.printer.equalise else
+               "1/r drop density of one angular clock; set printer.equalise = true")
         warn.append(f"{name}: the thickness per cycle varies by {100 * (t_max / t_min - 1):.0f} % over radii "
-                    f"{band[0]:.1f}-{band[1]:.1f} mm (1/r drop density of one angular clock); set printer.equalise = true")
+                    f"{band[0]:.1f}-{band[1]:.1f} mm ({why})")
     for ink in mat.inks:
         if ink.warning:
             warn.append(f"{name}: {ink.warning}")
@@ -436,7 +603,8 @@ def _estimate(job: ResolvedJob, mat: Material, heads: dict[str, HeadSetup], band
     return MaterialEstimate(
         material=name, band_mm=band, per_pass_wet_um=wet, per_cycle_um=(t_min, t_max), cycles=cycles,
         cycles_needed=needed, passes_per_layer=cycles * ppc, per_layer_um=(cycles * t_min, cycles * t_max),
-        profile_r_mm=r, profile_per_layer_um=cycles * t_cyc, warnings=tuple(warn),
+        profile_r_mm=np.asarray(r, np.float64), profile_per_layer_um=cycles * t_cyc, warnings=tuple(warn),
+        interlace_passes=n_inter, density_source=source, drops_per_mm2=dens,
     )
 
 
@@ -485,25 +653,38 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
     union = Mesh.from_triangles(np.concatenate([m.triangles for m in meshes.values()]), source="assembly")
     used_inks = {ink.name for m in job.materials.values() for ink in m.inks}
     clk = sp.printer.clock
+    warnings: list[str] = []
     heads: list[HeadSetup] = []
+    interlace_cache: dict[float, tuple] = {}
     for j, hs in enumerate(sp.printer.heads):
         if hs.ink not in used_inks:
             continue
         tilt = sp.printer.tilt_deg if hs.tilt_deg is None else hs.tilt_deg
+        common = dict(layer_height_mm=sp.job.layer_height_mm, tilt_deg=tilt, inner_radius_mm=sp.placement.inner_radius_mm,
+                      angle_deg=sp.placement.angle_deg - hs.mount_angle_deg, ref_radius_mm=clk.ref_radius_mm,
+                      direction=sp.printer.direction, max_swathes=sp.printer.max_swathes, equalise=sp.printer.equalise,
+                      kernel=kernel)
         try:
-            lat = slice_rotary(
-                union, device, layer_height_mm=sp.job.layer_height_mm, tilt_deg=tilt,
-                inner_radius_mm=sp.placement.inner_radius_mm, angle_deg=sp.placement.angle_deg - hs.mount_angle_deg,
-                dpi_y=clk.dpi_y, ref_radius_mm=clk.ref_radius_mm, direction=sp.printer.direction,
-                max_swathes=sp.printer.max_swathes, equalise=sp.printer.equalise, kernel=kernel,
-            )
+            lat = slice_rotary(union, device, dpi_y=clk.dpi_y, **common)
+            if sp.printer.passes == 1:
+                lats, pp, offsets = [lat], None, (0.0,)
+                info = {"passes": 1, "clock": "job" if clk.dpi_y is not None else "head", "dpi_y": lat.dpi_y}
+            else:
+                if tilt not in interlace_cache:
+                    interlace_cache[tilt] = _interlace(union, device, lat, common, sp, warnings)
+                pp, clock, info = interlace_cache[tilt]
+                offsets = pp.offsets_mm
+                lats = [slice_rotary(union, device, dpi_y=clock, pivot_offset_mm=o, **common) for o in offsets]
         except RotoprintError as exc:
             fld = "printer.tilt_deg" if hs.tilt_deg is None else f"printer.heads[{j}].tilt_deg"
             if "tilt" not in exc.problem:
                 fld = f"printer.heads[{j}] ({hs.name})"
+            if exc.problem.startswith("printer."):
+                raise ConfigError(exc.problem, path=job.source) from None
             raise ConfigError(f"{fld}: {exc.problem}", path=job.source) from None
-        inside = DirectSliceJob(lat.slice_job, lat.head, lat.part, lat.design, lat.plan, lat.tracks,
-                                options=dataclasses.replace(lat.options, equalise=False), dpi_y=lat.dpi_y)
+        lat = lats[0]
+        insides = tuple(DirectSliceJob(la.slice_job, la.head, la.part, la.design, la.plan, la.tracks,
+                                       options=dataclasses.replace(la.options, equalise=False), dpi_y=la.dpi_y) for la in lats)
         r, dens = track_density_per_mm2(lat.tracks, equalised=sp.printer.equalise)
         f = device.head.max_frequency_hz if clk.frequency_hz is None else clk.frequency_hz
         if f > device.head.max_frequency_hz:
@@ -511,17 +692,48 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
                               f"{device.head.max_frequency_hz:g} Hz", path=job.source)
         rev = tuple(2 * math.pi / t.dphi_rad / f for t in lat.tracks)
         heads.append(HeadSetup(index=j, name=hs.name, ink=hs.ink, mount_angle_deg=hs.mount_angle_deg, tilt_deg=tilt,
-                               lattice=lat, inside=inside, r_mm=r, density_per_mm2=dens, frequency_hz=f, revolution_s=rev))
-    by_ink = {h.ink: h for h in heads}
+                               lattice=lat, inside=insides[0], r_mm=r, density_per_mm2=dens, frequency_hz=f, revolution_s=rev,
+                               pass_lattices=tuple(lats), pass_inside=insides, pass_offsets_mm=tuple(offsets), pass_plan=pp,
+                               interlace=info))
     part0 = heads[0].lattice.part
     v_pl = device.head.drop_volume_pl
     layer_um = sp.job.layer_height_mm * 1000
-    estimates = {}
-    warnings: list[str] = []
+    plan = BuildPlan(job, device, meshes, tuple(heads), {}, warnings, planar=planar)
     for mname, mat in job.materials.items():
         band = _band(part0, [meshes[p.name] for p in sp.parts if p.material == mname])
-        est = _estimate(job, mat, by_ink, band, v_pl, layer_um)
-        estimates[mname] = est
+        est = _estimate(plan, mat, band, v_pl, layer_um)
+        plan.estimates[mname] = est
         warnings.extend(est.warnings)
     log.debug("planned %d layers, %d heads", len(heads[0].lattice), len(heads))
-    return BuildPlan(job, device, meshes, tuple(heads), estimates, warnings, planar=planar)
+    return plan
+
+
+def _interlace(union: Mesh, device, lat: DirectSliceJob, common: dict, sp, warnings: list[str]) -> tuple:
+    """The pass plan of one tilt, its clock and the ``interlace`` record (see :func:`plan_job`)."""
+    from ..errors import GeometryError
+    from ..rotary.deposit import DepositOptions
+    from ..rotary.interlace import plan_passes
+
+    head = device.head
+    n = None if sp.printer.passes == "auto" else int(sp.printer.passes)
+    d_um = DepositOptions().full_footprint_um(head)
+    try:
+        pp = plan_passes(head, lat.plan, footprint_um=d_um, passes=n)
+    except GeometryError as exc:
+        raise ConfigError(f"printer.passes: {exc.problem}") from None
+    clk = sp.printer.clock
+    if clk.dpi_y is None:
+        clock = pp.dpi_y
+        src = "pass plan"
+    else:
+        clock = float(clk.dpi_y)
+        src = "job"
+        if 25.4 / clock > pp.along_track_mm * (1 + 1e-9):
+            warnings.append(f"printer.clock.dpi_y: {clock:g} dpi spaces drops {25.4e3 / clock:.1f} um along the track, "
+                            f"more than the {pp.along_track_mm * 1e3:.1f} um the {d_um:.1f} um footprints close with "
+                            f"{pp.passes} interlaced pass(es): the film will have gaps (leave dpi_y out to use the plan's clock)")
+    info = {"passes": pp.passes, "clock": src, "dpi_y": clock, "plan_dpi_y": pp.dpi_y,
+            "footprint_um": d_um, "largest_gap_um": pp.largest_gap_mm * 1e3,
+            "single_pass_largest_gap_um": pp.single_pass_largest_gap_mm * 1e3,
+            "dead_nozzles": list(pp.dead_nozzles), "dead_track_cover_um": [c * 1e3 for c in pp.dead_track_cover_mm]}
+    return pp, clock, info

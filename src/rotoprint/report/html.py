@@ -158,6 +158,24 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
         w(f"<tr><td>{sw}{_e(m)}</td><td>{_e(ps)}</td><td>{inks}</td><td>{post}</td><td>{est.cycles} (needed {est.cycles_needed})</td>"
           f"<td>{est.passes_per_layer}</td><td>{_fmt(est.per_layer_um[0])} - {_fmt(est.per_layer_um[1])}</td></tr>")
     w("</table>")
+    w("<p style='font-size:13px'>Cycles per layer follow from the true volume per area of the planned drops: every drop "
+      "of every interlaced pass of the material's first layer, per 1 mm radial bin of its design area (not a nominal "
+      "density); with interlaced passes they are a multiple of the passes.</p>")
+    cov = plan_json.get("coverage") or {}
+    if cov:
+        h0 = plan.heads[0]
+        w("<h3>Film coverage (deposit model)</h3>"
+          f"<p style='font-size:13px'>{h0.passes} interlaced pass(es) per layer, radial offsets "
+          f"{', '.join(f'{o * 1000:.1f}' for o in h0.pass_offsets_mm)} um, clock {h0.lattice.dpi_y:.0f} dpi "
+          f"({_e(h0.interlace.get('clock', 'job'))}). Each layer's drops of every pass and ink spread to footprints and merged; "
+          "the interior is the design less a band half a footprint wide. The cell model's IoU is secondary.</p>"
+          "<table id='coverage'><tr><th>material</th><th>layers</th><th>interior uncovered</th><th>band uncovered</th>"
+          "<th>thinnest / mean</th><th>cell model IoU</th></tr>")
+        for m, c in cov.items():
+            w(f"<tr><td>{_e(m)}</td><td>{', '.join(str(x) for x in c['layers'])}</td><td><b>{100 * c['uncovered_fraction']:.2f} %</b></td>"
+              f"<td>{100 * c['band_uncovered_fraction']:.2f} %</td><td>{_fmt(c['thinnest_to_mean'])}</td>"
+              f"<td>{_fmt(c['cell_model_iou'])}</td></tr>")
+        w("</table>")
     if plan_json.get("layer_parts"):
         w("<h3>CAD layers</h3><table id='cad-layers'><tr><th>part</th><th>material</th><th>file</th><th>z (mm)</th>"
           "<th>area (mm2)</th><th>regions / holes</th><th>narrowest track / gap (mm)</th><th>terminals</th></tr>")
@@ -246,7 +264,7 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
         w(f"<h3>{_e(r['part'])}: {_e(r['between'][0])} to {_e(r['between'][1])}</h3><table>"
           "<tr><th>estimate</th><th>resistance</th><th>pixels solved</th></tr>"
           f"<tr><td>exact region, grid / {d['oversample']}</td><td>{_fmt(d['resistance_ohm'])} ohm</td><td>{d['unknowns']}</td></tr>"
-          f"<tr><td>printed pixels (simulated drops)</td><td>{_fmt(p['resistance_ohm'])} ohm</td><td>{p['unknowns']}</td></tr>")
+          f"<tr><td>deposited film (the planned drops of every pass)</td><td>{_fmt(p['resistance_ohm'])} ohm</td><td>{p['unknowns']}</td></tr>")
         if hc:
             w(f"<tr><td>hand check: {_e(hc['formula'])}; L = {hc['track_length_mm']:.2f} mm, w = {hc['track_width_mm']:g} mm, "
               f"{hc['corners']} corners, t = {hc['thickness_um']:.3g} um, R_s = {hc['sheet_resistance_ohm']:.4g} ohm/sq</td>"

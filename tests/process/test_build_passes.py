@@ -1,0 +1,129 @@
+"""Interlaced passes on the build (issue 14): ``[printer] passes``, every pass's own exact
+images (the direct slicer with the pass's pivot offset), cycles from the measured drops per
+area, the deposit model's coverage as the headline, dead nozzles covered by the plan."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from rotoprint.errors import ConfigError
+from rotoprint.pipeline import run_build
+from rotoprint.process import parse_job
+from rotoprint.process.plan import plan_job
+from rotoprint.rotary.direct import slice_rotary
+from rotoprint.rotary.interlace import plan_passes
+from rotoprint.rotary.deposit import DepositOptions
+
+
+def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None):
+    printer = {"device": "omnidot760", "tilt_deg": 20.0, "passes": passes,
+               "heads": [{"name": "H1", "ink": "ammonium_sulphate"},
+                         {"name": "H2", "ink": "calcium_chloride", "mount_angle_deg": 90.0}]}
+    if dead is not None:  # the preset with dead nozzles, as a device file beside the job
+        from importlib.resources import files
+
+        text = (files("rotoprint.devices") / "presets" / "omnidot760.toml").read_text(encoding="utf-8")
+        assert "dead_nozzles = []" in text
+        (tmp_path / "dead.toml").write_text(text.replace("dead_nozzles = []", f"dead_nozzles = {list(dead)}"), encoding="utf-8")
+        printer["device"] = "dead.toml"
+    d = {"job": {"name": "small", "layer_height_mm": 0.05}, "printer": printer, "placement": {"inner_radius_mm": 60.0},
+         "parts": [{"name": "b", "material": "plaster", "priority": 1,
+                    "shape": {"kind": "box", "size_mm": [3, 2, 0.05], "origin_mm": [0, 0, 0]}}]}
+    if cycles:
+        d["process"] = {"cycles_per_layer": {"plaster": cycles}}
+    return parse_job(d, base_dir=tmp_path or ".", source="small.toml")
+
+
+def test_each_pass_is_the_direct_slicers_print_at_its_offset_and_the_plans_clock():
+    plan = plan_job(_job())
+    h = plan.heads[0]
+    pp = plan_passes(plan.device.head, h.lattice.plan, footprint_um=DepositOptions().full_footprint_um(plan.device.head))
+    assert h.passes == pp.passes > 1 and h.pass_offsets_mm == pp.offsets_mm
+    assert h.interlace["clock"] == "pass plan" and h.lattice.dpi_y == pytest.approx(pp.dpi_y)
+    sched = plan.layer(0)
+    prs = sched.pass_images[("plaster", h.ink)]
+    assert len(prs) == h.passes and prs[0] is sched.images[("plaster", h.ink)]
+    mesh = plan.meshes["b"]
+    for q, pr in enumerate(prs):
+        want = slice_rotary(mesh, plan.device, layer_height_mm=0.05, tilt_deg=20.0, inner_radius_mm=60.0, dpi_y=pp.dpi_y,
+                            equalise=True, pivot_offset_mm=pp.offsets_mm[q]).layer(0)
+        assert len(pr.swathes) == len(want.swathes)
+        for a, b in zip(pr.swathes, want.swathes):
+            assert a.pivot_radius_mm == pytest.approx(b.pivot_radius_mm) and np.array_equal(a.levels, b.levels)
+            assert a.extra["pass"] == q and a.extra["pass_offset_mm"] == pp.offsets_mm[q]
+    assert not np.array_equal(prs[0].swathes[0].levels, prs[1].swathes[0].levels)
+
+
+def test_cycles_follow_from_the_measured_drops_per_area_rounded_to_the_passes():
+    plan = plan_job(_job())
+    est = plan.estimates["plaster"]
+    src = est.density_source
+    assert src["layer"] == 0 and "first layer" in src["rule"]
+    # the same density by hand: every drop of every pass over the design area, per pass
+    secs = plan.sections(0)
+    g = plan.design_grid()
+    area = plan.reference_image("plaster", secs).sum() * g.pitch_x_mm * g.pitch_y_mm
+    for ink in ("ammonium_sulphate", "calcium_chloride"):
+        h = plan.head(ink)
+        drops = sum(int(np.count_nonzero(s.levels)) for q in range(h.passes)
+                    for s in plan.material_print("plaster", h, secs, 0, pass_index=q).swathes)
+        assert src["drops"][ink] == drops
+        assert src["area_mm2"] == pytest.approx(area)
+        d = est.drops_per_mm2[ink]
+        assert d.min() <= drops / h.passes / area * 1.02 and d.max() >= drops / h.passes / area * 0.98
+    n = plan.heads[0].passes
+    assert est.cycles % n == 0 and est.cycles == est.cycles_needed
+    assert (est.cycles - n) * est.per_cycle_um[0] < 50.0 <= est.cycles * est.per_cycle_um[0]
+
+
+def test_one_pass_keeps_the_job_clock_and_no_interlace():
+    plan = plan_job(_job(passes=1))
+    h = plan.heads[0]
+    assert h.passes == 1 and h.pass_plan is None and h.lattice.dpi_y == plan.device.head.dpi_y
+    sched = plan.layer(0)
+    assert all(len(p) == 1 for p in sched.pass_images.values())
+
+
+def test_bad_passes_are_refused_naming_the_field():
+    for bad in (0, 65, "many"):
+        with pytest.raises(ConfigError, match=r"^small.toml: printer\.passes"):
+            _job(passes=bad)
+
+
+def test_dead_nozzles_are_covered_by_the_plan(tmp_path):
+    ks = plan_job(_job()).heads[0].lattice.tracks[0].nozzle  # nozzles whose tracks cross the part, by radius
+    dead = tuple(sorted(int(k) for k in ks[np.linspace(5, ks.size - 6, 5).astype(int)]))
+    plan = plan_job(_job(tmp_path, dead=dead))
+    h = plan.heads[0]
+    assert h.pass_plan.dead_nozzles == dead and h.interlace["dead_nozzles"] == list(dead)
+    assert h.interlace["dead_track_cover_um"] and max(h.interlace["dead_track_cover_um"]) < h.interlace["footprint_um"] / 2
+    for pr in plan.layer(0).pass_images[("plaster", h.ink)]:
+        for s in pr.swathes:
+            assert not s.levels[:, list(dead)].any()
+
+
+def test_build_in_passes_headline_coverage_machine_and_sidecars(tmp_path):
+    job = _job(cycles=4)
+    res = run_build(job, tmp_path / "out", check=False)
+    plan = json.loads((tmp_path / "out" / "plan.json").read_text())
+    cov = plan["coverage"]["plaster"]
+    assert cov["model"] == "deposit" and cov["uncovered_fraction"] <= 0.01 and res.summary["coverage"] == plan["coverage"]
+    assert all(o["deposit"]["uncovered_fraction"] <= 0.01 and o["reagent_pairs"] for o in plan["overlays"])
+    n = plan["heads"][0]["passes"]
+    im = plan["layers_detail"][0]["images"][0]
+    assert [p["pass"] for p in im["passes"]] == list(range(n))
+    for p in im["passes"]:
+        side = json.loads((tmp_path / "out" / p["sidecar"]).read_text())
+        assert all(s["pass_offset_mm"] == p["pass_offset_mm"] for s in side["swathes"])
+    html = (tmp_path / "out" / "report.html").read_text()
+    table = html[html.index("<table id='coverage'>"):]
+    table = table[: table.index("</table>")]
+    assert "<td>plaster</td>" in table and f"<b>{100 * cov['uncovered_fraction']:.2f} %</b>" in table
+    assert "true volume per area of the planned drops" in html
+    prog = json.loads((tmp_path / "out" / "machine" / "program.json").read_text())
+    rev = [s for L in prog["layers"] for s in L["steps"] if s["kind"] == "revolution"]
+    assert [s["interlace"] for s in rev if s["head"] == "H1" and s["repeat"] == 0] == [c % n for c in range(4)]
+    assert len({s["radial_stage_mm"] for s in rev if s["head"] == "H1"}) == min(n, 4)
