@@ -92,6 +92,7 @@ def test_coverage_matches_the_jit_kernels_and_numpy(monkeypatch):
         fast = coverage_mask(s, e, job.grid.shape)
         ref = coverage_mask(s, e, job.grid.shape, backend="numpy")
         assert np.abs(fast.astype(int) - ref.astype(int)).max() <= 1  # rounding at .5 only
+        assert abs(int(fast.sum()) - int(ref.sum())) <= 1  # both within 1/2 level of the exact sum
         monkeypatch.setattr(accel, "native", None)
         jit = coverage_mask(s, e, job.grid.shape)
         monkeypatch.setattr(accel, "native", native)
