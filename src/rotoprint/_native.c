@@ -7,11 +7,11 @@
  *                accumulate_jit then resolve_grey_jit, the same floating-point operations),
  *                rounded so that the window's grey sum is the exact area to 1/2 level.
  * - png_grey():  an 8-bit greyscale PNG of a mostly empty image given as a window at (r0, c0)
- *                of an otherwise black (H, W) image, optionally mirrored. Rows equal to the
- *                row above are filtered "Up" (all zero) and rows outside the window are zero:
- *                runs of such rows are copied from deflate chunks compressed once per
- *                (width, filter byte, run length 2^k) and byte-aligned by a sync flush; the
- *                other rows are left unfiltered ("None") and deflated with zlib's run-length strategy.
+ *                of an otherwise black (H, W) image, optionally mirrored. Rows outside the
+ *                window and all-zero rows are copied from deflate chunks compressed once per
+ *                (width, run length 2^k) and byte-aligned by a sync flush; rows equal to the
+ *                row above are filtered "Up" (all zero after the filter byte), the others are
+ *                left unfiltered ("None"), and both are deflated with zlib's run-length strategy.
  *
  * All three release the GIL. Inputs are buffers (numpy arrays); the Python side (the
  * validating public functions) checks shapes, dtypes and contiguity before calling.
@@ -477,7 +477,10 @@ encode_png(const uint8_t *win, long width, long height, long r0, long c0, long h
             if (is_zero(cur + 1, (size_t)width)) {
                 pattern = 1; fbyte = 0;             /* filter None: all zero */
             } else if (y > 0 && memcmp(cur + 1, prev + 1, (size_t)width) == 0) {
-                pattern = 1; fbyte = 2;             /* filter Up: all zero after the byte */
+                /* filter Up (all zero after the byte), deflated with the content rows and not
+                 * copied from a cached chunk: a run of copied chunks deflates again in the zip
+                 * 1.2x worse than one stream (231 vs 198 bytes for a 400-row plate layer) */
+                pattern = 0; fbyte = 2;
             } else {
                 pattern = 0; fbyte = 0;             /* content: filter None */
             }
@@ -491,8 +494,9 @@ encode_png(const uint8_t *win, long width, long height, long r0, long c0, long h
             if (rc == 0 && fb_reserve(&fb, rowlen)) rc = -1;
             if (rc) break;
             unsigned char *d = fb.buf + fb.len;
-            d[0] = 0; /* filter None: runs of 0 and 255 stay runs (smaller than Sub, Up, Paeth) */
-            memcpy(d + 1, cur + 1, (size_t)width);
+            /* a changed row: filter None, runs of 0 and 255 stay runs (smaller than Sub, Up, Paeth) */
+            d[0] = (unsigned char)fbyte;
+            if (fbyte) memset(d + 1, 0, (size_t)width); else memcpy(d + 1, cur + 1, (size_t)width);
             fb.len += rowlen;
             if (fb.len >= ((size_t)1 << 22)) rc = flush_content(&zs, &ad, &fb, &z);
         }
