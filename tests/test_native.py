@@ -112,25 +112,6 @@ def test_coverage_matches_the_jit_kernels_and_numpy(monkeypatch):
         assert np.array_equal(fast, jit)
 
 
-def test_coverage_scratch_buffer_is_left_clean_across_calls_and_threads():
-    """The C kernel keeps one zeroed accumulator per thread between calls: a large window
-    then a small one (and the reverse), in two threads at once, give the same masks as fresh
-    single calls."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    from rotoprint import load_device, slice_mesh
-    from rotoprint.masks.coverage import coverage_window
-
-    job = slice_mesh(uv_sphere_mesh(6.0, 32, 64), load_device("perfactory-sxga"), layer_height_mm=0.5)
-    segs = [job.pixel_segments(i)[:2] for i in range(len(job))]
-    want = [coverage_window(s, e, job.grid.shape)[2].copy() for s, e in segs]
-    order = list(range(len(segs))) + list(range(len(segs)))[::-1]
-    with ThreadPoolExecutor(2) as ex:
-        got = list(ex.map(lambda i: (i, coverage_window(*segs[i], job.grid.shape)[2]), order))
-    for i, win in got:
-        assert np.array_equal(win, want[i])
-
-
 def test_shell_labels_match_scipy():
     from rotoprint.mesh import Mesh, shell_labels, shell_labels_scipy
 

@@ -149,51 +149,6 @@ accumulate(const double *x0s, const double *y0s, const double *x1s, const double
 /* masks/coverage.COVERAGE_SNAP: coverage this close to 0 or 1 is 0 or 1 */
 #define COVERAGE_SNAP 1e-12
 
-/* The accumulator of coverage(): one per thread, kept between calls and left all zero by each
- * call (the resolve pass clears what it reads), so a layer neither allocates nor zeroes its
- * (h, w + 1) doubles again: a fresh calloc of a 1200 x 1200 window costs its page faults,
- * about 2 ms. Freed when the thread ends. */
-typedef struct {
-    double *p;
-    size_t cap;
-} acc_buf;
-
-static pthread_key_t g_acc_key;
-static pthread_once_t g_acc_once = PTHREAD_ONCE_INIT;
-
-static void
-acc_free(void *v)
-{
-    acc_buf *b = (acc_buf *)v;
-    if (b) { free(b->p); free(b); }
-}
-
-static void
-acc_key_init(void)
-{
-    pthread_key_create(&g_acc_key, acc_free);
-}
-
-/* A zeroed buffer of at least n doubles for this thread, or NULL (out of memory). */
-static double *
-acc_get(size_t n)
-{
-    pthread_once(&g_acc_once, acc_key_init);
-    acc_buf *b = (acc_buf *)pthread_getspecific(g_acc_key);
-    if (b == NULL) {
-        b = (acc_buf *)calloc(1, sizeof *b);
-        if (b == NULL || pthread_setspecific(g_acc_key, b)) { free(b); return NULL; }
-    }
-    if (b->cap < n) {
-        free(b->p);
-        b->cap = 0;
-        b->p = (double *)calloc(n, sizeof(double));
-        if (b->p == NULL) return NULL;
-        b->cap = n;
-    }
-    return b->p;
-}
-
 static PyObject *
 native_coverage(PyObject *self, PyObject *args)
 {
@@ -204,7 +159,7 @@ native_coverage(PyObject *self, PyObject *args)
         return NULL;
     Py_ssize_t n = X0.len / (Py_ssize_t)sizeof(double);
     double *acc = NULL;
-    if (h > 0 && w > 0) acc = acc_get((size_t)h * (size_t)(w + 1));
+    if (h > 0 && w > 0) acc = (double *)calloc((size_t)h * (size_t)(w + 1), sizeof(double));
     if (acc == NULL) {
         PyBuffer_Release(&X0); PyBuffer_Release(&Y0); PyBuffer_Release(&X1); PyBuffer_Release(&Y1);
         PyBuffer_Release(&OUT); PyBuffer_Release(&TAIL);
@@ -218,12 +173,11 @@ native_coverage(PyObject *self, PyObject *args)
      * the rounding error carried in row-major order, |carry| <= 1/2 level */
     double carry = 0.0;
     for (long r = 0; r < h; r++) {
-        double *row = acc + r * (w + 1);
+        const double *row = acc + r * (w + 1);
         uint8_t *o = out + r * w;
         double run = 0.0;
         for (long k = 0; k < w; k++) {
             run += row[k];
-            row[k] = 0.0; /* the buffer is left zero for the next call */
             double v = fabs(run);
             if (v > 1.0 - COVERAGE_SNAP) {
                 o[k] = 255;
@@ -239,11 +193,11 @@ native_coverage(PyObject *self, PyObject *args)
             }
         }
         run += row[w];
-        row[w] = 0.0;
         double v = fabs(run);
         tail[r] = v >= 1.0 ? 255 : (uint8_t)floor(v * 255.0 + 0.5);
     }
     Py_END_ALLOW_THREADS
+    free(acc);
     PyBuffer_Release(&X0); PyBuffer_Release(&Y0); PyBuffer_Release(&X1); PyBuffer_Release(&Y1);
     PyBuffer_Release(&OUT); PyBuffer_Release(&TAIL);
     Py_RETURN_NONE;
