@@ -83,6 +83,17 @@ def test_png_of_a_prism_layer_deflates_well_in_the_zip():
     assert len(z.compress(png) + z.flush()) < 200
 
 
+@pytest.mark.parametrize("rows", [1025, 1026, 1500])  # runs of rows - 1 Up rows
+def test_png_long_runs_of_equal_rows(rows):
+    """Runs of up to 1024 rows equal to the row above are deflated in the content stream,
+    longer ones copied from cached chunks (an inverted mask's full field): both decode."""
+    img = np.full((rows + 3, 40), 255, np.uint8)
+    img[0, 5] = 7
+    img[rows + 1 :, 10:30] = 0
+    png = native.png_grey(img, 40, rows + 3, 0, 0, rows + 3, 40, False, False, 3)
+    assert np.array_equal(_decode(png), img)
+
+
 def test_section_matches_the_numpy_reference():
     from rotoprint.slicing._sections import FaceSweep, section, section_numpy
 

@@ -7,11 +7,12 @@
  *                accumulate_jit then resolve_grey_jit, the same floating-point operations),
  *                rounded so that the window's grey sum is the exact area to 1/2 level.
  * - png_grey():  an 8-bit greyscale PNG of a mostly empty image given as a window at (r0, c0)
- *                of an otherwise black (H, W) image, optionally mirrored. Rows outside the
- *                window and all-zero rows are copied from deflate chunks compressed once per
- *                (width, run length 2^k) and byte-aligned by a sync flush; rows equal to the
- *                row above are filtered "Up" (all zero after the filter byte), the others are
- *                left unfiltered ("None"), and both are deflated with zlib's run-length strategy.
+ *                of an otherwise black (H, W) image, optionally mirrored. Rows equal to the
+ *                row above are filtered "Up" (all zero) and rows outside the window are zero:
+ *                runs of such rows are copied from deflate chunks compressed once per
+ *                (width, filter byte, run length 2^k) and byte-aligned by a sync flush, except
+ *                short runs and runs of up to 1024 Up rows, which are deflated with the other
+ *                rows; those are left unfiltered ("None"); zlib's run-length strategy.
  *
  * All three release the GIL. Inputs are buffers (numpy arrays); the Python side (the
  * validating public functions) checks shapes, dtypes and contiguity before calling.
@@ -417,13 +418,19 @@ fb_reserve(outbuf *fb, size_t n)
 
 /* Rows shorter than this run of pattern rows go into the content stream (no chunk switch). */
 #define MIN_CACHED_RUN 16
+/* Runs of Up rows (equal to the row above) up to this long go into the content stream too: a
+ * run of copied chunks (each flushed, with its own Huffman header) deflates again in the zip
+ * 1.2x worse than one stream (a 400-row square layer of the SL1S: 231 vs 198 bytes), but
+ * deflating the rows costs about 1 ms per 400 rows, so longer runs (a full field of an
+ * inverted mask) are still copied. */
+#define MAX_UP_RUN_IN_STREAM 1024
 
 static int
 finish_run(z_stream *zs, adler_t *ad, outbuf *fb, outbuf *z, long width, int fbyte, int level, size_t *run_n)
 {
     size_t n = *run_n, rowlen = (size_t)width + 1;
     *run_n = 0;
-    if (n >= MIN_CACHED_RUN) {
+    if (n >= (fbyte == 2 ? (size_t)MAX_UP_RUN_IN_STREAM + 1 : (size_t)MIN_CACHED_RUN)) {
         if (fb->len && flush_content(zs, ad, fb, z)) return -1;
         return emit_pattern_run(z, ad, width, fbyte, level, n);
     }
@@ -477,10 +484,7 @@ encode_png(const uint8_t *win, long width, long height, long r0, long c0, long h
             if (is_zero(cur + 1, (size_t)width)) {
                 pattern = 1; fbyte = 0;             /* filter None: all zero */
             } else if (y > 0 && memcmp(cur + 1, prev + 1, (size_t)width) == 0) {
-                /* filter Up (all zero after the byte), deflated with the content rows and not
-                 * copied from a cached chunk: a run of copied chunks deflates again in the zip
-                 * 1.2x worse than one stream (231 vs 198 bytes for a 400-row plate layer) */
-                pattern = 0; fbyte = 2;
+                pattern = 1; fbyte = 2;             /* filter Up: all zero after the byte */
             } else {
                 pattern = 0; fbyte = 0;             /* content: filter None */
             }
@@ -494,9 +498,8 @@ encode_png(const uint8_t *win, long width, long height, long r0, long c0, long h
             if (rc == 0 && fb_reserve(&fb, rowlen)) rc = -1;
             if (rc) break;
             unsigned char *d = fb.buf + fb.len;
-            /* a changed row: filter None, runs of 0 and 255 stay runs (smaller than Sub, Up, Paeth) */
-            d[0] = (unsigned char)fbyte;
-            if (fbyte) memset(d + 1, 0, (size_t)width); else memcpy(d + 1, cur + 1, (size_t)width);
+            d[0] = 0; /* filter None: runs of 0 and 255 stay runs (smaller than Sub, Up, Paeth) */
+            memcpy(d + 1, cur + 1, (size_t)width);
             fb.len += rowlen;
             if (fb.len >= ((size_t)1 << 22)) rc = flush_content(&zs, &ad, &fb, &z);
         }
