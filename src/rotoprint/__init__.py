@@ -20,12 +20,34 @@ from .errors import (  # noqa: E402
     ResourceError,
     RotoprintError,
 )
-from .io.mesh import load_mesh, make_transform  # noqa: E402
-from .mesh import Mesh  # noqa: E402
-from .devices import load_device  # noqa: E402
-from .slicing import slice_mesh  # noqa: E402
 
 logging.getLogger(__name__).addHandler(logging.NullHandler())
+
+#: The top-level API, imported on first use (PEP 562): ``import rotoprint`` (and so every
+#: ``rotoprint`` command, which imports this package first) does not pay for numpy,
+#: pydantic and the slicer before it needs them.
+_LAZY = {
+    "load_mesh": ".io.mesh",
+    "make_transform": ".io.mesh",
+    "Mesh": ".mesh",
+    "load_device": ".devices",
+    "slice_mesh": ".slicing",
+}
+
+
+def __getattr__(name: str):
+    mod = _LAZY.get(name)
+    if mod is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(mod, __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = [
     "__version__",

@@ -14,7 +14,6 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 from rich.text import Text
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 from .. import ranges as R
 from ..errors import ConfigError
@@ -163,7 +162,11 @@ def is_verbose(verbose: bool = False) -> bool:
     return bool(verbose) or _FLAGS.verbose
 
 
-def progress(quiet: bool = False) -> Progress:
+def progress(quiet: bool = False):
+    """A rich ``Progress`` bar on the console (disabled when quiet or not a terminal); rich's
+    progress module is imported here, not by every command's start-up."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
     return Progress(
         TextColumn("[bold]{task.description}"),
         BarColumn(),

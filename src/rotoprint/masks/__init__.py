@@ -4,7 +4,7 @@ inset, inversion and mirroring, and the exposure check of thin features.
 All functions are pure: arrays in, arrays out.
 """
 
-from .coverage import coverage_fraction, coverage_mask, fraction_to_grey, segments_area_px
+from .coverage import coverage_fraction, coverage_mask, fraction_to_grey, fraction_to_grey_summed, segments_area_px
 from .ops import (
     SMOOTH_KERNEL,
     erm_shift,
@@ -21,6 +21,7 @@ __all__ = [
     "coverage_fraction",
     "coverage_mask",
     "fraction_to_grey",
+    "fraction_to_grey_summed",
     "segments_area_px",
     "smooth_mask",
     "erm_shift",

@@ -109,8 +109,40 @@ def resolve_jit(acc, width, snap, out):  # pragma: no cover - jit
 
 
 @njit(cache=True, nogil=True)
-def resolve_grey_jit(acc, width, out):  # pragma: no cover - jit
-    """As :func:`resolve_jit`, straight to ``uint8`` grey levels ``round(255 * coverage)``."""
+def resolve_grey_jit(acc, width, snap, out):  # pragma: no cover - jit
+    """As :func:`resolve_jit`, straight to ``uint8`` grey levels with sum-preserving rounding.
+
+    Pixels within ``snap`` of 0 or 1 are 0 or 255. Every other pixel's level ``x = 255 *
+    coverage`` is rounded together with the rounding error carried so far (row-major over
+    ``out``): ``q = floor(x + carry + 0.5)``, then ``carry += x - q``. So every level is within
+    one of ``x`` and the sum of ``out`` is the sum of ``x`` to within half a level.
+    """
+    carry = 0.0
+    for r in range(acc.shape[0]):
+        run = 0.0
+        for k in range(width):
+            run += acc[r, k]
+            v = abs(run)
+            if v > 1.0 - snap:
+                out[r, k] = 255
+            elif v < snap:
+                out[r, k] = 0
+            else:
+                x = v * 255.0
+                q = math.floor(x + carry + 0.5)
+                if q < 0.0:
+                    q = 0.0
+                elif q > 255.0:
+                    q = 255.0
+                carry += x - q
+                out[r, k] = np.uint8(q)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def resolve_nearest_jit(acc, width, out):  # pragma: no cover - jit
+    """As :func:`resolve_jit`, to ``uint8`` levels ``round(255 * coverage)`` (half up), each
+    pixel on its own (the level right of a window of open loops)."""
     for r in range(acc.shape[0]):
         run = 0.0
         for k in range(width):
