@@ -34,7 +34,7 @@ def _expected_displacement_um(prog: dict, im, rec_of) -> float:
     nominal = place_drops(im.print)
     worst = 0.0
     for sw in im.print.swathes:
-        rec = rec_of[(im.material, im.ink, sw.index)]
+        rec = rec_of[(im.material, im.ink, im.interlace, sw.index)]
         c = next(h for h in prog["heads"] if h["name"] == im.head)["swathes"][sw.index]["clock"]
         sel = nominal.swathe == sw.index
         i = nominal.firing[sel]
@@ -48,13 +48,13 @@ def _expected_displacement_um(prog: dict, im, rec_of) -> float:
 
 def test_an_inexact_clock_moves_the_drops_by_what_the_program_says(small):
     prog = load_program(small)
-    rec_of = {(r["material"], r["ink"], r["swathe"]): r for L in prog["layers"] for r in L["images"] if L["index"] == 0}
+    rec_of = {(r["material"], r["ink"], int(r.get("interlace", 0)), r["swathe"]): r for L in prog["layers"] for r in L["images"] if L["index"] == 0}
     machine = replay_program(small, layer=0)
     nominal = replay_program(small, layer=0, angles="nominal")
     (_, imgs), = list(replay_layers(prog, small, layers=[0]))[:1]
-    by = {(r["material"], r["ink"]): r for r in machine["images"]}
+    by = {(r["material"], r["ink"], r["interlace"]): r for r in machine["images"]}
     for im in imgs:
-        r = by[(im.material, im.ink)]
+        r = by[(im.material, im.ink, im.interlace)]
         want = _expected_displacement_um(prog, im, rec_of)
         assert 0.01 < want < 1.0  # sub-micrometre, but not nothing: the ratio x180/33667 and whole counts
         assert r["max_drop_displacement_um"] == pytest.approx(want, rel=1e-6)
@@ -121,7 +121,7 @@ def test_an_exact_clock_gives_the_nominal_figures(small):
     loaded = load_program(p)
     for (_, imgs) in replay_layers(loaded, p, layers=[1]):
         for im in imgs:
-            r = next(x for x in machine["images"] if (x["layer"], x["material"], x["ink"]) == (1, im.material, im.ink))
+            r = next(x for x in machine["images"] if (x["layer"], x["material"], x["ink"], x["interlace"]) == (1, im.material, im.ink, im.interlace))
             _same(r, simulate(im.print, im.design).report.to_json())
 
 
