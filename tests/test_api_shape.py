@@ -18,10 +18,10 @@ MAX_PARAMETERS = 8
 # the pipeline refactor replaced the three writers that were allowed here; none is left
 _PENDING_PIPELINE: set[str] = set()
 # interlaced passes, merged from branch 'film' after the option objects were made: still to be
-# given RotarySetup / RotarySliceOptions (slice_rotary_passes, which writes folders, moved to
-# pipeline/passes); named one by one, with their counts today, so none may grow
-_PENDING_INTERLACE = {"rotoprint.rotary.interlace.transform_passes": 17, "rotoprint.rotary.interlace.track_fractions": 10,
-                      "rotoprint.pipeline.passes.slice_rotary_passes": 19}
+# given RotarySliceOptions (slice_rotary_passes, which writes folders, moved to pipeline/passes;
+# transform_passes and track_fractions take PassOptions / RotarySetup); named with its count
+# today, so it may not grow
+_PENDING_INTERLACE = {"rotoprint.pipeline.passes.slice_rotary_passes": 19}
 
 
 def _public_functions():
