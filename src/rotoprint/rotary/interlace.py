@@ -9,17 +9,25 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   *even* when ``largest / mean <= even_ratio`` (default :data:`EVEN_RATIO`). :func:`best_tilt`
   names the even tilt with the finest mean pitch.
 - :func:`plan_passes` prints a layer in ``N`` passes, each with every swathe's pivot moved
-  radially by an offset ``delta_q`` (pass 0: 0). The offsets minimise the largest gap of the
-  union of all passes' live tracks over the design's radial range (ties: the smallest sum of
-  squared gaps), by coordinate descent over a grid of offsets in ``[0, 2 * pitch)`` started
-  from the even split ``q * pitch / N``. Dead nozzles are left out of the union, so the
-  optimum places live tracks of other passes over their tracks; the plan reports how far each
-  dead track is from the nearest live one. The drop spacing along a track is then chosen with
-  the footprint ``D``: drops at radial spacing ``a`` (the largest gap) and spacing ``b`` along
-  the track leave no point farther than ``sqrt(a^2 + b^2) / 2`` from a drop, so ``b =
-  sqrt((c D)^2 - a^2)`` with ``c =`` :data:`COVER_SHARE` keeps every point within ``c D / 2``
-  of a drop centre, where a spherical cap still holds ``1 - c^2`` of its peak height (about
-  28 % for c = 0.85, chosen by measuring the film of the test design); ``b`` is never coarser than the head's native ``25.4 / dpi_y``.
+  radially by an offset ``delta_q`` (pass 0: 0). The offsets are found by coordinate descent
+  over 128 offsets spanning one row period (``rows * pitch``: the tracks of one row repeat
+  after about that), 3 rounds from the even split ``q * pitch / N`` and one finer round about
+  each offset. A candidate is judged on the union of all passes' live tracks over the design's
+  radial range: first its largest gap (to :data:`_GAP_QUANTUM_UM`), then the radial film
+  profile the tracks' footprints sum to (:func:`_pass_profile`): the mean squared shortfall
+  below :data:`PROFILE_TARGET` of its local mean (over +-0.25 mm, so that the ``1/r`` of one
+  clock per swathe, which no offset changes, does not decide). Dead nozzles are left out of
+  the union, so the optimum places live tracks of other passes over their tracks; the plan
+  reports how far each dead track is from the nearest live one. The drop spacing along a track
+  is then chosen with the footprint ``D``: drops at radial spacing ``a`` (the largest gap) and
+  spacing ``b`` along the track leave no point farther than ``sqrt(a^2 + b^2) / 2`` from a
+  drop, so ``b = sqrt((c D)^2 - a^2)`` with ``c =`` :data:`COVER_SHARE` keeps every point
+  within ``c D / 2`` of a drop centre, where a spherical cap still holds ``1 - c^2`` of its
+  peak height; ``b`` is never coarser than the head's native ``25.4 / dpi_y`` and never finer
+  than :data:`MAX_CLOCK_FACTOR` times native (the cost floor of a pass's firing images).
+  Measured on the test design (``docs/rotary.md``): the interior closes at every tilt, but the
+  thinnest point stays below half the mean at tilted settings (``1/r`` within a swathe, the
+  along-track ripple at a swathe's outer end, the design's inner edge and the swathe seams).
 """
 
 from __future__ import annotations
@@ -250,7 +258,7 @@ def plan_passes(
     ConfigError
         Passes outside 1..64, a footprint or cover share out of range.
     GeometryError
-        The footprint is narrower than the largest gap of the best plan (no clock closes it).
+        The largest gap of the best plan is not narrower than the footprint (no clock closes it).
 
     Examples
     --------
