@@ -265,8 +265,9 @@ def test_clock_within_the_cost_floor(head):
     """However narrow the footprint, a pass's clock is at most MAX_CLOCK_FACTOR x native; a plan
     is refused only when its largest gap is not narrower than the footprint."""
     sp = plan_swathes(head, tilt_deg=70.0, inner_radius_mm=60.0, outer_radius_mm=75.0)
-    pp = plan_passes(head, sp, footprint_um=49.6, passes=4)
-    assert pp.largest_gap_mm > 0.85 * 0.0496 / np.sqrt(2)  # the old rule would ask for > 2 x native
+    pp = plan_passes(head, sp, footprint_um=40.0, passes=4)
+    fit = np.sqrt((0.85 * 0.040) ** 2 - pp.largest_gap_mm**2)
+    assert fit < 25.4 / head.dpi_y / MAX_CLOCK_FACTOR  # the fit alone would ask for > 2 x native
     assert pp.dpi_y == pytest.approx(MAX_CLOCK_FACTOR * head.dpi_y)
     wide = plan_passes(head, sp, footprint_um=200.0, passes=4)
     assert wide.dpi_y == pytest.approx(head.dpi_y)  # never coarser than native

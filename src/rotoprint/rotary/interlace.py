@@ -59,6 +59,8 @@ MAX_CLOCK_FACTOR = 2.0
 PROFILE_TARGET = 0.8
 #: Offsets tried per pass and round of the coordinate descent (over one row period).
 _CANDIDATES = 128
+#: Starts of the coordinate descent (two even splits, the rest seeded random).
+_STARTS = 4
 _ROUNDS = 3
 #: Radial step of the film profile, mm.
 _PROFILE_STEP_MM = 0.002
@@ -329,21 +331,39 @@ def plan_passes(
     pitch = float((inside0[-1] - inside0[0]) / (inside0.size - 1)) if inside0.size > 1 else head.pitch_mm
 
     def optimise(n: int) -> list[float]:
-        offs = [q * pitch / n for q in range(n)]
+        """The best of coordinate descents from a few starts (it finds local optima)."""
+        if n == 1:
+            return [0.0]
+        rng = np.random.default_rng(n)
+        starts = [[q * pitch / n for q in range(n)], [q * period / n for q in range(n)]]
+        starts += [[0.0] + sorted(rng.uniform(0.0, period, n - 1).tolist()) for _ in range(_STARTS - 2)]
+        best, best_key = None, None
+        for st in starts:
+            offs = descend(list(st))
+            t = sum((profile(o) for o in offs), np.zeros(n_grid))
+            key = (round(largest_gap(offs) * 1e3 / _GAP_QUANTUM_UM), float(score(t[None, :])[0]))
+            if best_key is None or key < best_key:
+                best, best_key = offs, key
+        return best
+
+    def descend(offs: list[float]) -> list[float]:
+        n = len(offs)
         coarse = np.linspace(0.0, period, _CANDIDATES, endpoint=False)
         step = period / _CANDIDATES
         for rnd in range(_ROUNDS + 1 if n > 1 else 0):
             for q in range(1, n):
                 # rounds over the whole row period, then one finer round about each offset
                 cand = coarse if rnd < _ROUNDS else np.mod(offs[q] + np.linspace(-step, step, 33), period)
-                fixed = sum((profile(offs[p]) for p in range(n) if p != q), np.zeros(n_grid))
-                pen = score(fixed[None, :] + np.stack([profile(c) for c in cand]))
                 rest = np.concatenate([radii(offs[p])[0] for p in range(n) if p != q])
                 r = np.concatenate([np.broadcast_to(rest, (cand.size, rest.size)), radii(cand)], axis=1)
                 gmax, _ = _gap_score(r, lo, hi)
                 # the largest gap first (to _GAP_QUANTUM_UM); among equal ones the profile (measured
                 # on the test design: the profile first gives larger gaps and no thinner film)
-                key = np.lexsort((pen, np.round(gmax * 1e3 / _GAP_QUANTUM_UM)))
+                g_q = np.round(gmax * 1e3 / _GAP_QUANTUM_UM)
+                tie = np.flatnonzero(g_q == g_q.min())
+                fixed = sum((profile(offs[p]) for p in range(n) if p != q), np.zeros(n_grid))
+                pen = score(fixed[None, :] + np.stack([profile(c) for c in cand[tie]]))
+                key = [tie[int(np.argmin(pen))]]
                 offs[q] = float(cand[key[0]])
         return offs
 
