@@ -7,7 +7,12 @@ spread factor 2 (49.6 um footprints), deposit model on the interior.
 Rows: one pass at the head's native clock (today's print); the planned interlaced passes at the
 planned clock; the same with 5 seeded dead nozzles; the planned passes equalised. The issue's
 baseline (60 um discs judged at design-pixel centres, `disc_uncovered_fraction`) is printed
-beside the one-pass row.
+beside the one-pass row. A second table gives the cost floor: the time of one pass's firing
+images (the exact transform at the planned clock and the pass's pivot offset) over the same
+transform at the native clock (today's print of a layer), best of 3, and the same for direct
+slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
+
+    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS]
 """
 
 from __future__ import annotations
@@ -24,7 +29,8 @@ from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
 from rotoprint.rotary.deposit import deposit_print
 from rotoprint.rotary.files import read_print
-from rotoprint.rotary.interlace import read_passes, transform_passes
+from rotoprint.rotary.interlace import PassOptions, plan_passes, read_passes, transform_passes
+from rotoprint.rotary.options import RotarySetup
 from rotoprint.rotary.testimage import test_design
 
 
@@ -34,14 +40,65 @@ def film_row(label, tilt, passes, gap_um, dpi, f, secs, extra=""):
             f"{100 * f.volume_error_fraction:+.1e} | {f.drops} | {secs:.0f} |{extra}")
 
 
+def _best(fn, k: int = 3) -> float:
+    """Best of ``k`` wall times, the exact transform's map cache emptied before each (a pass
+    at a new pivot or clock builds its maps: that is its cost)."""
+    from rotoprint.rotary.exact import exact_maps
+
+    best = float("inf")
+    for _ in range(k):
+        exact_maps.cache_clear()
+        t = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t)
+    return best
+
+
+def cost_table(d, pl, head, tilts) -> None:
+    """The cost floor: a pass's firing images at the planned clock over today's at native."""
+    from rotoprint.rotary.direct import slice_rotary
+    from rotoprint.io.mesh import load_mesh
+
+    mesh_path = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes"
+    meshes = [m for m in (mesh_path / "sphere_openscad.stl",) if m.is_file()]
+    mesh = load_mesh(meshes[0]) if meshes else None
+    r_in, r_out = pl.radial_range_mm()
+    print()
+    print("| tilt deg | passes | planned clock dpi | transform (maps + images), native s | one pass, planned s | ratio | "
+          f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for tilt in tilts:
+        sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
+        pp = plan_passes(head, sp, footprint_um=49.6)
+        off = pp.offsets_mm[-1]
+        t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt))
+        t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off))
+        row = f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.2f} | {t1:.2f} | {t1 / t0:.2f} |"
+        if mesh is not None:
+            h = float(mesh.bounds[1][2] - mesh.bounds[0][2])
+            kw = dict(layer_height_mm=h / 3, tilt_deg=tilt, inner_radius_mm=60.0)
+            s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1))
+            s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1))
+            row += f" {s0:.2f} | {s1:.2f} | {s1 / s0:.2f} |"
+        print(row, flush=True)
+
+
 def main() -> None:
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 1200
-    tilts = [float(t) for t in sys.argv[2].split(",")] if len(sys.argv) > 2 else [0.0, 20.0, 45.0, 70.0]
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    n = int(args[0]) if args else 1200
+    tilts = [float(t) for t in args[1].split(",")] if len(args) > 1 else [0.0, 20.0, 45.0, 70.0]
     head0 = load_device("omnidot760").head
     d = test_design(n)
     px = 25.4 / 360
     pl = Placement(n, n, px, px, inner_radius_mm=60.0)
     r_in, r_out = pl.radial_range_mm()
+    strip = [int(a.split("=", 1)[1]) for a in sys.argv[1:] if a.startswith("--strip=")]
+    if strip:  # a band of full design ROWS px high through the middle, over the same radial range
+        d = np.full((strip[0], n), 255, np.uint8)
+        pl = Placement(n, strip[0], px, px, inner_radius_mm=60.0)
+    if "--cost-only" in sys.argv:
+        cost_table(d, pl, head0, tilts)
+        return
     print("| tilt deg | print | passes | largest track gap um | clock dpi | uncovered interior % | uncovered band % | "
           "thinnest / mean | mean um | 1 mm bins max dev % | volume error | drops | s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
@@ -53,8 +110,6 @@ def main() -> None:
         pr = transform_exact(d, head0, pl, tilt_deg=tilt)
         f = deposit_print(pr, d).films[0]
         base = simulate(pr, d).report.disc_uncovered_fraction
-        from rotoprint.rotary.interlace import plan_passes
-
         g1 = plan_passes(head0, sp, footprint_um=49.6, passes=4).single_pass_largest_gap_mm
         print(film_row("one pass, native clock", tilt, 1, g1 * 1000, head0.dpi_y, f, time.perf_counter() - t,
                        f" issue's baseline (60 um discs at pixel centres): {100 * base:.1f} % |"), flush=True)
@@ -64,7 +119,7 @@ def main() -> None:
                 t = time.perf_counter()
                 try:
                     with tempfile.TemporaryDirectory() as td:
-                        m = transform_passes(d, head, pl, Path(td) / "p.png", passes=passes, tilt_deg=tilt, equalise=eq)
+                        m = transform_passes(d, head, pl, Path(td) / "p.png", PassOptions(RotarySetup(tilt_deg=tilt), passes=passes, equalise=eq))
                         prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
                 except GeometryError as exc:
                     print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)
@@ -73,6 +128,7 @@ def main() -> None:
                 pp = m["pass_plan"]
                 print(film_row(label, tilt, pp["passes"], pp["largest_gap_mm"] * 1000, m["dpi_y"], f, time.perf_counter() - t), flush=True)
                 break
+    cost_table(d, pl, head0, tilts)
 
 
 if __name__ == "__main__":

@@ -17,10 +17,9 @@ from rotoprint.errors import ConfigError
 MAX_PARAMETERS = 8
 # the pipeline refactor replaced the three writers that were allowed here; none is left
 _PENDING_PIPELINE: set[str] = set()
-# interlaced passes, merged from branch 'film' after the option objects were made: still to be
-# given RotarySetup / RotarySliceOptions (slice_rotary_passes in pipeline/passes takes them now);
-# named one by one, with their counts today, so none may grow
-_PENDING_INTERLACE = {"rotoprint.rotary.interlace.transform_passes": 17, "rotoprint.rotary.interlace.track_fractions": 10}
+# interlaced passes: transform_passes and track_fractions take PassOptions / RotarySetup,
+# slice_rotary_passes (pipeline/passes) RotarySliceOptions / RunOptions; none is left
+_PENDING_INTERLACE: dict[str, int] = {}
 
 
 def _public_functions():

@@ -14,7 +14,8 @@ from rotoprint.rotary import _halftone_kernels as K
 from rotoprint.rotary.deposit import deposit_print
 from rotoprint.rotary.files import read_print
 from rotoprint.rotary.halftone import halftone_print
-from rotoprint.rotary.interlace import read_passes, transform_passes
+from rotoprint.rotary.interlace import PassOptions, read_passes, transform_passes
+from rotoprint.rotary.options import RotarySetup
 
 PX = 25.4 / 360
 
@@ -41,7 +42,7 @@ def test_grey_head_film_is_flat_over_a_3_to_1_span(tmp_path):
     w, h = round(40 / PX), round(4 / PX)
     d = np.full((h, w), 255, np.uint8)
     pl = Placement(w, h, PX, PX, inner_radius_mm=20.0)
-    m = transform_passes(d, grey, pl, tmp_path / "g.png", passes="auto", tilt_deg=0.0, equalise=True)
+    m = transform_passes(d, grey, pl, tmp_path / "g.png", PassOptions(RotarySetup(tilt_deg=0.0), passes="auto", equalise=True))
     assert m["equalise"] == "grey levels"
     prs = [read_print(f)[0] for f in read_passes(tmp_path / "g-passes.json")]
     f = deposit_print(prs, d).films[0]
@@ -51,7 +52,8 @@ def test_grey_head_film_is_flat_over_a_3_to_1_span(tmp_path):
     lv = np.concatenate([s.levels[s.levels > 0] for p in prs for s in p.swathes])
     assert lv.min() >= 1 and lv.max() == 8 and 2 < lv.mean() < 7
     man = json.loads((tmp_path / "g-passes.json").read_text())
-    plain = transform_passes(d, grey.model_copy(update={"grey_levels": 1}), pl, tmp_path / "b.png", passes=man["pass_plan"]["passes"], tilt_deg=0.0)
+    plain = transform_passes(d, grey.model_copy(update={"grey_levels": 1}), pl, tmp_path / "b.png",
+                             PassOptions(RotarySetup(tilt_deg=0.0), passes=man["pass_plan"]["passes"], balance=False))
     fb = deposit_print([read_print(q)[0] for q in read_passes(tmp_path / "b-passes.json")], d).films[0]
     assert fb.radial_spread > 0.3 and plain["equalise"] is None
 

@@ -73,8 +73,11 @@ def transform_command(
         info = {"path": str(image.resolve()),
                 "sha256": hashlib.sha256(read_input_bytes(image, what="image file", limit_bytes=MAX_IMAGE_BYTES)).hexdigest(),
                 "invert": invert, "design_dpi": dpi}
-        manifest = transform_passes(design, head, pl, out, passes=passes, device_name=dev.name, design_info=info, equalise=equalise,
-                                    force=force, inputs=inputs, **kw)
+        from ..rotary.interlace import PassOptions
+        from ..rotary.options import RotarySetup
+
+        popts = PassOptions(setup=RotarySetup(**kw), passes=passes, equalise=equalise)
+        manifest = transform_passes(design, dev, pl, out, popts, design_info=info, force=force, inputs=inputs)
         if json_out:
             print_json(manifest)
         elif not quiet:

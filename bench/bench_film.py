@@ -1,0 +1,50 @@
+"""Issue 14's cost floor as a `make bench` row: a pass's firing images at the planned clock
+(and its pivot offset) over today's print of a layer at the native clock, for the exact
+transform of the bundled test design (360 dpi, first column at 60 mm) and for direct slicing
+of one layer of a real mesh. The floor: ratio <= 2. The film figures themselves (uncovered,
+thinnest / mean, bins) are in ``bench/film_acceptance.py`` (minutes per tilt)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+TITLE = "Film: a pass's firing images against today's layer (issue 14 cost floor: ratio <= 2)"
+
+
+def run(quick: bool = False) -> list[dict]:
+    from film_acceptance import _best
+
+    from rotoprint import load_device
+    from rotoprint.io.mesh import load_mesh
+    from rotoprint.rotary import Placement, plan_swathes, transform_exact
+    from rotoprint.rotary.direct import slice_rotary
+    from rotoprint.rotary.interlace import plan_passes
+    from rotoprint.rotary.testimage import test_design
+
+    head = load_device("omnidot760").head
+    n = 600 if quick else 1200
+    d = test_design(n)
+    px = 25.4 / 360
+    pl = Placement(n, n, px, px, inner_radius_mm=60.0)
+    r_in, r_out = pl.radial_range_mm()
+    mesh_file = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes" / "sphere_openscad.stl"
+    mesh = load_mesh(mesh_file) if mesh_file.is_file() else None
+    rows = []
+    for tilt in ((0.0, 20.0) if quick else (0.0, 20.0, 45.0, 70.0)):
+        sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
+        pp = plan_passes(head, sp, footprint_um=49.6)
+        off = pp.offsets_mm[-1]
+        t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt), 7)
+        t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off), 7)
+        row = {"tilt_deg": tilt, "passes": pp.passes, "clock_dpi": pp.dpi_y, "transform_native_s": t0,
+               "transform_pass_s": t1, "transform_ratio": t1 / t0}
+        if mesh is not None:
+            h = float(np.ptp(np.asarray(mesh.vertices)[:, 2]))
+            kw = dict(layer_height_mm=h / 3, tilt_deg=tilt, inner_radius_mm=60.0)
+            s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1), 7)
+            s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1), 7)
+            row.update({"slice_layer_native_s": s0, "slice_layer_pass_s": s1, "slice_ratio": s1 / s0})
+        rows.append(row)
+    return rows
