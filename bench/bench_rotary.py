@@ -70,7 +70,7 @@ def run(quick: bool = False) -> list[dict]:
 
     def cold_np():
         exact_maps.cache_clear()
-        return transform_exact(design, head, pl, tilt_deg=tilt, kernel="numpy")
+        return transform_exact(design, head, pl, tilt_deg=tilt, backend="numpy")
 
     t_np = _best(cold_np, max(2, reps // 5))
     exact_maps.cache_clear()

@@ -122,8 +122,8 @@ def test_rotary_setup_object_equals_keywords():
     p1 = transform_paper(design, head, pl, RotarySetup(tilt_deg=10.0))
     p2 = transform_paper(design, head, pl, tilt_deg=10.0)
     assert all(np.array_equal(x.levels, y.levels) for x, y in zip(p1.swathes, p2.swathes))
-    with pytest.raises(ConfigError, match="kernel must be one of"):
-        RotarySetup(tilt_deg=1.0, kernel="cuda")
+    with pytest.raises(ConfigError, match="backend must be one of"):
+        RotarySetup(tilt_deg=1.0, backend="cuda")
     with pytest.raises(ConfigError, match="unknown option 'tilt'"):
         exact_maps(head, pl, tilt=20.0)
     opts = RotarySliceOptions(layer_height_mm=0.5, tilt_deg=20.0, inner_radius_mm=60.0, equalise=True)
@@ -131,7 +131,7 @@ def test_rotary_setup_object_equals_keywords():
     j2 = slice_rotary(box_mesh((10, 6, 1)), "omnidot760", layer_height_mm=0.5, tilt_deg=20.0, inner_radius_mm=60.0, equalise=True)
     assert j1.rotary_options == j2.rotary_options and j1.rotary_options["dpi_y"] == head.dpi_y
     assert list(j1.rotary_options) == ["layer_height_mm", "tilt_deg", "inner_radius_mm", "angle_deg", "dpi_y", "ref_radius_mm",
-                                       "direction", "max_swathes", "equalise", "fill", "gap_radius_mm", "kernel"]
+                                       "direction", "max_swathes", "equalise", "fill", "gap_radius_mm", "backend"]
     assert all(np.array_equal(x.levels, y.levels) for x, y in zip(j1.layer(0).swathes, j2.layer(0).swathes))
     with pytest.raises(AttributeError):
         j1.rotary_options = {}  # type: ignore[misc]  # made with the job, never set after

@@ -143,7 +143,7 @@ def test_numba_and_numpy_kernels_identical(tilt, fill, direction, equalise):
     mesh = torus_mesh(9.0, 3.0, 80, 30)
     kw = dict(fill=fill, direction=direction, equalise=equalise, inner_radius_mm=35.0, angle_deg=-40.0)
     a = _job(mesh, tilt, **kw)
-    b = _job(mesh, tilt, kernel="numpy", **kw)
+    b = _job(mesh, tilt, backend="numpy", **kw)
     for L in range(len(a)):
         for sa, sb in zip(a.layer(L).swathes, b.layer(L).swathes):
             np.testing.assert_array_equal(sa.levels, sb.levels)
@@ -321,4 +321,4 @@ def test_part_placement_round_trip_and_validation():
     with pytest.raises(ConfigError):
         slice_rotary(box_mesh(), load_device("perfactory-sxga"), layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0)
     with pytest.raises(ConfigError):
-        slice_rotary(box_mesh(), DEV, layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0, kernel="cuda")
+        slice_rotary(box_mesh(), DEV, layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0, backend="cuda")

@@ -44,12 +44,12 @@ def _brute_force(m, j, pl):
     return i0 + b0, idx[b0:b1]
 
 
-@pytest.mark.parametrize("kernel", ["numba", "numpy"])
+@pytest.mark.parametrize("backend", ["jit", "numpy"])
 @pytest.mark.parametrize("case", range(len(CASES)))
-def test_windows_miss_no_drop(case, kernel):
+def test_windows_miss_no_drop(case, backend):
     w, h, px, py, r0, ang, tilt, direction, mount, ref = CASES[case]
     pl = Placement(w, h, px, py, inner_radius_mm=r0, angle_deg=ang)
-    m = exact_maps(HEAD, pl, tilt_deg=tilt, direction=direction, mount_angle_deg=mount, ref_radius_mm=ref, kernel=kernel)
+    m = exact_maps(HEAD, pl, tilt_deg=tilt, direction=direction, mount_angle_deg=mount, ref_radius_mm=ref, backend=backend)
     two_arcs = 0
     for j, sm in enumerate(m.swathes):
         first, dense = _brute_force(m, j, pl)
@@ -95,9 +95,9 @@ def test_gather_equals_dense_gather(case):
     w, h, px, py, r0, ang, tilt, direction, mount, ref = CASES[case]
     pl = Placement(w, h, px, py, inner_radius_mm=r0, angle_deg=ang)
     d = make_design(max(w, h))[:h, :w].copy()
-    for kernel in ("numba", "numpy"):
-        pr = transform_exact(d, HEAD, pl, tilt_deg=tilt, direction=direction, mount_angle_deg=mount, ref_radius_mm=ref, kernel=kernel)
-        m = exact_maps(HEAD, pl, tilt_deg=tilt, direction=direction, mount_angle_deg=mount, ref_radius_mm=ref, kernel=kernel)
+    for backend in ("jit", "numpy"):
+        pr = transform_exact(d, HEAD, pl, tilt_deg=tilt, direction=direction, mount_angle_deg=mount, ref_radius_mm=ref, backend=backend)
+        m = exact_maps(HEAD, pl, tilt_deg=tilt, direction=direction, mount_angle_deg=mount, ref_radius_mm=ref, backend=backend)
         flat = np.concatenate([(d.ravel() != 0).astype(np.uint8), np.zeros(1, np.uint8)])
         for s, sm in zip(pr.swathes, m.swathes):
             np.testing.assert_array_equal(s.levels, flat[sm.index])
@@ -112,8 +112,8 @@ def test_binary_levels_agree_with_design_kind(values, binary):
 
     d = np.array([values * 5] * 3, np.uint8)
     assert (design_kind(d) == "binary") == binary
-    for kernel in ("numba", "numpy"):
-        flat, ok = K.BINARY_LEVELS[kernel](d, 3)
+    for backend in ("jit", "numpy"):
+        flat, ok = K.BINARY_LEVELS[backend](d, 3)
         assert ok == binary
         np.testing.assert_array_equal(flat, np.concatenate([np.where(d.ravel() != 0, 3, 0), [0]]).astype(np.uint8))
 
@@ -123,13 +123,13 @@ def test_first_layer_fused_equals_later_layers():
     # filled on its own (no gather) holds the same index
     pl = Placement(300, 260, 25.4 / 360, 25.4 / 360, inner_radius_mm=30.0, angle_deg=10.0)
     d = make_design(300)[:260].copy()
-    for kernel in ("numba", "numpy"):
+    for backend in ("jit", "numpy"):
         exact_maps.cache_clear()
-        m = exact_maps(HEAD, pl, tilt_deg=45.0, kernel=kernel)
+        m = exact_maps(HEAD, pl, tilt_deg=45.0, backend=backend)
         first = m.apply(d)
         second = m.apply(d)
         exact_maps.cache_clear()
-        fresh = exact_maps(HEAD, pl, tilt_deg=45.0, kernel=kernel)
+        fresh = exact_maps(HEAD, pl, tilt_deg=45.0, backend=backend)
         for a, b, sm, sf in zip(first.swathes, second.swathes, m.swathes, fresh.swathes):
             np.testing.assert_array_equal(a.levels, b.levels)
             np.testing.assert_array_equal(sm.windows.flat_index, sf.windows.flat_index)
@@ -137,7 +137,7 @@ def test_first_layer_fused_equals_later_layers():
 
 
 def test_index_kernel_int64_path():
-    # designs of 2**31 pixels or more need int64 indices; run the kernel on a one-drop window of such a size
+    # designs of 2**31 pixels or more need int64 indices; run the backend on a one-drop window of such a size
     coef = (np.array([1.0]), np.array([0.0]), 0.0, np.array([1.0]), np.array([0.0]), 0.0)
     w = h = 50_000
     assert K.index_dtype(w, h) == np.int64

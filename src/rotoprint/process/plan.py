@@ -608,15 +608,15 @@ def _estimate(plan: BuildPlan, mat: Material, band: tuple[float, float], v_pl: f
     )
 
 
-def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
+def plan_job(job: ResolvedJob, *, backend: str = "jit") -> BuildPlan:
     """Plan a validated job: meshes, head lattices, estimates (images come per layer).
 
     Parameters
     ----------
     job : ResolvedJob
         From :func:`rotoprint.process.load_job` or :func:`~rotoprint.process.parse_job`.
-    kernel : {'numba', 'numpy'}
-        Direct slicer kernel (identical output).
+    backend : {'jit', 'numpy'}
+        Direct slicer kernel: compiled or the pure-numpy reference (identical output).
 
     Returns
     -------
@@ -663,7 +663,7 @@ def plan_job(job: ResolvedJob, *, kernel: str = "numba") -> BuildPlan:
         common = dict(layer_height_mm=sp.job.layer_height_mm, tilt_deg=tilt, inner_radius_mm=sp.placement.inner_radius_mm,
                       angle_deg=sp.placement.angle_deg - hs.mount_angle_deg, ref_radius_mm=clk.ref_radius_mm,
                       direction=sp.printer.direction, max_swathes=sp.printer.max_swathes, equalise=sp.printer.equalise,
-                      kernel=kernel)
+                      backend=backend)
         try:
             lat = slice_rotary(union, device, dpi_y=clk.dpi_y, **common)
             if sp.printer.passes == 1:

@@ -264,4 +264,4 @@ def direct_fill_numpy(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, d
     return out
 
 
-KERNELS = {"numba": direct_fill_jit, "numpy": direct_fill_numpy}
+KERNELS = {"jit": direct_fill_jit, "numpy": direct_fill_numpy}

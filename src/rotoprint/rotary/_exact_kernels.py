@@ -145,7 +145,7 @@ def bilinear_numpy(img, col, row, idx):
 
 
 KERNELS = {
-    "numba": (coords_numba, bilinear_numba),
+    "jit": (coords_numba, bilinear_numba),
     "numpy": (coords_numpy, bilinear_numpy),
 }
 
@@ -457,8 +457,8 @@ def binary_levels_numpy(design, level):
     return flat, not bool(np.any(nz & (src != m)))
 
 
-WINDOW_BOUNDS = {"numba": window_bounds_numba, "numpy": window_bounds_numpy}
-WINDOWS_FILL = {"numba": windows_fill_numba, "numpy": windows_fill_numpy}
-WINDOWS_GATHER = {"numba": windows_gather_numba, "numpy": windows_gather_numpy}
-WINDOWS_FILL_GATHER = {"numba": windows_fill_gather_numba, "numpy": windows_fill_gather_numpy}
-BINARY_LEVELS = {"numba": binary_levels_numba, "numpy": binary_levels_numpy}
+WINDOW_BOUNDS = {"jit": window_bounds_numba, "numpy": window_bounds_numpy}
+WINDOWS_FILL = {"jit": windows_fill_numba, "numpy": windows_fill_numpy}
+WINDOWS_GATHER = {"jit": windows_gather_numba, "numpy": windows_gather_numpy}
+WINDOWS_FILL_GATHER = {"jit": windows_fill_gather_numba, "numpy": windows_fill_gather_numpy}
+BINARY_LEVELS = {"jit": binary_levels_numba, "numpy": binary_levels_numpy}

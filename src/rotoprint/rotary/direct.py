@@ -283,7 +283,7 @@ class DirectSliceJob:
         self.dpi_y = dpi_y
         self.fill = options.fill
         self.equalise = bool(options.equalise)
-        self.kernel = options.kernel
+        self.backend = options.backend
         equalise = self.equalise
         # density equalisation: keep the fraction area_per_drop / largest area_per_drop
         apd = [t.area_per_drop_mm2 for t in tracks]
@@ -323,7 +323,7 @@ class DirectSliceJob:
         xl1, yl1 = self.part.model_to_local(seg.end[:, 0], seg.end[:, 1])
         if xl0.size and (min(xl0.min(), xl1.min()) <= 0.0):
             raise GeometryError("the cross-section reaches the axis of rotation; use a larger --radius")
-        fn = _k.KERNELS[self.kernel]
+        fn = _k.KERNELS[self.backend]
         dead = np.array(self.head.dead_nozzles, dtype=np.int64)
         out = []
         for ts, frac in zip(self.tracks, self._frac):
@@ -429,7 +429,7 @@ def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, 
     opts = options_from(RotarySliceOptions, options, keywords, what="slice_rotary")
     tilt_deg, inner_radius_mm, angle_deg = opts.tilt_deg, opts.inner_radius_mm, opts.angle_deg
     dpi_y, ref_radius_mm, direction, max_swathes = opts.dpi_y, opts.ref_radius_mm, opts.direction, opts.max_swathes
-    kernel, pivot_offset_mm = opts.kernel, opts.pivot_offset_mm
+    backend, pivot_offset_mm = opts.backend, opts.pivot_offset_mm
     head = device.head
     check_tilt(head, float(tilt_deg))
     dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
@@ -438,7 +438,7 @@ def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, 
     part = PartPlacement.for_mesh(mesh, inner_radius_mm=inner_radius_mm, angle_deg=angle_deg)
     design = part.design_placement(head.pitch_mm, 25.4 / dpi_y)
     job = slice_mesh(mesh, device, layer_height_mm=opts.layer_height_mm, fill=opts.fill, gap_radius_mm=opts.gap_radius_mm,
-                     backend="numpy" if kernel == "numpy" else "jit")
+                     backend=backend)
     r_in, r_out = design.radial_range_mm()
     plan = plan_swathes(head, tilt_deg=float(tilt_deg), inner_radius_mm=r_in, outer_radius_mm=r_out,
                         mount_angle_deg=0.0, direction=int(direction), max_swathes=max_swathes)

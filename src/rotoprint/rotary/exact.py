@@ -93,7 +93,7 @@ class TrackWindows:
     sin_row: np.ndarray
     width: int
     height: int
-    kernel: str
+    backend: str
     _index: np.ndarray = field(repr=False)
     _filled: list = field(default_factory=lambda: [False], repr=False)
 
@@ -117,16 +117,16 @@ class TrackWindows:
         if self._filled[0]:
             return False
         if flat is None:
-            _k.WINDOWS_FILL[self.kernel](*self._args())
+            _k.WINDOWS_FILL[self.backend](*self._args())
         else:
-            _k.WINDOWS_FILL_GATHER[self.kernel](*self._args(), flat, out)
+            _k.WINDOWS_FILL_GATHER[self.backend](*self._args(), flat, out)
         self._filled[0] = True
         return flat is not None
 
     def gather(self, flat: np.ndarray, out: np.ndarray) -> np.ndarray:
         """``out[row + t, nozzle] = flat[flat_index[start + t]]`` for every window; ``out`` zeroed ``(F, N) uint8``."""
         if not self._fill(flat, out):
-            _k.WINDOWS_GATHER[self.kernel](flat, self.nozzle, self.row, self.count, self.start, self._index, out)
+            _k.WINDOWS_GATHER[self.backend](flat, self.nozzle, self.row, self.count, self.start, self._index, out)
         return out
 
     def dense(self, n_firings: int, n_nozzles: int, sentinel: int) -> np.ndarray:
@@ -190,7 +190,7 @@ class ExactMaps:
     dpi_y: float
     plan: SwathePlan
     swathes: tuple[SwatheMap, ...]
-    kernel: str
+    backend: str
 
     def apply(self, design: np.ndarray, *, kind: str | None = None) -> RotaryPrint:
         """Sample ``design`` ``(H, W) uint8`` through the maps; returns a :class:`RotaryPrint`."""
@@ -200,12 +200,12 @@ class ExactMaps:
             # one pass: the drop level of every design pixel (+ the 0 "no drop" sentinel the maps
             # point at), and whether the design is binary (the same answer as design_kind)
             level = design_levels(np.array([255], np.uint8), self.head.grey_levels, kind="binary")[0]
-            flat, binary = _k.BINARY_LEVELS[self.kernel](design, level)
+            flat, binary = _k.BINARY_LEVELS[self.backend](design, level)
             kind = kind or ("binary" if binary else "grey")
         if kind not in ("binary", "grey"):
             raise ConfigError(f"kind must be one of binary, grey; got {kind!r}")
         dead = np.array(self.head.dead_nozzles, dtype=np.int64)
-        _, bilinear = _k.KERNELS[self.kernel]
+        _, bilinear = _k.KERNELS[self.backend]
         out = []
         for j, sm in enumerate(self.swathes):
             if kind == "binary":
@@ -297,7 +297,7 @@ def exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup | None
 @functools.lru_cache(maxsize=8)
 def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> ExactMaps:
     tilt_deg, dpi_y, ref_radius_mm = setup.tilt_deg, setup.dpi_y, setup.ref_radius_mm
-    mount_angle_deg, direction, max_swathes, kernel = setup.mount_angle_deg, setup.direction, setup.max_swathes, setup.kernel
+    mount_angle_deg, direction, max_swathes, backend = setup.mount_angle_deg, setup.direction, setup.max_swathes, setup.backend
     pivot_offset_mm = setup.pivot_offset_mm
     dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
     r_in, r_out = placement.radial_range_mm()
@@ -338,7 +338,7 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
         # and last drop in the design by the exact test; the index itself is filled on first use
         wk, wlo, whi = _k.track_windows(lay.r_mm, lay.phi_rad, en, direction, angle, x0, x1, yh, dphi, i0, i1)
         cos_i, sin_i = np.cos(ii), np.sin(ii)
-        first, last = _k.WINDOW_BOUNDS[kernel](A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height)
+        first, last = _k.WINDOW_BOUNDS[backend](A, B, C, D, E, F, wk, wlo, whi, cos_i, sin_i, width, height)
         has = last > first
         if has.any():
             b0 = int(first[has].min())
@@ -359,7 +359,7 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
             sin_row=sin_i[b0:b1].copy(),
             width=width,
             height=height,
-            kernel=kernel,
+            backend=backend,
             _index=np.empty(int(count.sum()), _k.index_dtype(width, height)),
         )
         maps.append(
@@ -387,7 +387,7 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
         dpi_y=dpi_y,
         plan=plan,
         swathes=tuple(maps),
-        kernel=kernel,
+        backend=backend,
     )
 
 # the cache (8 maps, keyed by head, placement and setup) is emptied and inspected as before

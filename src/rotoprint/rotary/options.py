@@ -1,5 +1,5 @@
 """The rotary setup as option objects: :class:`RotarySetup` (what the transforms and their
-maps depend on: tilt, clock, reference radius, mount angle, direction, swathe limit, kernel)
+maps depend on: tilt, clock, reference radius, mount angle, direction, swathe limit, backend)
 and :class:`RotarySliceOptions` (direct rotary slicing: the part's placement, the layer
 height, the fill, plus the setup). Frozen: nothing is set on them after they are made."""
 
@@ -12,15 +12,15 @@ from typing import Any
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
 
-__all__ = ["RotarySetup", "RotarySliceOptions", "KERNELS", "options_from"]
+__all__ = ["RotarySetup", "RotarySliceOptions", "BACKENDS", "options_from"]
 
 #: The jit kernels or the pure-numpy references (identical output).
-KERNELS = ("numba", "numpy")
+BACKENDS = ("jit", "numpy")
 
 
-def _check_kernel(kernel: str) -> None:
-    if kernel not in KERNELS:
-        raise ConfigError(f"kernel must be one of {', '.join(KERNELS)}; got {kernel!r}")
+def _check_backend(backend: str) -> None:
+    if backend not in BACKENDS:
+        raise ConfigError(f"backend must be one of {', '.join(BACKENDS)}; got {backend!r}")
 
 
 @dataclass(frozen=True)
@@ -42,7 +42,7 @@ class RotarySetup:
         +1: platform turns counter-clockwise seen from above; -1 clockwise.
     max_swathes : int, optional
         Refuse designs that need more radial swathes.
-    kernel : {'numba', 'numpy'}
+    backend : {'jit', 'numpy'}
         The jit kernel or the pure-numpy reference; their output is identical.
     pivot_offset_mm : float
         Radial offset of every swathe's pivot from the planned one (an interlaced pass,
@@ -55,11 +55,11 @@ class RotarySetup:
     mount_angle_deg: float = 0.0
     direction: int = 1
     max_swathes: int | None = None
-    kernel: str = "numba"
+    backend: str = "jit"
     pivot_offset_mm: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_kernel(self.kernel)
+        _check_backend(self.backend)
 
 
 @dataclass(frozen=True)
@@ -86,7 +86,7 @@ class RotarySliceOptions:
     fill : {'nonzero', 'evenodd'}
     gap_radius_mm : float
         Open meshes: see :func:`rotoprint.slice_mesh`.
-    kernel : {'numba', 'numpy'}
+    backend : {'jit', 'numpy'}
     pivot_offset_mm : float
         Radial offset of every swathe's pivot from the planned one: one interlaced pass
         (:func:`rotoprint.rotary.interlace.plan_passes`); the swathes keep their nozzles.
@@ -103,14 +103,14 @@ class RotarySliceOptions:
     equalise: bool = False
     fill: str = "nonzero"
     gap_radius_mm: float = DEFAULT_GAP_RADIUS_MM
-    kernel: str = "numba"
+    backend: str = "jit"
     pivot_offset_mm: float = 0.0
 
     def __post_init__(self) -> None:
         from ..slicing import FILL_RULES
         from .head import DIRECTIONS
 
-        _check_kernel(self.kernel)
+        _check_backend(self.backend)
         if self.fill not in FILL_RULES:
             raise ConfigError(f"fill must be one of {', '.join(FILL_RULES)}, got {self.fill!r}")
         if self.direction not in DIRECTIONS:
@@ -120,7 +120,7 @@ class RotarySliceOptions:
     def setup(self) -> RotarySetup:
         """The head's setup (mount angle 0: the part's angle places it)."""
         return RotarySetup(tilt_deg=self.tilt_deg, dpi_y=self.dpi_y, ref_radius_mm=self.ref_radius_mm,
-                           direction=self.direction, max_swathes=self.max_swathes, kernel=self.kernel,
+                           direction=self.direction, max_swathes=self.max_swathes, backend=self.backend,
                            pivot_offset_mm=self.pivot_offset_mm)
 
     def as_dict(self) -> dict[str, Any]:
