@@ -5,7 +5,8 @@ spread factor 2 (49.6 um footprints), deposit model on the interior.
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX]
 
 Rows: one pass at the head's native clock (today's print); the planned interlaced passes at the
-planned clock; the same with 5 seeded dead nozzles; the planned passes equalised. The issue's
+planned clock (angular phases and swathe overlap, and beside them the same passes without
+either: radial offsets only); the same with 5 seeded dead nozzles; the planned passes equalised. The issue's
 baseline (60 um discs judged at design-pixel centres, `disc_uncovered_fraction`) is printed
 beside the one-pass row. A second table gives the cost floor: the time of one pass's firing
 images (the exact transform at the planned clock and the pass's pivot offset) over the same
@@ -113,13 +114,19 @@ def main() -> None:
         g1 = plan_passes(head0, sp, footprint_um=49.6, passes=4).single_pass_largest_gap_mm
         print(film_row("one pass, native clock", tilt, 1, g1 * 1000, head0.dpi_y, f, time.perf_counter() - t,
                        f" issue's baseline (60 um discs at pixel centres): {100 * base:.1f} % |"), flush=True)
-        for label, head, eq in (("planned passes", head0, False), ("planned passes, 5 dead nozzles", head0.model_copy(update={"dead_nozzles": dead}), False),
-                                ("planned passes, equalised", head0, True)):
+        dead_head = head0.model_copy(update={"dead_nozzles": dead})
+        for label, head, eq, inter in (("planned passes, no angular interlace / edge overlap", head0, False, False),
+                                       ("planned passes", head0, False, True),
+                                       ("planned passes, 5 dead nozzles, no interlace / overlap", dead_head, False, False),
+                                       ("planned passes, 5 dead nozzles", dead_head, False, True),
+                                       ("planned passes, equalised, no interlace / overlap", head0, True, False),
+                                       ("planned passes, equalised", head0, True, True)):
             for passes in ("auto", "6"):
                 t = time.perf_counter()
                 try:
                     with tempfile.TemporaryDirectory() as td:
-                        m = transform_passes(d, head, pl, Path(td) / "p.png", PassOptions(RotarySetup(tilt_deg=tilt), passes=passes, equalise=eq))
+                        m = transform_passes(d, head, pl, Path(td) / "p.png", PassOptions(RotarySetup(tilt_deg=tilt), passes=passes, equalise=eq,
+                                                                                          phases=inter, edge_overlap=inter))
                         prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
                 except GeometryError as exc:
                     print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)
