@@ -25,9 +25,22 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   within ``c D / 2`` of a drop centre, where a spherical cap still holds ``1 - c^2`` of its
   peak height; ``b`` is never coarser than the head's native ``25.4 / dpi_y`` and never finer
   than :data:`MAX_CLOCK_FACTOR` times native (the cost floor of a pass's firing images).
-  Measured on the test design (``docs/rotary.md``): the interior closes at every tilt, but the
-  thinnest point stays below half the mean at tilted settings (``1/r`` within a swathe, the
-  along-track ripple at a swathe's outer end, the design's inner edge and the swathe seams).
+- Angular interlace: each pass also gets a phase, a fraction of the along-track firing step
+  (:func:`interlace_phases`: 0, 1/2, 1/4, 3/4 in the passes' radial order), so that the drops
+  of radially neighbouring passes fall between each other along the track instead of in phase.
+  A pass's firing angles shifted by ``delta`` are the same firing data as a head whose mount
+  angle is larger by ``delta``, so a pass is printed (exactly) with ``mount_angle_deg +
+  delta`` (:func:`phase_angles`; the sidecar records it, the machine program's index offset
+  takes it out again).
+- Edges and seams: :func:`transform_passes` plans the swathes with an overlap of one row period
+  (:func:`pass_overlap_mm`, the offsets' span): each swathe's full-density band reaches that far
+  inside its owned band, and a pass prints with the nozzles whose moved track lies in the band
+  (:func:`~rotoprint.rotary.swathes.pass_enabled`). Every pass then prints the design's inner
+  edge and both sides of every seam, each radius with one swathe per pass (no doubled volume).
+
+Measured on the test design (``docs/rotary.md``): the interior closes at every tilt; the
+thinnest point rises with the interlace but stays below half the mean at full size, because of
+``1/r`` within a swathe (one angular clock per swathe) and the union's widest track gaps.
 """
 
 from __future__ import annotations
@@ -362,7 +375,26 @@ def plan_passes(
     pitch = float((inside0[-1] - inside0[0]) / (inside0.size - 1)) if inside0.size > 1 else head.pitch_mm
 
     def optimise(n: int) -> list[float]:
-        offs = [q * pitch / n for q in range(n)]
+        if n <= 1:
+            return [0.0]
+        starts = [[q * pitch / n for q in range(n)]]
+        if dead:
+            # dead tracks are missing in every pass at r_k + offset: whole-pitch shifts between
+            # the passes spread them apart, so coordinate descent also starts from a few of those
+            whole = max(1, int(round(period / pitch)))
+            for perm in ([0, 1, 2, 3], [0, 2, 1, 3], [0, 3, 1, 2], [0, 2, 3, 1]):
+                starts.append([(q * pitch / n + (perm[q % 4] % whole) * pitch) % period for q in range(n)])
+        best = None
+        for st0 in starts:
+            offs = descend(list(st0))
+            total = sum((profile(o) for o in offs), np.zeros(n_grid))
+            key = (round(largest_gap(offs) * 1e3 / _GAP_QUANTUM_UM), float(score(total[None, :])[0]))
+            if best is None or key < best[0]:
+                best = (key, offs)
+        return best[1]
+
+    def descend(offs: list[float]) -> list[float]:
+        n = len(offs)
         coarse = np.linspace(0.0, period, _CANDIDATES, endpoint=False)
         step = period / _CANDIDATES
         for rnd in range(_ROUNDS + 1 if n > 1 else 0):
@@ -662,9 +694,12 @@ def transform_passes(design: np.ndarray, device, placement, out_png, options: Pa
     placement : Placement
     out_png : path
         ``PRINT.png``: pass ``q`` is written as ``PRINT-p{q+1}.png`` (swathes ``-p{q+1}-s1.png``,
-        ...) with its own sidecar; every swathe of it records ``pass``, ``passes`` and
-        ``pass_offset_mm`` (its ``pivot_radius_mm`` is already moved by the offset).
-        ``PRINT-passes.json`` (format :data:`PASSES_FORMAT`) lists the plan and the files.
+        ...) with its own sidecar; every swathe of it records ``pass``, ``passes``,
+        ``pass_offset_mm`` (its ``pivot_radius_mm`` is already moved by the offset),
+        ``pass_phase`` (its angular phase on that swathe, a fraction of the firing step) and
+        ``pass_phase_angle_deg`` (the sidecar's ``mount_angle_deg`` already includes it).
+        ``PRINT-passes.json`` (format :data:`PASSES_FORMAT`) lists the plan (with ``phases``
+        and ``swathe_overlap_mm``), ``phase_angles_deg``, ``phases_by_swathe`` and the files.
     options : PassOptions
     design_info : dict, optional
         Recorded in the sidecars (path, digest, ...).
