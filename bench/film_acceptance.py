@@ -30,7 +30,7 @@ from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
 from rotoprint.rotary.deposit import deposit_print
 from rotoprint.rotary.files import read_print
-from rotoprint.rotary.interlace import PassOptions, plan_passes, read_passes, transform_passes
+from rotoprint.rotary.interlace import PassOptions, pass_overlap_mm, phase_angles, plan_passes, read_passes, transform_passes
 from rotoprint.rotary.options import RotarySetup
 from rotoprint.rotary.testimage import test_design
 
@@ -69,11 +69,14 @@ def cost_table(d, pl, head, tilts) -> None:
           f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio |")
     print("|---|---|---|---|---|---|---|---|---|")
     for tilt in tilts:
-        sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
-        pp = plan_passes(head, sp, footprint_um=49.6)
+        ov = pass_overlap_mm(head)
+        sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out, overlap_mm=ov)
+        pp = plan_passes(head, sp, footprint_um=49.6, phases=True)
         off = pp.offsets_mm[-1]
+        ang = phase_angles(sp, pp.phases, dpi_y=pp.dpi_y)[0][-1]  # the last pass as printed: offset, phase, overlap
         t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt))
-        t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off))
+        t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off,
+                                           mount_angle_deg=ang, swathe_overlap_mm=ov))
         row = f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.2f} | {t1:.2f} | {t1 / t0:.2f} |"
         if mesh is not None:
             h = float(mesh.bounds[1][2] - mesh.bounds[0][2])

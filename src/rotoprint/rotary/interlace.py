@@ -270,7 +270,7 @@ def plan_passes(
     max_passes: int = MAX_PASSES,
     dead_nozzles: Sequence[int] | None = None,
     cover_share: float = COVER_SHARE,
-    phases: bool = True,
+    phases: bool = False,
 ) -> PassPlan:
     """Choose the number of passes (unless given), their radial offsets and the clock.
 
@@ -292,7 +292,9 @@ def plan_passes(
     cover_share : float
         ``c`` of the module docstring, in (0, 1].
     phases : bool
-        Give the passes angular phases (:attr:`PassPlan.phases`, :func:`interlace_phases`).
+        Give the passes angular phases (:attr:`PassPlan.phases`, :func:`interlace_phases`); off
+        by default, since the caller must print them (:func:`transform_passes` does, with
+        :func:`phase_angles`).
 
     Returns
     -------
