@@ -118,12 +118,12 @@ def main() -> None:
         print(film_row("one pass, native clock", tilt, 1, g1 * 1000, head0.dpi_y, f, time.perf_counter() - t,
                        f" issue's baseline (60 um discs at pixel centres): {100 * base:.1f} % |"), flush=True)
         dead_head = head0.model_copy(update={"dead_nozzles": dead})
-        for label, head, eq, inter in (("planned passes, no angular interlace / edge overlap", head0, False, False),
-                                       ("planned passes", head0, False, True),
-                                       ("planned passes, 5 dead nozzles, no interlace / overlap", dead_head, False, False),
-                                       ("planned passes, 5 dead nozzles", dead_head, False, True),
-                                       ("planned passes, equalised, no interlace / overlap", head0, True, False),
-                                       ("planned passes, equalised", head0, True, True)):
+        for label, head, eq, inter in (("planned passes (radial offsets only, the default)", head0, False, False),
+                                       ("planned passes, angular phases + edge overlap", head0, False, True),
+                                       ("planned passes, 5 dead nozzles", dead_head, False, False),
+                                       ("planned passes, 5 dead nozzles, phases + overlap", dead_head, False, True),
+                                       ("planned passes, equalised", head0, True, False),
+                                       ("planned passes, equalised, phases + overlap", head0, True, True)):
             for passes in ("auto", "6"):
                 t = time.perf_counter()
                 try:
