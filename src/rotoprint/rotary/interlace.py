@@ -25,22 +25,23 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   within ``c D / 2`` of a drop centre, where a spherical cap still holds ``1 - c^2`` of its
   peak height; ``b`` is never coarser than the head's native ``25.4 / dpi_y`` and never finer
   than :data:`MAX_CLOCK_FACTOR` times native (the cost floor of a pass's firing images).
-- Angular interlace: each pass also gets a phase, a fraction of the along-track firing step
+- Angular interlace (``phases``): each pass also gets a phase, a fraction of the along-track firing step
   (:func:`interlace_phases`: 0, 1/2, 1/4, 3/4 in the passes' radial order), so that the drops
   of radially neighbouring passes fall between each other along the track instead of in phase.
   A pass's firing angles shifted by ``delta`` are the same firing data as a head whose mount
   angle is larger by ``delta``, so a pass is printed (exactly) with ``mount_angle_deg +
   delta`` (:func:`phase_angles`; the sidecar records it, the machine program's index offset
   takes it out again).
-- Edges and seams: :func:`transform_passes` plans the swathes with an overlap of one row period
+- Edges and seams (``edge_overlap``): :func:`transform_passes` plans the swathes with an overlap of one row period
   (:func:`pass_overlap_mm`, the offsets' span): each swathe's full-density band reaches that far
   inside its owned band, and a pass prints with the nozzles whose moved track lies in the band
   (:func:`~rotoprint.rotary.swathes.pass_enabled`). Every pass then prints the design's inner
   edge and both sides of every seam, each radius with one swathe per pass (no doubled volume).
 
-Measured on the test design (``docs/rotary.md``): the interior closes at every tilt; the
-thinnest point rises with the interlace but stays below half the mean at full size, because of
-``1/r`` within a swathe (one angular clock per swathe) and the union's widest track gaps.
+Both are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``): the
+interior closes at every tilt; the thinnest point stays below half the mean at tilted settings
+(``1/r`` within a swathe, one angular clock per swathe, sets the local mean; the phases move the
+pinholes between the passes' drops, with no steady gain).
 """
 
 from __future__ import annotations
