@@ -5,7 +5,8 @@ spread factor 2 (49.6 um footprints), deposit model on the interior.
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX]
 
 Rows: one pass at the head's native clock (today's print); the planned interlaced passes at the
-planned clock; the same with 5 seeded dead nozzles; the planned passes equalised. The issue's
+planned clock (angular phases and swathe overlap, and beside them the same passes without
+either: radial offsets only); the same with 5 seeded dead nozzles; the planned passes equalised. The issue's
 baseline (60 um discs judged at design-pixel centres, `disc_uncovered_fraction`) is printed
 beside the one-pass row. A second table gives the cost floor: the time of one pass's firing
 images (the exact transform at the planned clock and the pass's pivot offset) over the same
@@ -29,7 +30,7 @@ from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
 from rotoprint.rotary.deposit import deposit_print
 from rotoprint.rotary.files import read_print
-from rotoprint.rotary.interlace import PassOptions, plan_passes, read_passes, transform_passes
+from rotoprint.rotary.interlace import PassOptions, pass_overlap_mm, phase_angles, plan_passes, read_passes, transform_passes
 from rotoprint.rotary.options import RotarySetup
 from rotoprint.rotary.testimage import test_design
 
@@ -68,11 +69,14 @@ def cost_table(d, pl, head, tilts) -> None:
           f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio |")
     print("|---|---|---|---|---|---|---|---|---|")
     for tilt in tilts:
-        sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
-        pp = plan_passes(head, sp, footprint_um=49.6)
+        ov = pass_overlap_mm(head)
+        sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out, overlap_mm=ov)
+        pp = plan_passes(head, sp, footprint_um=49.6, phases=True)
         off = pp.offsets_mm[-1]
+        ang = phase_angles(sp, pp.phases, dpi_y=pp.dpi_y)[0][-1]  # the last pass as printed: offset, phase, overlap
         t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt))
-        t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off))
+        t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off,
+                                           mount_angle_deg=ang, swathe_overlap_mm=ov))
         row = f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.2f} | {t1:.2f} | {t1 / t0:.2f} |"
         if mesh is not None:
             h = float(mesh.bounds[1][2] - mesh.bounds[0][2])
@@ -113,13 +117,19 @@ def main() -> None:
         g1 = plan_passes(head0, sp, footprint_um=49.6, passes=4).single_pass_largest_gap_mm
         print(film_row("one pass, native clock", tilt, 1, g1 * 1000, head0.dpi_y, f, time.perf_counter() - t,
                        f" issue's baseline (60 um discs at pixel centres): {100 * base:.1f} % |"), flush=True)
-        for label, head, eq in (("planned passes", head0, False), ("planned passes, 5 dead nozzles", head0.model_copy(update={"dead_nozzles": dead}), False),
-                                ("planned passes, equalised", head0, True)):
+        dead_head = head0.model_copy(update={"dead_nozzles": dead})
+        for label, head, eq, inter in (("planned passes (radial offsets only, the default)", head0, False, False),
+                                       ("planned passes, angular phases + edge overlap", head0, False, True),
+                                       ("planned passes, 5 dead nozzles", dead_head, False, False),
+                                       ("planned passes, 5 dead nozzles, phases + overlap", dead_head, False, True),
+                                       ("planned passes, equalised", head0, True, False),
+                                       ("planned passes, equalised, phases + overlap", head0, True, True)):
             for passes in ("auto", "6"):
                 t = time.perf_counter()
                 try:
                     with tempfile.TemporaryDirectory() as td:
-                        m = transform_passes(d, head, pl, Path(td) / "p.png", PassOptions(RotarySetup(tilt_deg=tilt), passes=passes, equalise=eq))
+                        m = transform_passes(d, head, pl, Path(td) / "p.png", PassOptions(RotarySetup(tilt_deg=tilt), passes=passes, equalise=eq,
+                                                                                          phases=inter, edge_overlap=inter))
                         prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
                 except GeometryError as exc:
                     print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)

@@ -273,3 +273,112 @@ def test_clock_within_the_cost_floor(head):
     assert wide.dpi_y == pytest.approx(head.dpi_y)  # never coarser than native
     with pytest.raises(GeometryError, match="not less than the 20.0 um footprint"):
         plan_passes(head, sp, footprint_um=20.0, passes=2)
+
+
+def test_interlace_phases_and_their_angles(head):
+    from rotoprint.rotary.interlace import interlace_phases, phase_angles
+
+    # radial neighbours (in offset order) half a step apart, next neighbours a quarter
+    assert interlace_phases([0.0, 0.03, 0.01, 0.02]) == (0.0, 0.75, 0.5, 0.25)
+    assert interlace_phases([0.0, 0.02]) == (0.0, 0.5)
+    assert interlace_phases([0.0, 0.05, 0.02]) == pytest.approx((0.0, 2 / 3, 1 / 3))
+    assert interlace_phases([0.0]) == (0.0,)
+    sp = plan_swathes(head, tilt_deg=20.0, inner_radius_mm=60.0, outer_radius_mm=145.0)
+    assert len(sp.swathes) == 2
+    phases = (0.0, 0.75, 0.5, 0.25)
+    angles, got = phase_angles(sp, phases, dpi_y=720.0)
+    assert angles[0] == 0.0 and got.shape == (4, 2)
+    # swathe 0 gets the phases exactly (whole steps added); swathe 1's step is another, so its
+    # phases differ, but they stay spread: not all passes within a quarter step of each other
+    assert np.allclose(np.mod(got[:, 0] - np.array(phases) + 0.5, 1.0) - 0.5, 0.0, atol=1e-9)
+    ph1 = np.sort(got[:, 1])
+    assert np.max(np.diff(np.concatenate([ph1, [ph1[0] + 1]]))) < 0.5
+    assert np.abs(np.exp(2j * np.pi * got[:, 1]).sum()) < 2.0  # far from 4 (all in phase)
+
+
+def test_every_pass_prints_the_edges_and_seams(head):
+    from rotoprint.rotary.interlace import pass_overlap_mm
+
+    r_in, r_out = 60.0, 145.0
+    old = plan_swathes(head, tilt_deg=20.0, inner_radius_mm=r_in, outer_radius_mm=r_out)
+    sp = plan_swathes(head, tilt_deg=20.0, inner_radius_mm=r_in, outer_radius_mm=r_out, overlap_mm=pass_overlap_mm(head))
+    assert sp.overlap_mm == pass_overlap_mm(head) and len(sp.swathes) == len(old.swathes)
+    # at offset 0 the overlapped plan prints each band with the same number of tracks as before, within a few
+    for a, b in zip(old.swathes, sp.swathes):
+        assert abs(int(a.enabled.sum()) - int(b.enabled.sum())) <= 4 and b.usable.sum() > b.enabled.sum()
+    g1 = float(np.diff(union_radii(head, old, [0.0])).max())  # one pass's largest gap (137 um at tilt 20)
+    pp = plan_passes(head, sp, footprint_um=49.6, passes=4)
+    assert pp.swathe_overlap_mm == sp.overlap_mm and max(pp.offsets_mm) > 0.05
+    seams = [s.band_mm[0] for s in sp.swathes[1:]]
+    for o in pp.offsets_mm:
+        r = union_radii(head, sp, [o])
+        # each pass starts within a single pass's largest gap of the inner edge and ends as near the outer one
+        assert r[0] >= r_in - 1e-9 and r[0] - r_in < g1 and r_out - r[-1] < g1
+        assert r[-1] <= r_out + 1e-9
+        for s in seams:  # the seam is printed by this pass too (its two swathes' tracks meet there)
+            near = r[(r > s - 0.5) & (r < s + 0.5)]
+            assert near.min() < s < near.max() and np.diff(near).max() <= 1.25 * g1
+    u = union_radii(head, sp, pp.offsets_mm)
+    for s in seams:  # and the union closes it as well as anywhere
+        near = u[(u > s - 0.5) & (u < s + 0.5)]
+        assert np.diff(near).max() <= pp.largest_gap_mm + 1e-9
+    # without the overlap, a pass moved outwards leaves the design's inner edge to the others
+    far = max(pp.offsets_mm)
+    assert union_radii(head, old, [far])[0] >= r_in + far
+    # every radius is printed by one swathe per pass: the tracks of one pass do not repeat
+    from rotoprint.rotary.head import nozzle_layout
+    from rotoprint.rotary.swathes import pass_enabled
+
+    for o in pp.offsets_mm:
+        for j, s in enumerate(sp.swathes):
+            m = sp.mount(j)
+            lay = nozzle_layout(head, type(m)(m.pivot_radius_mm + o, tilt_deg=m.tilt_deg, mount_angle_deg=m.mount_angle_deg,
+                                             direction=m.direction))
+            rr = lay.r_mm[pass_enabled(sp, j, lay.r_mm)]
+            assert rr.min() >= s.band_mm[0] - 1e-9 and rr.max() < s.band_mm[1]
+
+
+def test_interlaced_passes_record_phases_and_even_a_small_film(head, tmp_path):
+    """A small design at tilt 20: with the angular interlace and the swathe overlap the
+    thinnest point is at least half the mean; with radial offsets only it is not."""
+    from rotoprint.rotary.files import read_print
+    from rotoprint.rotary.interlace import PassOptions, read_passes, transform_passes
+
+    d = np.full((20, 120), 255, np.uint8)
+    pl = Placement(120, 20, PX, PX, inner_radius_mm=60.0)
+    films = {}
+    for inter in (False, True):
+        out = tmp_path / f"i{int(inter)}" / "p.png"
+        out.parent.mkdir()
+        m = transform_passes(d, head, pl, out, PassOptions(RotarySetup(tilt_deg=20.0, mount_angle_deg=10.0), phases=inter, edge_overlap=inter))
+        sides = read_passes(out.with_name("p-passes.json"))
+        prs = [read_print(s)[0] for s in sides]
+        pp = m["pass_plan"]
+        assert pp["passes"] == len(prs) == 4
+        if inter:
+            assert len(pp["phases"]) == 4 and pp["phases"][0] == 0.0 and sorted(pp["phases"]) == [0.0, 0.25, 0.5, 0.75]
+            assert pp["swathe_overlap_mm"] > 0
+            assert len(m["phase_angles_deg"]) == 4 and m["phase_angles_deg"][0] == 0.0
+            for q, (pr, s) in enumerate(zip(prs, sides)):
+                # the pass is printed as a head turned by its phase angle (recorded in the sidecar)
+                assert pr.mount_angle_deg == pytest.approx(10.0 + m["phase_angles_deg"][q], abs=1e-12)
+                side = json.loads(s.read_text())
+                sw0 = side["swathes"][0]
+                assert sw0["pass"] == q and sw0["pass_phase"] == pytest.approx(m["phases_by_swathe"][q][0])
+                assert sw0["pass_phase_angle_deg"] == m["phase_angles_deg"][q]
+            # the drops of pass q land its phase angle after those of the same pass unturned
+            from rotoprint.rotary.head import Mount, nozzle_layout
+
+            sw = prs[1].swathes[0]
+            turned = nozzle_layout(head, Mount(sw.pivot_radius_mm, tilt_deg=20.0, mount_angle_deg=prs[1].mount_angle_deg))
+            plain = nozzle_layout(head, Mount(sw.pivot_radius_mm, tilt_deg=20.0, mount_angle_deg=10.0))
+            assert np.allclose(turned.phi_rad - plain.phi_rad, np.radians(m["phase_angles_deg"][1]), atol=1e-12)
+            assert np.allclose(turned.r_mm, plain.r_mm, atol=1e-12)
+        else:
+            assert pp["phases"] == [] and pp["swathe_overlap_mm"] == 0.0
+            assert all(pr.mount_angle_deg == 10.0 for pr in prs)
+        films[inter] = deposit_print(prs, d).films[0]
+    for f in films.values():
+        assert f.uncovered_fraction == 0.0 and abs(f.volume_error_fraction) < 5e-3
+    assert films[True].thinnest_to_mean >= 0.5
+    assert films[False].thinnest_to_mean < 0.5

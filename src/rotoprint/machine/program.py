@@ -311,7 +311,10 @@ class MachineWriter:
                        "mount_angle_deg": pr.mount_angle_deg, "direction": pr.direction, "dpi_y": pr.dpi_y,
                        "placement": pr.placement.to_json()}
                 n_counts = self.spec.encoder_counts_per_rev
-                exact = first * sw.dphi_rad / (2 * math.pi) * n_counts
+                # a print made for a mount turned by delta from the head's (an interlaced pass's
+                # angular phase) is the head's firing data delayed by direction * delta
+                delta = math.radians(pr.mount_angle_deg - hrec["mount_angle_deg"])
+                exact = (first * sw.dphi_rad - pr.direction * delta) / (2 * math.pi) * n_counts
                 rec["index_offset_counts"] = int(round(exact)) % n_counts
                 rec["index_error_deg"] = (round(exact) - exact) * 360.0 / n_counts
                 if self.opts.tiff:

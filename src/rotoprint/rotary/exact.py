@@ -26,7 +26,7 @@ from .head import Mount, NozzleLayout, nozzle_layout
 from .options import RotarySetup, options_from
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_levels
-from .swathes import SwathePlan, plan_swathes
+from .swathes import SwathePlan, pass_enabled, plan_swathes
 
 __all__ = ["SwatheMap", "TrackWindows", "ExactMaps", "exact_maps", "transform_exact", "firing_range", "KERNEL_NAMES"]
 
@@ -309,6 +309,7 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
         mount_angle_deg=mount_angle_deg,
         direction=direction,
         max_swathes=max_swathes,
+        overlap_mm=float(setup.swathe_overlap_mm),
     )
     a_lo, a_hi = placement.angular_range_rad()
     angle = math.radians(placement.angle_deg)
@@ -321,14 +322,14 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
         if pivot_offset_mm:
             mount = dataclasses.replace(mount, pivot_radius_mm=mount.pivot_radius_mm + float(pivot_offset_mm))
         lay = nozzle_layout(head, mount)
+        en = pass_enabled(plan, j, lay.r_mm)
         dphi, r_ref = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
-        i0, i1 = firing_range(lay.phi_rad[sw.enabled], a_lo, a_hi, dphi, direction)
-        setup.append((sw, mount, lay, dphi, r_ref, i0, i1))
+        i0, i1 = firing_range(lay.phi_rad[en], a_lo, a_hi, dphi, direction)
+        setup.append((sw, en, mount, lay, dphi, r_ref, i0, i1))
     # at most the whole firing range of every swathe (dense index for grey designs: 12 bytes each)
     check_raster_fits(head.nozzles, sum(i1 - i0 + 1 for *_, i0, i1 in setup), 12, what="exact maps")
     maps = []
-    for sw, mount, lay, dphi, r_ref, i0, i1 in setup:
-        en = sw.enabled
+    for sw, en, mount, lay, dphi, r_ref, i0, i1 in setup:
         ii = np.arange(i0, i1 + 1, dtype=np.float64) * dphi
         A, B, C, D, E, F = _k.coefficients(
             lay.r_mm, lay.phi_rad, direction, angle,

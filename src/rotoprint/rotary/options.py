@@ -47,6 +47,10 @@ class RotarySetup:
     pivot_offset_mm : float
         Radial offset of every swathe's pivot from the planned one (an interlaced pass,
         :mod:`rotoprint.rotary.interlace`); the swathes keep their nozzles and bands.
+    swathe_overlap_mm : float
+        Swathes planned with this overlap (:func:`~rotoprint.rotary.swathes.plan_swathes`):
+        then a pass prints, per swathe, the full-density nozzles whose moved track lies in the
+        swathe's band (the design's edges and the seams covered by every pass). 0: as before.
     """
 
     tilt_deg: float
@@ -57,6 +61,7 @@ class RotarySetup:
     max_swathes: int | None = None
     backend: str = "jit"
     pivot_offset_mm: float = 0.0
+    swathe_overlap_mm: float = 0.0
 
     def __post_init__(self) -> None:
         _check_backend(self.backend)

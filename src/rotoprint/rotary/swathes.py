@@ -18,7 +18,7 @@ from ..devices.models import InkjetHead
 from ..errors import ConfigError, GeometryError
 from .head import Mount, check_tilt, nozzle_layout, nozzle_offsets
 
-__all__ = ["Swathe", "SwathePlan", "plan_swathes"]
+__all__ = ["Swathe", "SwathePlan", "plan_swathes", "pass_enabled"]
 
 #: Radii closer than this (mm) count as equal when assigning tracks to bands.
 _EPS_MM = 1e-9
@@ -42,6 +42,10 @@ class Swathe:
         Radii of the innermost and outermost enabled tracks.
     pitch_mm : float
         Mean radial pitch of the last tracks (the step to the next swathe's first track).
+    usable : (N,) bool, optional
+        Nozzles inside the full-density band (a superset of ``enabled``): an interlaced pass
+        whose pivot is moved prints with those of them whose moved track lies in ``band_mm``
+        (:func:`pass_enabled`, when the plan has an ``overlap_mm``).
     """
 
     index: int
@@ -51,6 +55,7 @@ class Swathe:
     first_track_mm: float
     last_track_mm: float
     pitch_mm: float
+    usable: np.ndarray | None = None
 
     def to_json(self) -> dict:
         en = np.flatnonzero(self.enabled)
@@ -75,6 +80,9 @@ class SwathePlan:
     inner_radius_mm: float
     outer_radius_mm: float
     swathes: tuple[Swathe, ...]
+    #: Each swathe's full-density band reaches this far inside its owned band (mm), so that a
+    #: pass with a pivot offset in ``[0, overlap_mm]`` still covers the whole band.
+    overlap_mm: float = 0.0
 
     def __len__(self) -> int:
         return len(self.swathes)
@@ -106,6 +114,7 @@ def plan_swathes(
     mount_angle_deg: float = 0.0,
     direction: int = 1,
     max_swathes: int | None = None,
+    overlap_mm: float = 0.0,
 ) -> SwathePlan:
     """Pivot radii and nozzle sets covering the radial range ``[inner, outer]`` mm.
 
@@ -125,6 +134,13 @@ def plan_swathes(
         +1 the platform turns counter-clockwise seen from above, -1 clockwise.
     max_swathes : int, optional
         Refuse a plan needing more swathes than this (``>= 1``).
+    overlap_mm : float
+        Interlaced passes (:mod:`rotoprint.rotary.interlace`): every swathe's first track is
+        placed this much further in, so that its full-density band reaches ``overlap_mm``
+        inside its owned band (inside the design's inner edge for the first swathe). A pass
+        whose pivot is moved outwards by up to ``overlap_mm`` then still covers its swathe's
+        whole band with the tracks of :func:`pass_enabled`: the design's edge and every seam
+        are printed by every pass, each radius by one swathe per pass. 0 (default): as before.
 
     Returns
     -------
@@ -153,6 +169,8 @@ def plan_swathes(
         raise GeometryError(f"radial range must satisfy 0 < inner < outer, got {inner_radius_mm} .. {outer_radius_mm} mm")
     if max_swathes is not None and max_swathes < 1:
         raise ConfigError(f"max_swathes must be at least 1, got {max_swathes}")
+    if not (math.isfinite(overlap_mm) and overlap_mm >= 0):
+        raise ConfigError(f"swathe overlap must be >= 0 mm, got {overlap_mm!r}")
     s, t, row = nozzle_offsets(head)
     th = math.radians(tilt_deg)
     X = s * math.cos(th) - t * math.sin(th)
@@ -216,7 +234,7 @@ def plan_swathes(
     R0 = solve(inner_radius_mm + pitch0 / 2)
     _, lo, hi, _, T = band_tracks(R0)
     pitch0 = (T[2] - T[0]) / 2
-    target = inner_radius_mm + pitch0 / 2
+    target = inner_radius_mm + pitch0 / 2 - overlap_mm
     b_lo = inner_radius_mm
 
     swathes: list[Swathe] = []
@@ -239,12 +257,13 @@ def plan_swathes(
                 first_track_mm=float(r[nz].min()),
                 last_track_mm=float(r[nz].max()),
                 pitch_mm=pitch,
+                usable=inb,
             )
         )
         if last or len(swathes) >= _MAX_SWATHES_HARD:
             break
         b_lo = b_hi
-        target = hi + pitch
+        target = hi + pitch - overlap_mm
     if max_swathes is not None and len(swathes) > max_swathes:
         band = swathes[0].last_track_mm - swathes[0].first_track_mm
         raise GeometryError(
@@ -260,4 +279,28 @@ def plan_swathes(
         inner_radius_mm=float(inner_radius_mm),
         outer_radius_mm=float(outer_radius_mm),
         swathes=tuple(swathes),
+        overlap_mm=float(overlap_mm),
     )
+
+
+def pass_enabled(plan: SwathePlan, j: int, r_mm: np.ndarray) -> np.ndarray:
+    """Nozzles that print in swathe ``j`` of a pass whose nozzles lie at radii ``r_mm``.
+
+    Parameters
+    ----------
+    plan : SwathePlan
+    j : int
+    r_mm : (N,) float64
+        Track radius of every nozzle with the pass's pivot.
+
+    Returns
+    -------
+    (N,) bool
+        ``plan.swathes[j].enabled`` when the plan has no overlap (as before); else the usable
+        nozzles whose track lies in the swathe's band ``[lo, hi)``.
+    """
+    sw = plan.swathes[j]
+    if plan.overlap_mm <= 0 or sw.usable is None:
+        return sw.enabled
+    lo, hi = sw.band_mm
+    return sw.usable & (r_mm >= lo - _EPS_MM) & (r_mm < hi)
