@@ -30,7 +30,8 @@ from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
 from rotoprint.rotary.deposit import deposit_print
 from rotoprint.rotary.files import read_print
-from rotoprint.rotary.interlace import PassOptions, pass_overlap_mm, phase_angles, plan_passes, read_passes, transform_passes
+from rotoprint.rotary.interlace import PassOptions, pass_overlap_mm, phase_angles, plan_passes, read_passes
+from rotoprint.pipeline.prints import transform_passes
 from rotoprint.rotary.options import RotarySetup
 from rotoprint.rotary.testimage import test_design
 

@@ -14,7 +14,8 @@ from rotoprint.rotary import _halftone_kernels as K
 from rotoprint.rotary.deposit import deposit_print
 from rotoprint.rotary.files import read_print
 from rotoprint.rotary.halftone import halftone_print
-from rotoprint.rotary.interlace import PassOptions, read_passes, transform_passes
+from rotoprint.rotary.interlace import PassOptions, read_passes
+from rotoprint.pipeline.prints import transform_passes
 from rotoprint.rotary.options import RotarySetup
 
 PX = 25.4 / 360

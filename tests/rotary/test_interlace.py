@@ -228,7 +228,8 @@ def test_slice_rotary_passes_cli_then_simulate_union(run_cli, tmp_path):
 
 
 def test_pass_options_and_density_shares(head, tmp_path):
-    from rotoprint.rotary.interlace import PassOptions, density_shares, read_passes, transform_passes
+    from rotoprint.rotary.interlace import PassOptions, density_shares, read_passes
+    from rotoprint.pipeline.prints import transform_passes
     from rotoprint.rotary.exact import swathe_clock
 
     with pytest.raises(ConfigError, match="pivot_offset_mm must be 0"):
@@ -342,7 +343,8 @@ def test_interlaced_passes_record_phases_and_even_a_small_film(head, tmp_path):
     """A small design at tilt 20: with the angular interlace and the swathe overlap the
     thinnest point is at least half the mean; with radial offsets only it is not."""
     from rotoprint.rotary.files import read_print
-    from rotoprint.rotary.interlace import PassOptions, read_passes, transform_passes
+    from rotoprint.rotary.interlace import PassOptions, read_passes
+    from rotoprint.pipeline.prints import transform_passes
 
     d = np.full((20, 120), 255, np.uint8)
     pl = Placement(120, 20, PX, PX, inner_radius_mm=60.0)

@@ -42,7 +42,8 @@ def transform_command(
     from ..devices import InkjetDevice, load_device
     from ..io.images import read_grey_image
     from ..io.atomic import check_output_path
-    from ..rotary.files import print_paths, write_print
+    from ..pipeline.prints import write_print
+    from ..rotary.files import print_paths
     from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes
     from ..rotary.placement import Placement
 
@@ -66,7 +67,7 @@ def transform_command(
     pl = Placement(w, h, 25.4 / dpi, 25.4 / dpi, inner_radius_mm=radius, angle_deg=angle)
     kw = dict(tilt_deg=tilt, dpi_y=dpi_y, ref_radius_mm=ref_radius, mount_angle_deg=0.0, direction=direction, max_swathes=max_swathes)
     if passes != "1":
-        from ..rotary.interlace import transform_passes
+        from ..pipeline.prints import transform_passes
 
         if method != "exact":
             raise ConfigError("--passes needs --method exact")

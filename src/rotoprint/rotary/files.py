@@ -1,8 +1,9 @@
-"""Writing a :class:`RotaryPrint` as PNG images plus a JSON sidecar, and reading it back.
+"""A :class:`RotaryPrint` as the bytes of its PNG images plus a JSON sidecar, and reading it back.
 
 ``PRINT.png`` for one swathe; ``PRINT-s1.png``, ``PRINT-s2.png``, ... for several; always the
-sidecar ``PRINT.json`` listing them. Every file is written atomically, and only after all
-images have been encoded, so an error leaves nothing behind.
+sidecar ``PRINT.json`` listing them. :func:`print_files` makes the bytes;
+:func:`rotoprint.pipeline.prints.write_print` writes them (atomically, after all images are
+encoded, so an error leaves nothing behind).
 """
 
 from __future__ import annotations
@@ -24,7 +25,6 @@ from ..devices.models import InkjetHead
 from pydantic import ValidationError
 
 from ..errors import ImageError, InputFileError, RotoprintError
-from ..io.atomic import check_output_path, write_owned_file
 from ..io.ownership import mark_json, mark_png
 from ..io.images import png_bytes
 from ..io.images import open_image
@@ -33,7 +33,7 @@ from .head import check_tilt
 from .placement import Placement
 from .printdata import SIDECAR_FORMAT, RotaryPrint, SwatheImage, levels_to_png, png_to_levels, runs_to_mask
 
-__all__ = ["write_print", "read_print", "swathe_filenames", "sidecar_path"]
+__all__ = ["print_files", "print_paths", "read_print", "swathe_filenames", "sidecar_path"]
 
 
 def swathe_filenames(out_png: Path, n: int) -> list[Path]:
@@ -86,48 +86,6 @@ def print_paths(out_png: str | Path) -> list[Path]:
     parent = out_png.parent if str(out_png.parent) else Path(".")
     found = sorted(p for p in parent.glob(f"{glob.escape(out_png.stem)}-s*.png") if re.fullmatch(r"-s[0-9]+", p.stem[len(out_png.stem):]))
     return [out_png, out_png.with_suffix(".json"), *found]
-
-
-def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", design: dict | None = None,
-                force: bool = False, inputs=()) -> dict:
-    """Write the swathe images and the sidecar; returns the sidecar dict.
-
-    Parameters
-    ----------
-    pr : RotaryPrint
-    out_png : str or Path
-        ``PRINT.png``; the swathe images are named by :func:`swathe_filenames` and the sidecar
-        ``PRINT.json``, all in the same folder. Each file is written atomically.
-    device_name : str
-        Recorded in the sidecar as ``device``.
-    design : dict, optional
-        Extra fields for the sidecar's ``design`` table (beside ``kind``).
-    force : bool
-        Replace existing files even if they are not provably ours (each file we write carries
-        our marker, see :mod:`rotoprint.io.ownership`).
-    inputs : iterable of path
-        Files the run read (the design, a device file): no output may be one.
-
-    Returns
-    -------
-    dict
-        The sidecar as written, with the SHA-256 of every swathe image.
-
-    Raises
-    ------
-    InputFileError
-        ``out_png`` does not end in ``.png``, its folder does not exist, an output file is an
-        input, or one exists and is not provably ours (without ``force``).
-    """
-    out_png = Path(out_png)
-    if out_png.suffix.lower() != ".png":
-        raise InputFileError("output must be a .png file", path=out_png)
-    blobs, side = print_files(pr, out_png.name, device_name=device_name, design=design)
-    paths = [out_png.parent / name for name in blobs]
-    check_output_path(out_png, is_dir=False, inputs=inputs, force=force, also=[*print_paths(out_png)[1:], *paths])
-    for path, data in zip(paths, blobs.values(), strict=True):
-        write_owned_file(path, data, kind="rotary-print", inputs=inputs, force=force, marked=True)
-    return side
 
 
 def sidecar_path(path: str | Path) -> Path:

@@ -32,7 +32,7 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   angle is larger by ``delta``, so a pass is printed (exactly) with ``mount_angle_deg +
   delta`` (:func:`phase_angles`; the sidecar records it, the machine program's index offset
   takes it out again).
-- Edges and seams (``edge_overlap``): :func:`transform_passes` plans the swathes with an overlap of one row period
+- Edges and seams (``edge_overlap``): :func:`pass_prints` plans the swathes with an overlap of one row period
   (:func:`pass_overlap_mm`, the offsets' span): each swathe's full-density band reaches that far
   inside its owned band, and a pass prints with the nozzles whose moved track lies in the band
   (:func:`~rotoprint.rotary.swathes.pass_enabled`). Every pass then prints the design's inner
@@ -58,7 +58,7 @@ from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
 
-__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm"]
+__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
 
 #: A tilt interleaves evenly when its largest track gap is at most this times the mean gap.
 EVEN_RATIO = 1.25
@@ -296,7 +296,7 @@ def plan_passes(
         ``c`` of the module docstring, in (0, 1].
     phases : bool
         Give the passes angular phases (:attr:`PassPlan.phases`, :func:`interlace_phases`); off
-        by default, since the caller must print them (:func:`transform_passes` does, with
+        by default, since the caller must print them (:func:`pass_prints` does, with
         :func:`phase_angles`).
 
     Returns
@@ -610,7 +610,7 @@ def pass_files(out_png, n: int) -> list:
 
 @dataclass(frozen=True)
 class PassOptions:
-    """How a design is printed in interlaced passes (:func:`transform_passes`).
+    """How a design is printed in interlaced passes (:func:`pass_prints`).
 
     Parameters
     ----------
@@ -696,9 +696,9 @@ def density_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[floa
     return [[np.where(np.isfinite(s_), np.minimum(1.0, np.nan_to_num(s_) / widest), 0.0) for s_ in row] for row in spacing]
 
 
-def transform_passes(design: np.ndarray, device, placement, out_png, options: PassOptions, *,
-                     design_info: dict | None = None, force: bool = False, inputs=()) -> dict:
-    """Plan interlaced passes for ``design`` and write each pass as its own exact print.
+def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> tuple[str, list, dict]:
+    """Plan interlaced passes for ``design`` and make each pass's exact print (written by
+    :func:`rotoprint.pipeline.prints.transform_passes`).
 
     Parameters
     ----------
@@ -706,19 +706,7 @@ def transform_passes(design: np.ndarray, device, placement, out_png, options: Pa
     device : InkjetDevice, InkjetHead or str
         The printer (a preset name, a device, or a bare head: then no device name is recorded).
     placement : Placement
-    out_png : path
-        ``PRINT.png``: pass ``q`` is written as ``PRINT-p{q+1}.png`` (swathes ``-p{q+1}-s1.png``,
-        ...) with its own sidecar; every swathe of it records ``pass``, ``passes``,
-        ``pass_offset_mm`` (its ``pivot_radius_mm`` is already moved by the offset),
-        ``pass_phase`` (its angular phase on that swathe, a fraction of the firing step) and
-        ``pass_phase_angle_deg`` (the sidecar's ``mount_angle_deg`` already includes it).
-        ``PRINT-passes.json`` (format :data:`PASSES_FORMAT`) lists the plan (with ``phases``
-        and ``swathe_overlap_mm``), ``phase_angles_deg``, ``phases_by_swathe`` and the files.
     options : PassOptions
-    design_info : dict, optional
-        Recorded in the sidecars (path, digest, ...).
-    force, inputs
-        As for :func:`~rotoprint.rotary.files.write_print`.
 
     The clock is the plan's unless ``options.setup.dpi_y`` is given. With ``equalise`` and a
     grey-level head, every site keeps its drop and its size follows the track's share; with a
@@ -729,18 +717,20 @@ def transform_passes(design: np.ndarray, device, placement, out_png, options: Pa
 
     Returns
     -------
-    dict
-        The passes manifest as written.
+    device_name : str
+        ``""`` for a bare head.
+    prints : list of RotaryPrint
+        One per pass; every swathe records ``pass``, ``passes``, ``pass_offset_mm`` (its
+        ``pivot_radius_mm`` is already moved by the offset), ``pass_phase`` and
+        ``pass_phase_angle_deg``.
+    manifest : dict
+        The passes manifest (format :data:`PASSES_FORMAT`) without its ``files``.
     """
     import dataclasses
-    import json
-    from pathlib import Path
 
     from ..devices import InkjetDevice, load_device
-    from ..io.atomic import write_owned_file
     from .deposit import DepositOptions
     from .exact import transform_exact
-    from .files import write_print
     from .swathes import plan_swathes
 
     if isinstance(device, InkjetHead):
@@ -781,13 +771,12 @@ def transform_passes(design: np.ndarray, device, placement, out_png, options: Pa
         clock = clock * math.ceil(1.0 / f_min - 1e-9)
     elif options.balance:
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
-    files = pass_files(out_png, pp.passes)
     if pp.phases:
         angles, achieved = phase_angles(sp, pp.phases, dpi_y=clock, ref_radius_mm=st.ref_radius_mm)
     else:
         angles, achieved = tuple(0.0 for _ in pp.offsets_mm), np.zeros((pp.passes, len(sp.swathes)))
-    sides = []
-    for q, (off, f) in enumerate(zip(pp.offsets_mm, files)):
+    prints = []
+    for q, off in enumerate(pp.offsets_mm):
         pst = dataclasses.replace(st, dpi_y=clock, pivot_offset_mm=off, swathe_overlap_mm=overlap,
                                   mount_angle_deg=float(st.mount_angle_deg) + angles[q])
         pr = transform_exact(design, head, placement, pst)
@@ -801,7 +790,7 @@ def transform_passes(design: np.ndarray, device, placement, out_png, options: Pa
                                                  "pass_phase": float(achieved[q, j]), "pass_phase_angle_deg": angles[q]})
                    for j, s in enumerate(pr.swathes))
         pr = dataclasses.replace(pr, swathes=sw)
-        sides.append(write_print(pr, f, device_name=device_name, design=design_info, force=force, inputs=inputs))
+        prints.append(pr)
     manifest = {
         "format": PASSES_FORMAT,
         "version": 1,
@@ -813,15 +802,12 @@ def transform_passes(design: np.ndarray, device, placement, out_png, options: Pa
         "pass_plan": pp.to_json(),
         "phase_angles_deg": list(angles),
         "phases_by_swathe": [[float(x) for x in row] for row in achieved],
-        "files": [f.with_suffix(".json").name for f in files],
     }
-    mp = Path(out_png).with_name(Path(out_png).stem + "-passes.json")
-    write_owned_file(mp, (json.dumps(manifest, indent=2) + "\n").encode("utf-8"), kind="passes", inputs=inputs, force=force)
-    return manifest
+    return device_name, prints, manifest
 
 
 def read_passes(path) -> list:
-    """The sidecar paths of a passes manifest written by :func:`transform_passes` (or of
+    """The sidecar paths of a passes manifest written by :func:`rotoprint.pipeline.prints.transform_passes` (or of
     ``slice --rotary --passes``), in pass order, resolved beside the manifest."""
     from pathlib import Path
 
