@@ -16,7 +16,6 @@ writes into a folder that the caller installs atomically (the build's temporary 
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from dataclasses import dataclass
@@ -67,10 +66,6 @@ class MachineOptions:
             raise ConfigError(f"--bits must be 1, 2 or 4, got {self.bits!r}")
         if self.row_delays not in ("baked", "program"):
             raise ConfigError(f"--row-delays must be 'baked' or 'program', got {self.row_delays!r}")
-
-
-def _sha(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
 
 
 def row_offsets_firings(head, *, pivot_radius_mm: float, tilt_deg: float, mount_angle_deg: float, direction: int,
