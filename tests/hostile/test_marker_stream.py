@@ -85,6 +85,15 @@ def test_other_json_forms_of_a_marker_are_read_whole_and_judged_as_before(tmp_pa
     assert "not a valid rotoprint marker" in folder_not_ours(d)
 
 
+def test_a_marker_with_a_number_of_thousands_of_digits_is_not_ours_and_raises_nothing(tmp_path, small_chunks):
+    d = _folder(tmp_path, ODD)
+    write_folder_marker(d, "test")
+    text = (d / MARKER_NAME).read_text()
+    assert '"size": 3' in text
+    (d / MARKER_NAME).write_text(text.replace('"size": 3', '"size": ' + "9" * 5000, 1))  # past int()'s 4300 digits
+    assert "not a valid rotoprint marker" in folder_not_ours(d)
+
+
 def test_the_streamed_check_names_the_first_file_in_order(tmp_path, small_chunks):
     d = _folder(tmp_path, ODD)
     write_folder_marker(d, "test")

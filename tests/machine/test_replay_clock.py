@@ -154,3 +154,20 @@ def test_a_step_whose_clock_is_not_its_swathes_is_refused(small, run_cli, tmp_pa
     assert "is not the one of its swathe and image" in err and not (tmp_path / "o.png").exists()
     code, out, err = run_cli("replay", small, "--angles", "sideways", "--out", tmp_path / "o.png")
     assert code == 2 and "--angles must be one of machine, nominal" in err
+
+
+@pytest.mark.parametrize("field, bad", [("index_offset_counts", "x"), ("index_offset_counts", -5), ("index_offset_counts", 1.5),
+                                        ("index_offset_counts", 2 ** 70), ("first_firing_index", 2.5), ("first_firing_index", None)])
+def test_an_image_with_impossible_counts_is_refused_naming_it(small, field, bad):
+    from rotoprint.errors import InputFileError
+
+    prog = json.loads(small.read_text())
+    rec = prog["layers"][0]["images"][0]
+    rec[field] = bad
+    for st in prog["layers"][0]["steps"]:  # the steps that print it say the same (their own check passes)
+        if st.get("image") == rec["file"] and field == "index_offset_counts":
+            st["index_offset_counts"] = bad
+    p = small.with_name(f"bad-{field}.json")
+    p.write_text(json.dumps(prog))
+    with pytest.raises(InputFileError, match=f"image {rec['file']}: {field} must be a whole"):
+        replay_program(p, layer=0)

@@ -18,7 +18,7 @@ from rotoprint.rotary.interlace import plan_passes
 from rotoprint.rotary.deposit import DepositOptions
 
 
-def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None):
+def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None, cap=None):
     printer = {"device": "omnidot760", "tilt_deg": 20.0, "passes": passes,
                "heads": [{"name": "H1", "ink": "ammonium_sulphate"},
                          {"name": "H2", "ink": "calcium_chloride", "mount_angle_deg": 90.0}]}
@@ -34,6 +34,8 @@ def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None):
                     "shape": {"kind": "box", "size_mm": [3, 2, 0.05], "origin_mm": [0, 0, 0]}}]}
     if cycles:
         d["process"] = {"cycles_per_layer": {"plaster": cycles}}
+    if cap:
+        d.setdefault("process", {})["max_passes_per_layer"] = cap
     return parse_job(d, base_dir=tmp_path or ".", source="small.toml")
 
 
@@ -88,9 +90,24 @@ def test_one_pass_keeps_the_job_clock_and_no_interlace():
 
 
 def test_bad_passes_are_refused_naming_the_field():
-    for bad in (0, 65, "many"):
-        with pytest.raises(ConfigError, match=r"^small.toml: printer\.passes"):
+    for bad in (0, 65, "many", True, 2.5, "2"):
+        with pytest.raises(ConfigError, match=r"^small.toml: printer\.passes: must be a whole number 1\.\.64 or 'auto'"):
             _job(passes=bad)
+
+
+def test_a_limit_below_the_rounded_cycles_keeps_the_cycles_that_reach_the_layer():
+    from rotoprint.process.estimates import cycles_for_height
+
+    est = plan_job(_job()).estimates["plaster"]
+    n = est.interlace_passes
+    bare = cycles_for_height(50.0, est.per_cycle_um[0])
+    assert n > 1 and est.cycles_needed == n * -(-bare // n)
+    if est.cycles_needed == bare:
+        pytest.skip(f"the layer needs {bare} cycles, already a multiple of the {n} passes: nothing to round")
+    ppc = est.passes_per_layer // est.cycles
+    low = plan_job(_job(cap=bare * ppc)).estimates["plaster"]  # room for the layer, not for a whole round of passes
+    assert low.cycles == bare and low.per_layer_um[0] >= 50.0 * (1 - 1e-9)
+    assert any("would exceed" in w for w in low.warnings) and not any("short" in w for w in low.warnings)
 
 
 def test_dead_nozzles_are_covered_by_the_plan(tmp_path):

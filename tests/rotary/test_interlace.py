@@ -117,6 +117,19 @@ def test_interlaced_film_is_closed(head):
     assert abs(f.volume_error_fraction) < 0.005
 
 
+def test_transform_passes_writes_nothing_when_one_pass_file_is_not_ours(run_cli, tmp_path):
+    from rotoprint.io.images import write_png
+
+    p = tmp_path / "d.png"
+    write_png(p, make_design(1200)[300:340, 300:340])
+    (tmp_path / "o-p2.json").write_text("{}\n")  # the user's file where pass 2's sidecar would go
+    before = sorted(q.name for q in tmp_path.iterdir())
+    code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
+                           "--passes", "3", "--out", tmp_path / "o.png")
+    assert code == 2 and "o-p2.json" in err and "Traceback" not in err
+    assert sorted(q.name for q in tmp_path.iterdir()) == before and (tmp_path / "o-p2.json").read_text() == "{}\n"
+
+
 def test_transform_passes_cli_and_simulate_union(run_cli, tmp_path):
     from rotoprint.io.images import write_png
 

@@ -32,10 +32,8 @@ def replay_command(
     from PIL import Image
 
     from ..io.atomic import check_output_path, write_owned_file
-    from ..machine.replay import replay_program
+    from ..machine.replay import ANGLES, replay_program
     from ..rotary.simulate import render_overlay
-
-    from ..machine.replay import ANGLES
 
     if angles not in ANGLES:
         raise ConfigError(f"--angles must be one of {', '.join(ANGLES)}, got {angles!r}")

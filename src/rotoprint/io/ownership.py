@@ -449,7 +449,7 @@ def _jstr(line: str, start: int) -> tuple[str, int]:
 
 
 def _jint(text: str) -> int:
-    if not _INT.match(text):
+    if not _INT.match(text) or len(text) > 30:  # no size or version of ours has 30 digits (and int() stops at 4300)
         raise _NotLayout
     return int(text)
 

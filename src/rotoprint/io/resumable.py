@@ -243,7 +243,7 @@ class PartialOutput:
         """Create the folder and the journal (appending when resuming)."""
         self.dir.mkdir(exist_ok=True)
         fresh = not self.done
-        self._journal = open(self.dir / JOURNAL, "w" if fresh else "a", encoding="utf-8")  # noqa: SIM115
+        self._journal = open(self.dir / JOURNAL, "w" if fresh else "a", encoding="utf-8", newline="\n")  # noqa: SIM115
         if fresh:
             self._journal.write(json.dumps({"fingerprint": self.fingerprint, "layers": self.n_layers}) + "\n")
             self._journal.flush()

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 from pydantic import ValidationError
 
+from .. import ranges as R
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, InputFileError, RotoprintError
 from ..io.inputs import parse_json, read_input_bytes
@@ -189,6 +190,18 @@ class ReplayImage:
     interlace: int = 0
 
 
+def _check_image_counts(rec: dict, counts_per_rev: int, where: str, p: Path) -> None:
+    """An image record's index offset (a whole count within one revolution) and first firing
+    (a whole number in the sidecar range), or one line naming the image."""
+    off, first = rec.get("index_offset_counts"), rec.get("first_firing_index")
+    if isinstance(off, bool) or not isinstance(off, int) or not 0 <= off < counts_per_rev:
+        raise InputFileError(f"{where}: index_offset_counts must be a whole count in 0..{counts_per_rev - 1}, "
+                             f"got {str(off)[:40]!r}", path=p)
+    if isinstance(first, bool) or not isinstance(first, int) or not -R.MAX_COUNT <= first <= R.MAX_COUNT:
+        raise InputFileError(f"{where}: first_firing_index must be a whole number within +-{R.MAX_COUNT:g}, "
+                             f"got {str(first)[:40]!r}", path=p)
+
+
 class _Files:
     """Packed files read and checked once each."""
 
@@ -286,6 +299,7 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
             for r in sorted(rs, key=lambda r: r["swathe"]):
                 where = f"layer {i} image {r['file']}"
                 c = h["swathes"][r["swathe"]]["clock"]
+                _check_image_counts(r, spec.encoder_counts_per_rev, where, p)
                 clocks[r["swathe"]] = machine_clock(spec.encoder_counts_per_rev, c["multiplier"], c["divider"],
                                                     r["index_offset_counts"], r["first_firing_index"])
                 steps[r["swathe"]] = printed_by.get(r["file"], [])

@@ -25,6 +25,7 @@ def _holds(p: Path, data: bytes) -> bool:
     except (OSError, InputFileError):
         return False
 
+
 def write_example(name: str, folder: str | Path, *, overwrite: bool = False) -> Path:
     """Write example ``name`` (job file and its meshes) into ``folder``; returns the job path.
 

@@ -22,7 +22,7 @@ def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", 
     ----------
     pr : RotaryPrint
     out_png : str or Path
-        ``PRINT.png``; the swathe images are named by :func:`swathe_filenames` and the sidecar
+        ``PRINT.png``; the swathe images are named by :func:`rotoprint.rotary.files.swathe_filenames` and the sidecar
         ``PRINT.json``, all in the same folder. Each file is written atomically.
     device_name : str
         Recorded in the sidecar as ``device``.
@@ -88,9 +88,16 @@ def transform_passes(design, device, placement, out_png: str | Path, options, *,
 
     device_name, prints, manifest = pass_prints(design, device, placement, options)
     files = pass_files(out_png, len(prints))
-    for pr, f in zip(prints, files, strict=True):
-        write_print(pr, f, device_name=device_name, design=design_info, force=force, inputs=inputs)
-    manifest = {**manifest, "files": [f.with_suffix(".json").name for f in files]}
     mp = Path(out_png).with_name(Path(out_png).stem + "-passes.json")
+    made = []  # every pass's files as bytes first: every path is checked before the first is written
+    for pr, f in zip(prints, files, strict=True):
+        blobs, _ = print_files(pr, f.name, device_name=device_name, design=design_info)
+        made.append({f.parent / name: data for name, data in blobs.items()})
+    also = [mp] + [q for f, m in zip(files, made) for q in (*print_paths(f), *m)]
+    check_output_path(files[0], is_dir=False, inputs=inputs, force=force, also=also)
+    for m in made:
+        for path, data in m.items():
+            write_owned_file(path, data, kind="rotary-print", inputs=inputs, force=force, marked=True)
+    manifest = {**manifest, "files": [f.with_suffix(".json").name for f in files]}
     write_owned_file(mp, (json.dumps(manifest, indent=2) + "\n").encode("utf-8"), kind="passes", inputs=inputs, force=force)
     return manifest

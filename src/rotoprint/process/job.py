@@ -128,10 +128,19 @@ class PrinterSpec(_Strict):
     tilt_deg: Annotated[float, R.field(R.TILT_DEG)] = 0.0
     direction: int = 1
     equalise: bool = True
-    passes: Annotated[int, Field(ge=1, le=64)] | Literal["auto"] = "auto"
+    passes: int | Literal["auto"] = "auto"
     max_swathes: Annotated[int, R.field(R.SWATHES)] | None = None
     clock: ClockSpec = ClockSpec()
     heads: tuple[HeadSpec, ...] = Field(min_length=1)
+
+    @field_validator("passes", mode="before")
+    @classmethod
+    def _passes(cls, v):
+        if v == "auto" and isinstance(v, str):
+            return v
+        if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 64:
+            raise ValueError("must be a whole number 1..64 or 'auto'")
+        return v
 
     @field_validator("direction")
     @classmethod

@@ -565,9 +565,8 @@ def _estimate(plan: BuildPlan, mat: Material, band: tuple[float, float], v_pl: f
     if not t_min > 0:
         raise ConfigError(f"{name}: its first layer gets no drop on some inks ({', '.join(k for k, d in dens.items() if not (d > 0).all())}); "
                           "a larger part, a finer clock or another placement", path=job.source)
-    needed = cycles_for_height(layer_um, t_min)
-    if n_inter > 1:  # every interlaced pass printed equally often
-        needed = n_inter * math.ceil(needed / n_inter)
+    bare = cycles_for_height(layer_um, t_min)  # the fewest cycles that reach the layer
+    needed = n_inter * math.ceil(bare / n_inter) if n_inter > 1 else bare  # every pass printed equally often
     ppc = mat.passes_per_cycle
     warn = []
     if name in sp.cycles_per_layer:
@@ -579,9 +578,16 @@ def _estimate(plan: BuildPlan, mat: Material, band: tuple[float, float], v_pl: f
         if n_inter > 1 and cycles % n_inter:
             warn.append(f"{name}: {cycles} cycle(s) per layer (set in the job) are not a multiple of the {n_inter} "
                         f"interlaced passes: some passes print {cycles // n_inter + 1} times, others {cycles // n_inter}")
+    elif needed * ppc > sp.max_passes_per_layer and bare * ppc <= sp.max_passes_per_layer:
+        # the layer is reached within the limit, only not in a whole number of rounds of the passes
+        cycles = bare
+        if n_inter > 1 and cycles % n_inter:
+            warn.append(f"{name}: {needed} cycles (a multiple of the {n_inter} interlaced passes) would exceed "
+                        f"process.max_passes_per_layer = {sp.max_passes_per_layer}; planned {cycles}: some passes print "
+                        f"{cycles // n_inter + 1} times, others {cycles // n_inter}")
     elif needed * ppc > sp.max_passes_per_layer:
         cycles = max(1, sp.max_passes_per_layer // ppc)
-        warn.append(f"{name}: reaching the {layer_um:g} um layer needs {needed} cycles ({needed * ppc} passes) at "
+        warn.append(f"{name}: reaching the {layer_um:g} um layer needs {bare} cycles ({bare * ppc} passes) at "
                     f"{t_min * 1000:.3g} nm per cycle, more than process.max_passes_per_layer = "
                     f"{sp.max_passes_per_layer}; planned {cycles} cycles ({cycles * t_min:.3g} um, "
                     f"{100 * (1 - cycles * t_min / layer_um):.0f} % short): use a thinner layer, stronger inks or "

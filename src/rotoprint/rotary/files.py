@@ -181,7 +181,7 @@ def _check_sidecar(side: dict, head: InkjetHead, sp: Path) -> None:
 
 
 def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
-    """Read a print written by :func:`write_print` from its PNG or its sidecar.
+    """Read a print written by :func:`rotoprint.pipeline.prints.write_print` from its PNG or its sidecar.
 
     Parameters
     ----------
