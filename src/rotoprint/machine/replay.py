@@ -134,12 +134,18 @@ def _check_swathe(spec: MachineSpec, head: dict, sw: dict, step: dict, where: st
                              f"{spec.max_platform_rpm:g} rpm", path=p)
 
 
-def machine_clock(counts_per_rev: int, multiplier: int, divider: int, index_offset_counts: int, first_firing: int) -> FiringClock:
+def machine_clock(counts_per_rev: int, multiplier: int, divider: int, index_offset_counts: int, first_firing: int,
+                  mount_turn_rad: float = 0.0) -> FiringClock:
     """The angles an image's firings fire at on the machine.
 
     The controller fires the image's first firing ``index_offset_counts`` encoder counts after
     the index pulse and every ``divider / multiplier`` counts after that: firing ``i`` at
     ``2 pi (index_offset_counts + (i - first_firing) * divider / multiplier) / counts_per_rev``.
+
+    ``mount_turn_rad``: for a print made for a mount turned from the head's by ``delta`` (an
+    interlaced pass's angular phase), ``direction * delta``. The program folds that turn into
+    the index offset (the head's data delayed by it); the print keeps its own mount angle, so
+    the turn is added back here and the phase is counted once.
 
     Examples
     --------
@@ -148,7 +154,7 @@ def machine_clock(counts_per_rev: int, multiplier: int, divider: int, index_offs
     True
     """
     step = 2 * math.pi / counts_per_rev
-    return FiringClock(ref_firing=int(first_firing), turn_at_ref_rad=index_offset_counts * step,
+    return FiringClock(ref_firing=int(first_firing), turn_at_ref_rad=index_offset_counts * step + mount_turn_rad,
                        dphi_rad=step * divider / multiplier)
 
 
@@ -300,8 +306,10 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
                 where = f"layer {i} image {r['file']}"
                 c = h["swathes"][r["swathe"]]["clock"]
                 _check_image_counts(r, spec.encoder_counts_per_rev, where, p)
+                # a phased pass's mount turn is in its index offset and in its mount angle: once
+                turn = int(r["direction"]) * math.radians(float(r["mount_angle_deg"]) - float(h["mount_angle_deg"]))
                 clocks[r["swathe"]] = machine_clock(spec.encoder_counts_per_rev, c["multiplier"], c["divider"],
-                                                    r["index_offset_counts"], r["first_firing_index"])
+                                                    r["index_offset_counts"], r["first_firing_index"], turn)
                 steps[r["swathe"]] = printed_by.get(r["file"], [])
                 files_of[r["swathe"]] = r["file"]
                 data = files.read(r["file"], r["sha256"], where)
