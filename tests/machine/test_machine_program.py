@@ -323,6 +323,7 @@ radial_stage_mm = [20.0, 150.0]
     assert code == 0, err
     s = json.loads(out)
     assert s["machine"]["revolutions"] > 0
+    assert s["report"] is None and not (tmp_path / "b" / "report.html").exists()
     prog = json.loads((tmp_path / "b" / "machine" / "program.json").read_text())
     assert prog["packing"]["bits_per_nozzle"] == 2 and prog["row_delays"] == "program"
     assert prog["machine"]["radial_stage_mm"] == [20.0, 150.0]
@@ -337,6 +338,9 @@ radial_stage_mm = [20.0, 150.0]
     assert lv.any() and np.array_equal(tifffile.imread(folder / rec["tiff"]), lv[:, nozzle_order(764, 2)])
     code, out, err = run_cli("build", job, "--out", tmp_path / "b2", "--no-report")
     assert code == 0 and "machine: " in out and "program.json" in out
+    # --no-report writes no report and names none (it printed "report: .../report.html")
+    assert "report:" not in out and f"plan:   {(tmp_path / 'b2' / 'plan.json').resolve()}" in out.replace("\n", "")
+    assert not (tmp_path / "b2" / "report.html").exists()
     code, out, err = run_cli("build", job, "--out", tmp_path / "c", "--row-delays", "sideways")
     assert code == 2 and "--row-delays must be 'baked' or 'program'" in err and not (tmp_path / "c").exists()
     code, out, err = run_cli("build", job, "--out", tmp_path / "c", "--bits", "3")

@@ -35,4 +35,4 @@ def test_without_check_and_report_those_stages_report_nothing(tmp_path):
     seen = []
     res = run_build(job, tmp_path / "out", on_step=lambda *a: seen.append(a[0]), check=False, report=False)
     assert "check" not in seen and "report" not in seen
-    assert not res.report_path.exists() and res.plan_path.exists()
+    assert res.report_path is None and not (res.out_dir / "report.html").exists() and res.plan_path.exists()

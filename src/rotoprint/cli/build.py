@@ -49,7 +49,8 @@ def report_summary(res, *, label: str = "") -> None:
         print_table(t, console)
     if s["printability_ok"] is False:
         console.print(styled(("printability: some features fall short", "red"), " (see the report)"))
-    out_console.print(f"report: {res.report_path}")
+    if res.report_path is not None:  # not with --no-report
+        out_console.print(f"report: {res.report_path}")
     out_console.print(f"plan:   {res.plan_path}")
     m = s.get("machine")
     if m:
@@ -92,7 +93,7 @@ def build_command(
         res = run_build(spec, out, on_step=on_step, check=False if no_check else None, report=not no_report, force=force,
                         inputs=[job, *job_inputs(spec)], machine=mopts)
     if json_out:
-        print_json({"out": str(res.out_dir), "report": str(res.report_path) if not no_report else None,
+        print_json({"out": str(res.out_dir), "report": None if res.report_path is None else str(res.report_path),
                     "plan": str(res.plan_path), **res.summary})
     else:
         report_summary(res)

@@ -49,7 +49,7 @@ Step = Callable[[str, int, int], None]
 @dataclass(frozen=True)
 class BuildResult:
     out_dir: Path
-    report_path: Path
+    report_path: Path | None  # None: no report written (report=False)
     plan_path: Path
     summary: dict
 
@@ -461,7 +461,7 @@ def run_build(job, out_dir: str | Path, *, on_step: Step | None = None, check: b
         "timings_s": all_timings, "plan_sha256": hashlib.sha256(text.encode()).hexdigest(),
         "machine": machine_totals,
     }
-    return BuildResult(out_dir=final, report_path=final / "report.html", plan_path=final / "plan.json", summary=summary)
+    return BuildResult(out_dir=final, report_path=final / "report.html" if report else None, plan_path=final / "plan.json", summary=summary)
 
 
 def _json_default(o):
