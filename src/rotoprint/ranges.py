@@ -45,7 +45,7 @@ from pathlib import Path
 
 from .errors import ConfigError, RotoprintError
 
-__all__ = ["Range", "check_range", "check_count", "check_direction", "field", "MAX_COUNT"]
+__all__ = ["Range", "check_range", "check_count", "check_direction", "field", "show_value", "MAX_COUNT"]
 
 #: The largest count of swathes, firings, drops or pixels any array may be sized for.
 MAX_COUNT = 2**40
@@ -150,7 +150,7 @@ def check_range(
         else:
             ok = v in rng and (not rng.integer or isinstance(value, numbers.Integral) or v.is_integer())
     if not ok:
-        raise error(f"{name} must be {rng.text()}, got {_show(value)}", path=path)
+        raise error(f"{name} must be {rng.text()}, got {show_value(value)}", path=path)
     return int(value) if rng.integer else float(value)  # type: ignore[arg-type]
 
 
@@ -166,16 +166,27 @@ def check_count(n: float, what: str, limit: float = MAX_COUNT, *, error: type[Ro
     """A count computed from inputs (swathes, firings, pixels, angles) before anything is sized
     for it: a finite number at most ``limit``, as an int; else an error saying how many."""
     if not (isinstance(n, numbers.Real) and (isinstance(n, numbers.Integral) or math.isfinite(float(n)))) or n > limit:
-        shown = _show(float(n) if isinstance(n, float) else n) if isinstance(n, numbers.Real) else repr(n)
+        shown = show_value(float(n) if isinstance(n, float) else n) if isinstance(n, numbers.Real) else repr(n)
         raise error(f"{what} would be {shown}, more than {limit:.3g}")
     return int(n)
 
 
-def _show(value: object) -> str:
+def show_value(value: object) -> str:
+    """A value as an error message shows it: short whatever it is (an integer of thousands of
+    digits as ``1.23e+4567``, its size; any other repr cut at 40 characters).
+
+    Examples
+    --------
+    >>> show_value(10**3000 + 7), show_value(2.5), show_value("x" * 100)[-5:]
+    ('1.00e+3000', '2.5', 'xx...')
+    """
     if isinstance(value, float):
         return f"{value:.6g}"
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > 10**15:
+        sign = "-" if value < 0 else ""
+        if abs(value).bit_length() > 12_000:  # str() refuses more than 4300 digits: the size from the bits
+            return f"{sign}about 1e+{int(abs(value).bit_length() * math.log10(2))}"
         digits = str(abs(value))
-        return f"{'-' if value < 0 else ''}{digits[0]}.{digits[1:3]}e+{len(digits) - 1}"
+        return f"{sign}{digits[0]}.{digits[1:3]}e+{len(digits) - 1}"
     text = repr(value)
     return text if len(text) <= 40 else text[:37] + "..."

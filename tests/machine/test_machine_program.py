@@ -289,6 +289,24 @@ def test_replay_refuses_altered_and_missing_files_impossible_stage_and_unreachab
     assert not (tmp_path / "o.png").exists()
 
 
+@pytest.mark.parametrize("key, value, said", [
+    ("multiplier", 10**3000 + 7, "encoder ratio x1.00e+3000/"),  # printed all 3001 digits
+    ("divider", -(10**2000), "/-1.00e+2000 is beyond the controller's limits"),
+    ("frequency_hz", 10**3000, "firing clock 1.00e+3000 Hz is beyond"),  # was a traceback (int past float)
+    ("frequency_hz", True, "firing clock True Hz is beyond"),  # was taken as 1 Hz
+    ("radial_stage_mm", 10**400, "radial stage position 1.00e+400 mm is outside"),  # was a traceback
+    ("time_s", 10**500, "time_s 1.00e+500 is not a duration"),  # was a traceback
+], ids=["multiplier", "divider", "frequency", "frequency-bool", "stage", "time"])
+def test_replay_says_how_big_a_huge_number_is_in_one_short_line(small_program, run_cli, tmp_path, key, value, said):
+    def edit(prog):
+        prog["layers"][0]["steps"][0][key] = value
+
+    _edit(small_program, edit)
+    code, out, err = run_cli("replay", small_program, "--out", tmp_path / "o.png")
+    assert code == 2 and said in err, err[:300]
+    assert err.strip().count("\n") == 0 and len(err) < 400 and not (tmp_path / "o.png").exists()
+
+
 def test_build_cli_options(tmp_path, run_cli):
     job = tmp_path / "small.toml"
     job.write_text("""

@@ -108,19 +108,35 @@ def load_program(path: str | Path) -> dict:
     return prog
 
 
+def _finite(v: object) -> bool:
+    """A JSON number that is finite as a float (not a bool, not an int past the float range)."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        return False
+    try:
+        return math.isfinite(v)
+    except OverflowError:
+        return False
+
+
+def _shown(v: object) -> str:
+    """A program's value in a message: a float as written, anything else short (an integer of
+    thousands of digits by its size, :func:`rotoprint.ranges.show_value`)."""
+    return repr(v) if isinstance(v, float) else R.show_value(v)
+
+
 def _check_swathe(spec: MachineSpec, head: dict, sw: dict, step: dict, where: str, p: Path) -> None:
     """A stage position and a clock the machine can make, else one line naming ``where``."""
     lo, hi = spec.radial_stage_mm
     pos = step["radial_stage_mm"]
-    if not (isinstance(pos, (int, float)) and math.isfinite(pos) and lo <= pos <= hi):
-        raise InputFileError(f"{where}: radial stage position {pos!r} mm is outside the machine's stage [{lo:g}, {hi:g}] mm", path=p)
+    if not (_finite(pos) and lo <= pos <= hi):
+        raise InputFileError(f"{where}: radial stage position {_shown(pos)} mm is outside the machine's stage [{lo:g}, {hi:g}] mm", path=p)
     f = step["frequency_hz"]
     fmax = min(head["_model"].max_frequency_hz, spec.head_frequency_hz or math.inf)
-    if not (isinstance(f, (int, float)) and 0 < f <= fmax):
-        raise InputFileError(f"{where}: firing clock {f!r} Hz is beyond what the head can reach ({fmax:g} Hz)", path=p)
+    if not (_finite(f) and 0 < f <= fmax):
+        raise InputFileError(f"{where}: firing clock {_shown(f)} Hz is beyond what the head can reach ({fmax:g} Hz)", path=p)
     m, d = step["multiplier"], step["divider"]
     if not (isinstance(m, int) and isinstance(d, int) and 1 <= m <= spec.clock_max_multiplier and 1 <= d <= spec.clock_max_divider):
-        raise InputFileError(f"{where}: encoder ratio x{m!r}/{d!r} is beyond the controller's limits "
+        raise InputFileError(f"{where}: encoder ratio x{_shown(m)}/{_shown(d)} is beyond the controller's limits "
                              f"(multiplier <= {spec.clock_max_multiplier}, divider <= {spec.clock_max_divider})", path=p)
     dphi = sw["dphi_rad"]
     want = 2 * math.pi / dphi
@@ -261,8 +277,8 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
         for st in lay["steps"]:
             where = f"layer {i} step {st['n']} ({st['kind']}" + (f" of {st['head']} swathe {st['swathe']})" if st["kind"] == "revolution" else ")")
             t = st.get("time_s")
-            if not (isinstance(t, (int, float)) and math.isfinite(t) and t >= 0):
-                raise InputFileError(f"{where}: time_s {t!r} is not a duration", path=p)
+            if not (_finite(t) and t >= 0):
+                raise InputFileError(f"{where}: time_s {_shown(t)} is not a duration", path=p)
             if st["kind"] != "revolution":
                 continue
             h = heads.get(st["head"])
