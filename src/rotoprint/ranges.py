@@ -33,6 +33,7 @@ quantity                range                  used for
 ``SEED``                0 ... 2**32 - 1        random seeds
 ``OVERLAY_SCALE``       1 ... 16               overlay pixels per design pixel
 ``MACHINE_BITS``        1 ... 4 (1, 2 or 4)    bits per nozzle of machine/ firing data
+``PASSES``              1 ... 64               interlaced passes per layer (or "auto")
 ======================  =====================  =======================================
 """
 
@@ -63,7 +64,10 @@ class Range:
     integer: bool = False
 
     def __contains__(self, v: float) -> bool:
-        if not math.isfinite(v):
+        try:
+            if not math.isfinite(v):
+                return False
+        except OverflowError:  # an int past the float range
             return False
         above = v > self.lo if self.lo_open else v >= self.lo
         below = v < self.hi if self.hi_open else v <= self.hi
@@ -100,6 +104,7 @@ SWATHES = Range(1, 10_000, integer=True)
 SEED = Range(0, 2**32 - 1, integer=True)
 OVERLAY_SCALE = Range(1, 16, integer=True)
 MACHINE_BITS = Range(1, 4, integer=True)  # and 1, 2 or 4: see machine.program.MachineOptions
+PASSES = Range(1, 64, integer=True)  # interlaced passes per layer (rotary.interlace, [printer] passes)
 NOZZLE_INDEX = Range(0, 100_000, integer=True)  # the largest head (devices.models)
 DIRECTION = Range(-1, 1, integer=True)  # and not 0: see check_direction
 

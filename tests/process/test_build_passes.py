@@ -95,6 +95,34 @@ def test_bad_passes_are_refused_naming_the_field():
             _job(passes=bad)
 
 
+def test_the_passes_range_is_one_constant_for_the_job_the_cli_and_the_planner():
+    from rotoprint.ranges import PASSES
+    from rotoprint.rotary.interlace import parse_passes
+    from rotoprint.rotary.swathes import plan_swathes
+    from rotoprint.devices import load_device
+
+    assert (PASSES.lo, PASSES.hi) == (1, 64)
+    head = load_device("omnidot760").head
+    sp = plan_swathes(head, tilt_deg=20.0, inner_radius_mm=60.0, outer_radius_mm=61.0)
+    assert parse_passes(str(PASSES.hi)) == PASSES.hi and parse_passes("auto") is None
+    assert _job(passes=PASSES.hi).spec.printer.passes == PASSES.hi
+    for bad in (PASSES.lo - 1, PASSES.hi + 1):
+        with pytest.raises(ConfigError, match=r"passes must be 1\.\.64 or 'auto', got"):
+            parse_passes(str(bad))
+        with pytest.raises(ConfigError, match=r"printer\.passes: must be a whole number 1\.\.64 or 'auto'"):
+            _job(passes=bad)
+        with pytest.raises(ConfigError, match=r"^passes must be 1\.\.64, got"):
+            plan_passes(head, sp, footprint_um=49.6, passes=bad)
+    with pytest.raises(ConfigError, match=r"max passes must be 1\.\.64"):
+        plan_passes(head, sp, footprint_um=49.6, max_passes=PASSES.hi + 1)
+    # a number of a thousand digits: said by its size, in a short line (it printed every digit)
+    with pytest.raises(ConfigError, match=r"got 9\.99e\+999$") as ei:
+        parse_passes("9" * 1000)
+    assert len(str(ei.value)) < 80
+    with pytest.raises(ConfigError, match=r"printer\.passes: must be a whole number 1\.\.64"):
+        _job(passes=10**1000)
+
+
 def test_a_limit_below_the_rounded_cycles_keeps_the_cycles_that_reach_the_layer():
     from rotoprint.process.estimates import cycles_for_height
 

@@ -138,8 +138,8 @@ class PrinterSpec(_Strict):
     def _passes(cls, v):
         if v == "auto" and isinstance(v, str):
             return v
-        if isinstance(v, bool) or not isinstance(v, int) or not 1 <= v <= 64:
-            raise ValueError("must be a whole number 1..64 or 'auto'")
+        if isinstance(v, bool) or not isinstance(v, int) or v not in R.PASSES:
+            raise ValueError(f"must be a whole number {R.PASSES.lo}..{R.PASSES.hi} or 'auto'")
         return v
 
     @field_validator("direction")

@@ -54,6 +54,7 @@ import numpy as np
 
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, GeometryError
+from ..ranges import PASSES, show_value
 from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
@@ -320,10 +321,10 @@ def plan_passes(
     >>> pp.passes <= 4, pp.largest_gap_mm < pp.single_pass_largest_gap_mm / 2
     (True, True)
     """
-    if passes is not None and not 1 <= int(passes) <= 64:
-        raise ConfigError(f"passes must be 1..64, got {passes!r}")
-    if not 1 <= int(max_passes) <= 64:
-        raise ConfigError(f"max passes must be 1..64, got {max_passes!r}")
+    if passes is not None and int(passes) not in PASSES:
+        raise ConfigError(f"passes must be {PASSES.lo}..{PASSES.hi}, got {passes!r}")
+    if int(max_passes) not in PASSES:
+        raise ConfigError(f"max passes must be {PASSES.lo}..{PASSES.hi}, got {max_passes!r}")
     if not (math.isfinite(footprint_um) and footprint_um > 0):
         raise ConfigError(f"footprint must be > 0 um, got {footprint_um!r}")
     if not (math.isfinite(cover_share) and 0 < cover_share <= 1):
@@ -594,9 +595,9 @@ def parse_passes(text: str | int) -> int | None:
     try:
         n = int(text)
     except (TypeError, ValueError):
-        raise ConfigError(f"passes must be a whole number 1..64 or 'auto', got {text!r}") from None
-    if not 1 <= n <= 64:
-        raise ConfigError(f"passes must be 1..64 or 'auto', got {n}")
+        raise ConfigError(f"passes must be a whole number {PASSES.lo}..{PASSES.hi} or 'auto', got {text!r}") from None
+    if n not in PASSES:
+        raise ConfigError(f"passes must be {PASSES.lo}..{PASSES.hi} or 'auto', got {show_value(n)}")
     return n
 
 
