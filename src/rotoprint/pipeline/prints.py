@@ -14,6 +14,15 @@ from ..rotary.printdata import RotaryPrint
 __all__ = ["write_print", "transform_passes"]
 
 
+def _check_then_write(first: Path, files: dict[Path, bytes], also: list[Path], *, inputs, force: bool) -> None:
+    """Check ``first`` and every path of ``also`` (:func:`rotoprint.io.atomic.check_output_path`:
+    none an input, none there and not provably ours) before the first file is written, then
+    write ``files`` (path -> bytes), each atomically and marked as ours."""
+    check_output_path(first, is_dir=False, inputs=inputs, force=force, also=also)
+    for path, data in files.items():
+        write_owned_file(path, data, kind="rotary-print", inputs=inputs, force=force, marked=True)
+
+
 def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", design: dict | None = None,
                 force: bool = False, inputs=()) -> dict:
     """Write the swathe images and the sidecar; returns the sidecar dict.
@@ -49,10 +58,8 @@ def write_print(pr: RotaryPrint, out_png: str | Path, *, device_name: str = "", 
     if out_png.suffix.lower() != ".png":
         raise InputFileError("output must be a .png file", path=out_png)
     blobs, side = print_files(pr, out_png.name, device_name=device_name, design=design)
-    paths = [out_png.parent / name for name in blobs]
-    check_output_path(out_png, is_dir=False, inputs=inputs, force=force, also=[*print_paths(out_png)[1:], *paths])
-    for path, data in zip(paths, blobs.values(), strict=True):
-        write_owned_file(path, data, kind="rotary-print", inputs=inputs, force=force, marked=True)
+    files = {out_png.parent / name: data for name, data in blobs.items()}
+    _check_then_write(out_png, files, [*print_paths(out_png)[1:], *files], inputs=inputs, force=force)
     return side
 
 
@@ -94,10 +101,7 @@ def transform_passes(design, device, placement, out_png: str | Path, options, *,
         blobs, _ = print_files(pr, f.name, device_name=device_name, design=design_info)
         made.append({f.parent / name: data for name, data in blobs.items()})
     also = [mp] + [q for f, m in zip(files, made) for q in (*print_paths(f), *m)]
-    check_output_path(files[0], is_dir=False, inputs=inputs, force=force, also=also)
-    for m in made:
-        for path, data in m.items():
-            write_owned_file(path, data, kind="rotary-print", inputs=inputs, force=force, marked=True)
+    _check_then_write(files[0], {p: d for m in made for p, d in m.items()}, also, inputs=inputs, force=force)
     manifest = {**manifest, "files": [f.with_suffix(".json").name for f in files]}
     write_owned_file(mp, (json.dumps(manifest, indent=2) + "\n").encode("utf-8"), kind="passes", inputs=inputs, force=force)
     return manifest
