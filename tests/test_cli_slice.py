@@ -133,12 +133,14 @@ def test_rerun_replaces_earlier_output(run_cli, tmp_path):
     assert len(list(out.glob("layer_*.png"))) == 4
 
 
-def test_demo_runs(run_cli, tmp_path):
-    code, out, err = run_cli("demo", "--out", tmp_path / "demo")
+def test_demo_runs(coil_demo):
+    # coil_demo: the session's `rotoprint demo --out DIR` (tests/conftest.py)
+    code, out, err = coil_demo.code, coil_demo.stdout, coil_demo.stderr
     assert code == 0, err
     # the demo builds the bundled coil sensor (issue 7; details in tests/process/test_build_cli.py)
     assert "report:" in out
-    assert (tmp_path / "demo" / "build" / "report.html").exists()
+    assert (coil_demo.root / "d" / "build" / "report.html").exists()
+    assert (coil_demo.root / "d" / "job" / "coil-sensor.toml").exists()
 
 
 def test_usage_error_exit_2(run_cli):

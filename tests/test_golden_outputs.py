@@ -117,12 +117,12 @@ def test_cli_outputs_are_byte_identical(run_cli, workdir, name, args):
     _check(name, workdir / args[args.index("-o") + 1])
 
 
-@pytest.mark.parametrize("name, example, check", [("build-coil-no-check", "coil-sensor", False), ("build-gas", "gas-sensor", None)])
-def test_build_outputs_are_byte_identical(run_cli, workdir, name, example, check):
-    from rotoprint.pipeline.examples import write_example
-
-    job = write_example(example, Path("job"))
-    args = ["build", job, "--out", "build"] + (["--no-check"] if check is False else [])
-    code, _, err = run_cli(*args)
-    assert code in (0, 3), err  # 3: the part has printability findings (the build is written)
-    _check(name, workdir / "build")
+@pytest.mark.parametrize("name, fixture, args", [("build-coil-no-check", "coil_build", ["--no-check"]), ("build-gas", "gas_build", [])])
+def test_build_outputs_are_byte_identical(request, name, fixture, args):
+    # the session's shared build (tests/conftest.py): `rotoprint build job/EXAMPLE.toml --out
+    # build ARGS` run from a working folder, relative names, SOURCE_DATE_EPOCH set
+    b = request.getfixturevalue(fixture)
+    assert b.code in (0, 3), b.stderr  # 3: the part has printability findings (the build is written)
+    assert b.job.relative_to(b.root).parts[0] == "job" and b.out == b.root / "build"
+    assert b.args == ("build", str(b.job.relative_to(b.root)), "--out", "build", *args)
+    _check(name, b.out)

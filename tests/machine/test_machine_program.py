@@ -1,6 +1,6 @@
 """machine/ of a build: the program's steps and times, clocks, limits, and its replay.
 
-The coil demo is built once (no printability check, no report): replay of its program at
+The coil demo is built once for the session (tests/conftest.py coil_build): replay of its program at
 the nominal angles must give the drops, IoU and coverage that ``simulate`` gives for the
 build's own images (at the machine clock's angles: tests/machine/test_replay_clock.py)."""
 
@@ -18,18 +18,17 @@ from rotoprint.machine.program import MachineOptions, write_machine_folder
 from rotoprint.machine.replay import replay_program
 from rotoprint.process import load_job, parse_job
 from rotoprint.pipeline import run_build
-from rotoprint.pipeline.examples import write_example
 from rotoprint.process.plan import plan_job
 from rotoprint.rotary.printdata import clock_dphi
 from rotoprint.rotary.simulate import simulate
 
 
 @pytest.fixture(scope="module")
-def coil(tmp_path_factory):
-    root = tmp_path_factory.mktemp("coil")
-    job = load_job(write_example("coil-sensor", root / "job"))
-    res = run_build(job, root / "out", check=False, report=False)
-    return job, res, root / "out" / "machine" / "program.json"
+def coil(coil_build):
+    """(job, plan.json, program.json) of the session's coil build (no printability check)."""
+    assert coil_build.code == 0, coil_build.stderr
+    plan = json.loads((coil_build.out / "plan.json").read_text())
+    return load_job(coil_build.job), plan, coil_build.out / "machine" / "program.json"
 
 
 def _small_job(**machine):
@@ -58,7 +57,7 @@ def _same(a: dict, b: dict) -> None:
 
 
 def test_replay_of_the_coil_program_gives_simulates_figures_for_every_layer_and_head(coil):
-    job, res, prog_path = coil
+    job, _, prog_path = coil
     rep = replay_program(prog_path, angles="nominal")
     plan = plan_job(job)
     by = {(r["layer"], r["material"], r["ink"], r["interlace"]): r for r in rep["images"]}
@@ -99,13 +98,13 @@ def test_replay_with_the_deposit_model_gives_the_builds_film_figures(coil):
 
 
 def test_program_time_is_the_sum_of_its_steps_and_the_plans_estimate(coil):
-    _, res, prog_path = coil
+    _, plan_json, prog_path = coil
     prog = json.loads(prog_path.read_text())
     steps = [s for L in prog["layers"] for s in L["steps"]]
     assert prog["totals"]["steps"] == len(steps) and [s["n"] for s in steps] == list(range(len(steps)))
     total = math.fsum(s["time_s"] for s in steps)
     assert prog["totals"]["time_s"] == pytest.approx(total, rel=1e-12)
-    assert total == pytest.approx(res.summary["estimated_print_time_s"], rel=1e-12)
+    assert total == pytest.approx(plan_json["estimated_print_time_s"], rel=1e-12)
     for L in prog["layers"]:
         assert math.fsum(s["time_s"] for s in L["steps"]) == pytest.approx(L["plan_time_s"], rel=1e-12)
         assert L["steps"][-1]["kind"] == "z_step" and L["steps"][-1]["z_step_mm"] == pytest.approx(0.02)

@@ -16,19 +16,10 @@ from rotoprint.pipeline.examples import write_example
 from rotoprint.rotary.files import read_print
 
 
-@pytest.fixture(scope="module")
-def gas_build(tmp_path_factory):
-    from rotoprint.cli.main import main
-
-    root = tmp_path_factory.mktemp("gas")
-    job = write_example("gas-sensor", root / "job")
-    code = main(["build", str(job), "--out", str(root / "out"), "--json"])
-    return code, root / "out"
-
-
 def test_build_cli_writes_plan_images_and_report(gas_build):
-    code, out = gas_build
-    assert code == 0
+    # gas_build: the session's `rotoprint build` of the gas sensor (tests/conftest.py)
+    code, out = gas_build.code, gas_build.out
+    assert code == 0, gas_build.stderr
     plan = json.loads((out / "plan.json").read_text())
     assert plan["format"] == "rotoprint-build-plan" and plan["layers"] == len(plan["layers_detail"]) == 10
     assert plan["material_order"] == ["plaster", "silver", "polyamide"]
@@ -57,7 +48,7 @@ def test_build_cli_writes_plan_images_and_report(gas_build):
 
 
 def test_build_cli_layer_images_are_binary_drops(gas_build):
-    _, out = gas_build
+    out = gas_build.out
     plan = json.loads((out / "plan.json").read_text())
     s = plan["layers_detail"][6]["images"][0]["swathes"][0]
     img = read_grey_image(out / s["file"])
@@ -65,12 +56,13 @@ def test_build_cli_layer_images_are_binary_drops(gas_build):
     assert int((img > 0).sum()) == s["drops"]
 
 
-def test_build_demo_builds_the_coil_and_says_where_the_report_is(run_cli, tmp_path):
-    code, out, err = run_cli("demo", "--out", tmp_path / "d")
+def test_build_demo_builds_the_coil_and_says_where_the_report_is(coil_demo):
+    # coil_demo: the session's `rotoprint demo --out DIR` (tests/conftest.py)
+    code, out, err = coil_demo.code, coil_demo.stdout, coil_demo.stderr
     assert code == 0, err
-    rep = tmp_path / "d" / "build" / "report.html"
-    assert f"report: {rep.resolve()}" in out.replace("\n", "")
-    plan = json.loads((tmp_path / "d" / "build" / "plan.json").read_text())
+    rep = coil_demo.out / "report.html"
+    assert rep.is_file() and f"report: {rep.resolve()}" in out.replace("\n", "")
+    plan = json.loads((coil_demo.out / "plan.json").read_text())
     (r,) = plan["resistance"]
     hand = r["hand_check"]["resistance_ohm"]
     assert r["design"]["resistance_ohm"] == pytest.approx(hand, rel=0.01)

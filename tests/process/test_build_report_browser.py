@@ -29,14 +29,10 @@ def _need(what: str):
 
 
 @pytest.fixture(scope="module")
-def coil_report(tmp_path_factory):
-    from rotoprint.process import load_job
-    from rotoprint.pipeline import run_build
-    from rotoprint.pipeline.examples import write_example
-
-    root = tmp_path_factory.mktemp("coil")
-    job = write_example("coil-sensor", root / "job")
-    return run_build(load_job(job), root / "out").report_path
+def coil_report(coil_build):
+    """The report of the session's coil build (tests/conftest.py)."""
+    assert coil_build.code == 0, coil_build.stderr
+    return coil_build.out / "report.html"
 
 
 @pytest.fixture(scope="module")
