@@ -136,7 +136,7 @@ def test_simulate_takes_the_name_given_to_transform(run_cli, tmp_path):
     from rotoprint.rotary.testimage import test_design
 
     design = tmp_path / "d.png"
-    write_png(design, test_design(150))
+    write_png(design, test_design(100))  # 42 mm at 60 dpi: two swathes at tilt 45 (150 px: 2.3x the time)
     out = tmp_path / "p.png"
     code, _, err = run_cli("transform", design, "--device", "omnidot760", "--tilt", "45", "--radius", "40",
                            "--design-dpi", "60", "--out", out)

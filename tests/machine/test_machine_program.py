@@ -15,7 +15,7 @@ import pytest
 
 from rotoprint.machine import clock_ratio
 from rotoprint.machine.program import MachineOptions, write_machine_folder
-from rotoprint.machine.replay import replay_program
+from rotoprint.machine.replay import load_program, replay_layers, replay_program
 from rotoprint.process import load_job, parse_job
 from rotoprint.pipeline import run_build
 from rotoprint.process.plan import plan_job
@@ -56,24 +56,51 @@ def _same(a: dict, b: dict) -> None:
             assert a[k] == v, k
 
 
+def _same_print(a, b) -> None:
+    """Two RotaryPrints equal bit for bit: geometry, head and every swathe's levels."""
+    assert (a.method, a.tilt_deg, a.mount_angle_deg, a.direction, a.dpi_y, a.placement, a.head) == \
+        (b.method, b.tilt_deg, b.mount_angle_deg, b.direction, b.dpi_y, b.placement, b.head)
+    assert len(a.swathes) == len(b.swathes)
+    for x, y in zip(a.swathes, b.swathes):
+        assert (x.index, x.first_firing, x.dphi_rad, x.pivot_radius_mm, x.ref_radius_mm, x.band_mm, x.enabled_nozzles) == \
+            (y.index, y.first_firing, y.dphi_rad, y.pivot_radius_mm, y.ref_radius_mm, y.band_mm, y.enabled_nozzles)
+        assert np.array_equal(x.levels, y.levels) and x.levels.dtype == y.levels.dtype
+        assert (x.enabled is None and y.enabled is None) or np.array_equal(x.enabled, y.enabled)
+
+
 def test_replay_of_the_coil_program_gives_simulates_figures_for_every_layer_and_head(coil):
     job, _, prog_path = coil
     rep = replay_program(prog_path, angles="nominal")
     plan = plan_job(job)
     by = {(r["layer"], r["material"], r["ink"], r["interlace"]): r for r in rep["images"]}
-    n = 0
+    # every image of every layer decodes to the build's own print and design, bit for bit
+    # (so the replay simulates exactly what the build planned; its drops are the print's)
+    keys = set()
+    for lay, imgs in replay_layers(load_program(prog_path), prog_path):
+        i = lay["index"]
+        sched, secs = plan.layer(i), plan.sections(i)
+        for im in imgs:
+            pr = sched.pass_images[(im.material, im.ink)][im.interlace]
+            _same_print(im.print, pr)
+            assert np.array_equal(im.design, plan.reference_image(im.material, secs).astype(np.uint8) * 255)
+            key = (i, im.material, im.ink, im.interlace)
+            assert by[key]["drops"] == sum(int(np.count_nonzero(sw.levels)) for sw in pr.swathes)
+            assert by[key]["head"] == im.head == plan.head(im.ink).name
+            keys.add(key)
+    assert keys == set(by)
+    # and simulate's figures: each layer's every ink at one of its passes, in turn (pass i mod
+    # passes: every pass of every ink of every material is compared in some layer)
+    n, seen = 0, set()
     for i in range(len(plan)):
         sched = plan.layer(i)
         secs = plan.sections(i)
         for (m, ink), prs in sched.pass_images.items():
             ref = plan.reference_image(m, secs).astype(np.uint8) * 255
-            for q, pr in enumerate(prs):  # every interlaced pass is its own print in the program
-                if q > 1 and i % 5:
-                    continue  # every pass of every fifth layer, passes 0 and 1 of the others (time)
-                sim = simulate(pr, ref).report.to_json()
-                _same(by[(i, m, ink, q)], sim)
-                assert by[(i, m, ink, q)]["head"] == plan.head(ink).name
-                n += 1
+            q = i % len(prs)  # every interlaced pass is its own print in the program
+            _same(by[(i, m, ink, q)], simulate(prs[q], ref).report.to_json())
+            seen.add((m, ink, q))
+            n += 1
+    assert seen == {(m, ink, q) for (_, m, ink, q) in by}
     assert len(rep["images"]) == sum(len(prs) for i in range(len(plan)) for prs in plan.layer(i).pass_images.values())
     assert n > 15 and {r["interlace"] for r in rep["images"]} == set(range(plan.heads[0].passes))
     assert {r["head"] for r in rep["images"]} == {h.name for h in plan.heads}
