@@ -81,3 +81,27 @@ def test_demo_refuses_an_edited_job_without_a_traceback(run_cli, tmp_path):
     assert code == 2
     assert err.strip() == f"rotoprint: error: {job}: differs from the coil-sensor example (edited?); refusing to overwrite it"
     assert job.read_text() == "# mine\n" and not (tmp_path / "d" / "build").exists()
+
+
+#: SHA-256 of each bundled job file. The texts are put together from shared pieces
+#: (process/examples.py PRINTER_TABLE, HEADS_PLASTER_SILVER); a change to a piece must not
+#: change a job by accident: a user's earlier copy would then be refused as "edited" by the
+#: next `rotoprint demo`. When a job changes on purpose, update its digest here.
+JOB_SHA256 = {
+    "coil-sensor": "35bfeb1c5eb65af2d6552941a28471818ba3c22b7d3b132f2a42ea1d32e7475e",
+    "gas-sensor": "eef40ecbf0764936217a4af07aa6c4a437696d2431563c68d37164ae6a788db0",
+    "cad-coil": "5e06ad979524a15be1d3b09add05096961afb28d06068dfb1511c0b6fd1c465e",
+}
+
+
+def test_the_bundled_job_files_are_the_ones_users_have():
+    import hashlib
+    import tomllib
+
+    assert set(JOB_SHA256) == set(EXAMPLES)
+    heads = {}
+    for name, (job, _, _) in EXAMPLES.items():
+        data = example_files(name)[job]
+        assert hashlib.sha256(data).hexdigest() == JOB_SHA256[name], name
+        heads[name] = tomllib.loads(data.decode("utf-8"))["printer"]["heads"]
+    assert heads["cad-coil"] == heads["coil-sensor"][:4] == heads["gas-sensor"][:4]  # the shared H1-H4

@@ -12,6 +12,7 @@ import io
 
 import numpy as np
 
+from .examples import HEADS_PLASTER_SILVER, PRINTER_TABLE
 from .shapes import SquareCoilShape
 
 __all__ = ["gerber_coil", "excellon_holes", "dxf_outline", "CAD_COIL", "CAD_COIL_JOB", "cad_coil_files"]
@@ -158,34 +159,7 @@ name = "cad coil"
 description = "5-turn silver coil from a Gerber layer on a plaster body (DXF outline), vias from the drill file"
 layer_height_mm = 0.02
 
-[printer]
-device = "omnidot760"
-tilt_deg = 20.0
-equalise = true
-
-passes = "auto"          # interlaced passes at the planner's radial offsets (docs/build.md)
-# no [printer.clock] dpi_y: the drop spacing along the track follows from the pass plan, so the drops merge
-
-[[printer.heads]]
-name = "H1"
-ink = "ammonium_sulphate"
-mount_angle_deg = 0.0
-
-[[printer.heads]]
-name = "H2"
-ink = "calcium_chloride"
-mount_angle_deg = 60.0
-
-[[printer.heads]]
-name = "H3"
-ink = "silver_nitrate"
-mount_angle_deg = 120.0
-
-[[printer.heads]]
-name = "H4"
-ink = "ascorbate"
-mount_angle_deg = 180.0
-
+""" + PRINTER_TABLE + HEADS_PLASTER_SILVER + """
 [placement]
 inner_radius_mm = 60.0
 angle_deg = 0.0

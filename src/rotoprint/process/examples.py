@@ -21,7 +21,19 @@ from ..primitives import box_triangles
 
 __all__ = ["EXAMPLES", "example_files"]
 
-_HEADS = """
+#: The [printer] table of the gas sensor and the cad coil (before their heads).
+PRINTER_TABLE = """[printer]
+device = "omnidot760"
+tilt_deg = 20.0
+equalise = true
+
+passes = "auto"          # interlaced passes at the planner's radial offsets (docs/build.md)
+# no [printer.clock] dpi_y: the drop spacing along the track follows from the pass plan, so the drops merge
+"""
+
+#: The heads H1-H4 (plaster's and silver's inks) at 60 degree steps, as every bundled job has
+#: them (process/cad_examples.py too).
+HEADS_PLASTER_SILVER = """
 [[printer.heads]]
 name = "H1"
 ink = "ammonium_sulphate"
@@ -41,7 +53,9 @@ mount_angle_deg = 120.0
 name = "H4"
 ink = "ascorbate"
 mount_angle_deg = 180.0
+"""
 
+_HEADS = HEADS_PLASTER_SILVER + """
 [[printer.heads]]
 name = "H5"
 ink = "{ink5}"
@@ -114,14 +128,7 @@ name = "gas sensor"
 description = "interdigitated electrode, 2 x 8 fingers of 0.3 mm with 0.3 mm gaps, 8 mm overlap, in a polyamide well"
 layer_height_mm = 0.02
 
-[printer]
-device = "omnidot760"
-tilt_deg = 20.0
-equalise = true
-
-passes = "auto"          # interlaced passes at the planner's radial offsets (docs/build.md)
-# no [printer.clock] dpi_y: the drop spacing along the track follows from the pass plan, so the drops merge
-""" + _HEADS.format(ink5="acyl_thiol", ink6="polyamine") + """
+""" + PRINTER_TABLE + _HEADS.format(ink5="acyl_thiol", ink6="polyamine") + """
 [placement]
 inner_radius_mm = 70.0
 angle_deg = 0.0
