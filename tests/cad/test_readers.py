@@ -233,3 +233,26 @@ def test_gerber_arc_draw_and_macro_exposure_off(tmp_path):
     ring = math.pi * (1.0 - 0.25)
     assert 16 + ring - tol * 2 * math.pi * 1.5 <= lm.area_mm2 <= 16 + ring + 1e-9
     assert lm.holes == 1 and lm.regions == 2
+
+
+def test_info_prints_a_layers_and_a_meshs_bounds_in_one_table_form(run_cli, tmp_path):
+    """`rotoprint info` on a DXF layer and on an STL of the same outline: the same quantity |
+    value table (cli._common.print_quantities), bounds rows alike, in order after two rows."""
+    from rotoprint.examples import write_binary_stl
+    from rotoprint.primitives import box_triangles
+
+    dxf = tmp_path / "o.dxf"
+    dxf.write_bytes(dxf_outline(0, 0, 20, 10))
+    stl = tmp_path / "o.stl"
+    write_binary_stl(stl, box_triangles((20, 10, 1)))
+    tables = {}
+    for p in (dxf, stl):
+        code, out, err = run_cli("info", p)
+        assert code == 0, err
+        lines = [ln for ln in out.splitlines() if "(mm)" in ln and ("bounds" in ln or "size" in ln)]
+        tables[p.suffix] = lines
+        rows = [ln for ln in out.splitlines() if "│" in ln or "|" in ln]
+        names = [r.strip("│| ").split("│")[0].strip() for r in rows]
+        assert names.index("bounds min (mm)") == 2 and names[3:5] == ["bounds max (mm)", "size (mm)"], names
+    assert "20.0000 x 10.0000" in tables[".dxf"][2] and "20.0000 x 10.0000 x 1.0000" in tables[".stl"][2]
+    assert "0.0000, 0.0000" in tables[".dxf"][0] and "0.0000, 0.0000, 0.0000" in tables[".stl"][0]

@@ -84,7 +84,7 @@ def test_demo_refuses_an_edited_job_without_a_traceback(run_cli, tmp_path):
 
 
 #: SHA-256 of each bundled job file. The texts are put together from shared pieces
-#: (process/examples.py PRINTER_TABLE, HEADS_PLASTER_SILVER); a change to a piece must not
+#: (process/_job_pieces.py); a change to a piece must not
 #: change a job by accident: a user's earlier copy would then be refused as "edited" by the
 #: next `rotoprint demo`. When a job changes on purpose, update its digest here.
 JOB_SHA256 = {

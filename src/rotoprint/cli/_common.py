@@ -217,6 +217,24 @@ def styled(*parts: str | tuple[str, str]) -> Text:
     return Text.assemble(*(escape_controls(p) if isinstance(p, str) else (escape_controls(p[0]), p[1]) for p in parts))
 
 
+def print_quantities(title: str, data: dict, rows: list[tuple[str, str]]) -> None:
+    """`rotoprint info`'s table (meshes and CAD layers): ``quantity | value``, the bounds and
+    size of ``data`` (``bounds_mm``, ``size_mm``) after the first two ``rows`` entries, the
+    other rows after them; printed whole (:func:`print_table`)."""
+    from rich.table import Table
+
+    t = Table(title=title, show_header=False)
+    t.add_column("quantity", style="bold")
+    t.add_column("value")
+    b = data["bounds_mm"]
+    bounds = [("bounds min (mm)", ", ".join(f"{v:.4f}" for v in b["min"])),
+              ("bounds max (mm)", ", ".join(f"{v:.4f}" for v in b["max"])),
+              ("size (mm)", " x ".join(f"{v:.4f}" for v in data["size_mm"]))]
+    for k, v in [*rows[:2], *bounds, *rows[2:]]:
+        t.add_row(k, v)
+    print_table(t)
+
+
 def print_table(table, con: Console | None = None) -> None:
     """Print a rich ``Table`` whole: as a table when its natural width fits the console (a
     pipe is 80 columns), else as one block per row, ``column: value`` a line, so that no

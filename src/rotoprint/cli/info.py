@@ -6,9 +6,8 @@ from pathlib import Path
 from typing import Annotated
 
 import typer
-from rich.table import Table
 
-from ._common import FillHolesOpt, JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, print_json, print_table
+from ._common import FillHolesOpt, JsonOpt, RotateOpt, ScaleOpt, TranslateOpt, UnitsOpt, load_mesh_from_options, print_json, print_quantities
 
 
 def info(
@@ -34,16 +33,9 @@ def info(
     if json_out:
         print_json(data)
         return
-    t = Table(title=str(mesh), show_header=False)
-    t.add_column("quantity", style="bold")
-    t.add_column("value")
-    b = data["bounds_mm"]
     rows = [
         ("triangles", f"{data['triangles']:,}"),
         ("vertices", f"{data['vertices']:,}"),
-        ("bounds min (mm)", ", ".join(f"{v:.4f}" for v in b["min"])),
-        ("bounds max (mm)", ", ".join(f"{v:.4f}" for v in b["max"])),
-        ("size (mm)", " x ".join(f"{v:.4f}" for v in data["size_mm"])),
         ("shells", str(data["shells"])),
         ("open edges", str(data["open_edges"])),
         ("non-manifold edges", str(data["nonmanifold_edges"])),
@@ -54,9 +46,7 @@ def info(
         ("faces re-wound", str(data["faces_reoriented"])),
         ("shells turned outside-in", str(data["shells_flipped"])),
     ]
-    for k, v in rows:
-        t.add_row(k, v)
-    print_table(t)
+    print_quantities(str(mesh), data, rows)
 
 
 def _holes_line(h: dict) -> str:

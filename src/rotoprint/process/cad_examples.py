@@ -12,7 +12,7 @@ import io
 
 import numpy as np
 
-from .examples import HEADS_PLASTER_SILVER, PRINTER_TABLE
+from ._job_pieces import HEADS_PLASTER_SILVER, PRINTER_TABLE
 from .shapes import SquareCoilShape
 
 __all__ = ["gerber_coil", "excellon_holes", "dxf_outline", "CAD_COIL", "CAD_COIL_JOB", "cad_coil_files"]
