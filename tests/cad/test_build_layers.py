@@ -54,12 +54,22 @@ def _job(tmp_path, source, terms):
     return parse_job(tomllib.loads(SILVER_JOB.format(source=source, terms=terms)), base_dir=tmp_path, source="job.toml")
 
 
-def test_gerber_coil_same_drops_and_resistance_as_square_coil(tmp_path):
+#: the built-in square coil of CAD_COIL's dimensions, as a job's shape
+SQUARE_SHAPE = (f'shape = {{ kind = "square_coil", outer_mm = {CAD_COIL.outer_mm}, track_width_mm = {CAD_COIL.track_width_mm}, '
+                f"gap_mm = {CAD_COIL.gap_mm}, turns = {CAD_COIL.turns}, height_mm = 0.04 }}")
+
+
+@pytest.fixture(scope="module")
+def square_coil_ohm(tmp_path_factory):
+    """The built-in square coil's resistance from its build (shared by the two tests below)."""
+    root = tmp_path_factory.mktemp("square")
+    res = run_build(_job(root, SQUARE_SHAPE, '"outer", "inner"'), root / "a", report=False)
+    return res.summary["resistance"][0]["design"]["resistance_ohm"]
+
+
+def test_gerber_coil_same_drops_and_resistance_as_square_coil(tmp_path, square_coil_ohm):
     (tmp_path / "coil.gbr").write_text(gerber_coil(CAD_COIL, track="region"))
-    sh = CAD_COIL
-    shape = (f'shape = {{ kind = "square_coil", outer_mm = {sh.outer_mm}, track_width_mm = {sh.track_width_mm}, '
-             f"gap_mm = {sh.gap_mm}, turns = {sh.turns}, height_mm = 0.04 }}")
-    a = _job(tmp_path, shape, '"outer", "inner"')
+    a = _job(tmp_path, SQUARE_SHAPE, '"outer", "inner"')
     b = _job(tmp_path, 'layer = { file = "coil.gbr", z_mm = [0.0, 0.04] }', '"COIL_OUT", "COIL_IN"')
     pa, pb = plan_job(a), plan_job(b)
     assert len(pa) == len(pb) == 2
@@ -71,20 +81,18 @@ def test_gerber_coil_same_drops_and_resistance_as_square_coil(tmp_path):
             for sa, sb in zip(la.images[k].swathes, lb.images[k].swathes):
                 assert np.count_nonzero(sa.levels) > 1000
                 np.testing.assert_array_equal(sa.levels, sb.levels)
-    ra = run_build(a, tmp_path / "a", report=False).summary["resistance"][0]["design"]["resistance_ohm"]
+    ra = square_coil_ohm
     rb = run_build(b, tmp_path / "b", report=False).summary["resistance"][0]["design"]["resistance_ohm"]
     assert rb == pytest.approx(ra, rel=0.005)
     print(f"square_coil {ra:.2f} ohm, Gerber region coil {rb:.2f} ohm")
 
 
-def test_round_aperture_coil_differs_only_at_corners(tmp_path):
+def test_round_aperture_coil_differs_only_at_corners(tmp_path, square_coil_ohm):
     """KiCad-style draws (round aperture) round the outer corners: drops differ only within
     the corner radius of the centreline's corners, and the resistance within 0.5 %."""
     (tmp_path / "coil.gbr").write_text(gerber_coil(CAD_COIL, track="draw"))
     sh = CAD_COIL
-    shape = (f'shape = {{ kind = "square_coil", outer_mm = {sh.outer_mm}, track_width_mm = {sh.track_width_mm}, '
-             f"gap_mm = {sh.gap_mm}, turns = {sh.turns}, height_mm = 0.04 }}")
-    a = _job(tmp_path, shape, '"outer", "inner"')
+    a = _job(tmp_path, SQUARE_SHAPE, '"outer", "inner"')
     b = _job(tmp_path, 'layer = { file = "coil.gbr", z_mm = [0.0, 0.04], tolerance_mm = 0.002 }', '"COIL_OUT", "COIL_IN"')
     pa, pb = plan_job(a), plan_job(b)
     ga, gb = pa.design_grid(oversample=2), pb.design_grid(oversample=2)
@@ -99,7 +107,7 @@ def test_round_aperture_coil_differs_only_at_corners(tmp_path):
     corners = sh.centreline()[1:-1]
     d = np.min(np.hypot(x[cc][:, None] - corners[None, :, 0], y[rr][:, None] - corners[None, :, 1]), axis=1)
     assert d.max() <= sh.track_width_mm / 2 * np.sqrt(2) + ga.pitch_x_mm
-    ra = run_build(a, tmp_path / "a", report=False).summary["resistance"][0]["design"]["resistance_ohm"]
+    ra = square_coil_ohm
     rb = run_build(b, tmp_path / "b", report=False).summary["resistance"][0]["design"]["resistance_ohm"]
     assert rb == pytest.approx(ra, rel=0.005)
     print(f"square_coil {ra:.2f} ohm, round-aperture Gerber coil {rb:.2f} ohm, {diff.sum()} pixels differ")
