@@ -763,12 +763,13 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
                                 floor=g_floor, target_percentile=0.0)
     elif equalise:
-        fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um)
-        f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
-        # the shares do not change with the clock; the ordered pattern spaces kept drops at most
-        # ceil(1 / f) firings apart, so this keeps every track within the planned spacing
-        # (measured: at the plan's clock alone, thinned clusters open holes)
-        clock = clock * math.ceil(1.0 / f_min - 1e-9)
+        # the print's clock is EQUALISE_CLOCK_FACTOR x the plan's; the ordered pattern spaces kept
+        # drops at most ceil(1 / f) firings apart, so a share >= EQUALISE_FLOOR keeps every track
+        # within the planned spacing (measured: at the plan's clock alone, thinned clusters open
+        # holes), and a track keeps less only where its kept drops stay within the lattice reach
+        fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
+                                reach_um=COVER_SHARE * d_um, clock_factor=EQUALISE_CLOCK_FACTOR)
+        clock = clock * EQUALISE_CLOCK_FACTOR
     elif options.balance:
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
     if pp.phases:
@@ -832,14 +833,19 @@ EQUALISE_FLOOR = 0.5
 #: ``cbrt`` of it, sets the passes and the clock; 0.3 allows a 3:1 radius span).
 GREY_FLOOR = 0.3
 #: Percentile of the unthinned radial thickness (at the tracks) that equalisation aims at.
-EQUALISE_TARGET_PERCENTILE = 10.0
+EQUALISE_TARGET_PERCENTILE = 0.0
+#: The clock of an equalised binary print over the plan's (``ceil(1 / EQUALISE_FLOOR)``).
+EQUALISE_CLOCK_FACTOR = 2
+#: Smallest share any track keeps when :func:`track_fractions` sets floors by the lattice reach.
+EQUALISE_MIN_SHARE = 0.25
 #: Multiplicative updates of :func:`track_fractions`.
 EQUALISE_ITERATIONS = 60
 
 
 def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
                     footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None, floor: float | None = None,
-                    target_percentile: float | None = None) -> list[list[np.ndarray]]:
+                    target_percentile: float | None = None, reach_um: float | None = None,
+                    clock_factor: int = 2) -> list[list[np.ndarray]]:
     """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
 
     Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
@@ -907,34 +913,18 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     w = np.concatenate(ws)
     order = np.argsort(r, kind="stable")
     r_s, w_s = r[order], w[order]
-    # neighbour pairs within a footprint radius (both directions) and their profile weights
-    ii, jj, kk = [np.arange(r_s.size)], [np.arange(r_s.size)], [np.ones(r_s.size)]
-    shift = 1
-    while shift < r_s.size:
-        d = r_s[shift:] - r_s[:-shift]
-        near = np.flatnonzero(d < a_mm)
-        if near.size == 0:
-            break
-        kv = (1.0 - (d[near] / a_mm) ** 2) ** 1.5
-        ii += [near, near + shift]
-        jj += [near + shift, near]
-        kk += [kv, kv]
-        shift += 1
-    ii, jj, kk = np.concatenate(ii), np.concatenate(jj), np.concatenate(kk)
-    f = np.ones(r_s.size)
-    # the target is the thinnest track where every pass prints, a footprint in from either end
-    # (nearer the ends tracks lack neighbours on one side)
-    lo_t = max(float(r_s[0]), plan.inner_radius_mm + max(0.0, max(offsets_mm))) + a_mm
-    hi_t = min(float(r_s[-1]), plan.outer_radius_mm + min(0.0, min(offsets_mm))) - a_mm
-    mid = (r_s >= lo_t) & (r_s <= hi_t)
-    if not mid.any():
-        mid[:] = True
-    t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
-    pct = EQUALISE_TARGET_PERCENTILE if target_percentile is None else float(target_percentile)
-    target = float(np.percentile(t[mid], pct))
-    for _ in range(EQUALISE_ITERATIONS):
-        f = np.clip(f * (target / t), lo_f, 1.0)
-        t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
+    floors = np.full(r_s.size, lo_f)
+    if reach_um is not None:
+        # a track may keep 1/m of its drops when m firings at the printed clock (clock_factor x
+        # the setup's) still lie within the lattice reach given the wider gap beside it
+        gaps = np.diff(r_s)
+        g = np.maximum(np.concatenate([[gaps[0]], gaps]), np.concatenate([gaps, [gaps[-1]]]))
+        reach = 1e-3 * float(reach_um)
+        b_max = np.sqrt(np.clip(reach * reach - g * g, 0.0, None))
+        m = np.floor(b_max * w_s * int(clock_factor) + 1e-9)  # 1 / w: spacing at the setup's clock
+        m = np.clip(m, 1.0 / lo_f, 1.0 / EQUALISE_MIN_SHARE)
+        floors = np.minimum(floors, 1.0 / m)
+    f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, floors, target_percentile, drop_tracks=reach_um is not None)
     f_all = np.empty_like(f)
     f_all[order] = f
     out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
@@ -943,6 +933,111 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
         out[q][j][k] = f_all[pos:pos + k.size]
         pos += k.size
     return out
+
+
+
+#: Rounds of leaving whole tracks out (:func:`track_fractions` with ``reach_um``) and the
+#: share of the target the mm-scale level may exceed before they start.
+_DROP_ROUNDS = 3
+_DROP_TOLERANCE = 0.005
+#: Radial step of the profile :func:`track_fractions` equalises, mm.
+_EQ_STEP_MM = 0.002
+#: Width of the running mean whose smallest value (over the band every pass prints) is the
+#: target of :func:`track_fractions`, mm: a mm-scale level, not a single track's peak.
+_EQ_WINDOW_MM = 0.5
+
+
+def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
+                      lo_f: np.ndarray, target_percentile: float | None, drop_tracks: bool = False) -> np.ndarray:
+    """Shares ``(M,)`` of sorted tracks ``r_s`` (mm) with drops per mm ``w_s`` so that their radial
+    profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`)."""
+    import scipy.sparse as sps
+
+    step = _EQ_STEP_MM
+    g0 = float(r_s[0]) - a_mm
+    n_g = int(math.ceil((float(r_s[-1]) + a_mm - g0) / step)) + 1
+    reach = int(math.ceil(a_mm / step)) + 1
+    base = np.floor((r_s - g0) / step).astype(np.int64)
+    rows, cols, vals = [], [], []
+    tr = np.arange(r_s.size)
+    for s_ in range(-reach, reach + 1):
+        idx = base + s_
+        x = (g0 + idx * step - r_s) / a_mm
+        k = np.clip(1.0 - x * x, 0.0, None) ** 1.5
+        ok = (k > 0) & (idx >= 0) & (idx < n_g)
+        rows.append(tr[ok])
+        cols.append(idx[ok])
+        vals.append(k[ok])
+    K = sps.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(r_s.size, n_g))
+    k_sum = np.asarray(K.sum(axis=1)).ravel()
+    grid = g0 + np.arange(n_g) * step
+    # the band where every pass prints, a footprint in from either end (tracks there lack
+    # neighbours on one side)
+    lo_t = max(float(r_s[0]), plan.inner_radius_mm + max(0.0, max(offsets_mm))) + a_mm
+    hi_t = min(float(r_s[-1]), plan.outer_radius_mm + min(0.0, min(offsets_mm))) - a_mm
+    t0 = K.T @ w_s
+    win = max(1, int(round(_EQ_WINDOW_MM / step)))
+    c = np.concatenate([[0.0], np.cumsum(t0)])
+    centre = np.arange(n_g)
+    a_i, b_i = np.clip(centre - win // 2, 0, n_g), np.clip(centre + win // 2 + 1, 0, n_g)
+    smooth = (c[b_i] - c[a_i]) / np.maximum(b_i - a_i, 1)
+    mid = (grid - _EQ_WINDOW_MM / 2 >= lo_t) & (grid + _EQ_WINDOW_MM / 2 <= hi_t)
+    if not mid.any():
+        mid = (grid >= lo_t) & (grid <= hi_t)
+    if not mid.any():
+        mid[:] = True
+    pct = EQUALISE_TARGET_PERCENTILE if target_percentile is None else float(target_percentile)
+    target = float(np.percentile(smooth[mid], pct))
+    f = np.ones(r_s.size)
+    hi_f = np.ones(r_s.size)
+
+    s_k = np.clip(np.floor((r_s - g0) / step).astype(np.int64), 0, n_g - 1)
+
+    def level_of(f: np.ndarray) -> np.ndarray:
+        """The running mean (over _EQ_WINDOW_MM) of the profile, ``(n_g,)``."""
+        c = np.concatenate([[0.0], np.cumsum(K.T @ (f * w_s))])
+        return (c[b_i] - c[a_i]) / np.maximum(b_i - a_i, 1)
+
+    def settle(f: np.ndarray) -> np.ndarray:
+        """Multiplicative updates of the profile averaged over each track's footprint towards the target."""
+        lo_k = np.minimum(lo_f, hi_f)
+        for _ in range(EQUALISE_ITERATIONS):
+            t = K.T @ (f * w_s)
+            seen = (K @ t) / np.maximum(k_sum, 1e-300)
+            f = np.clip(f * (target / np.maximum(seen, 1e-300)), lo_k, hi_f)
+        return f
+
+    f = settle(f)
+    if drop_tracks:
+        # where even the floors leave the mm-scale level above the target (tracks crowd at one end
+        # of a steeply tilted head), whole tracks are left out, error-diffused by the excess, and
+        # only where the gap they leave is no wider than the union's largest gap (so the drop
+        # lattice the plan chose still closes); then the shares settle again
+        inside = (r_s >= lo_t) & (r_s <= hi_t)
+        gaps = np.diff(r_s)
+        both = inside[1:] & inside[:-1]
+        g_lim = float(gaps[both].max()) if both.any() else float(gaps.max())
+        for _ in range(_DROP_ROUNDS):
+            need = 1.0 - target * (1.0 + _DROP_TOLERANCE) / np.maximum(level_of(f)[s_k], 1e-300)
+            if not (need > 0).any():
+                break
+            debt, last = 0.0, -np.inf
+            for k in range(r_s.size):
+                if hi_f[k] == 0.0:
+                    continue
+                if need[k] > 0:
+                    debt += need[k]
+                else:
+                    debt = 0.0
+                nxt = r_s[k + 1:][hi_f[k + 1:] > 0][:1]
+                nxt = float(nxt[0]) if nxt.size else np.inf
+                if need[k] > 0 and debt >= 0.5 and nxt - last <= g_lim:
+                    hi_f[k] = 0.0
+                    debt -= 1.0
+                else:
+                    last = r_s[k]
+            f = settle(np.where(hi_f > 0, np.maximum(f, 0.5), 0.0))
+    return f
 
 
 def thin_print(pr, fractions: Sequence[np.ndarray], *, pass_index: int = 0):
