@@ -6,7 +6,9 @@ spread factor 2 (49.6 um footprints), deposit model on the interior.
 
 Rows: one pass at the head's native clock (today's print); the planned interlaced passes at the
 planned clock (angular phases and swathe overlap, and beside them the same passes without
-either: radial offsets only); the same with 5 seeded dead nozzles; the planned passes equalised. The issue's
+either: radial offsets only); the same with 5 seeded dead nozzles; the planned passes equalised (also with the 5
+dead nozzles: their tracks are left out of the union the shares are equalised over, so the live tracks of
+the other passes beside them keep more drops). The issue's
 baseline (60 um discs judged at design-pixel centres, `disc_uncovered_fraction`) is printed
 beside the one-pass row. A second table gives the cost floor: the time of one pass's firing
 images (the exact transform at the planned clock and the pass's pivot offset) over the same
@@ -124,6 +126,7 @@ def main() -> None:
                                        ("planned passes, 5 dead nozzles", dead_head, False, False),
                                        ("planned passes, 5 dead nozzles, phases + overlap", dead_head, False, True),
                                        ("planned passes, equalised", head0, True, False),
+                                       ("planned passes, 5 dead nozzles, equalised", dead_head, True, False),
                                        ("planned passes, equalised, phases + overlap", head0, True, True)):
             for passes in ("auto", "6"):
                 t = time.perf_counter()

@@ -913,18 +913,9 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     w = np.concatenate(ws)
     order = np.argsort(r, kind="stable")
     r_s, w_s = r[order], w[order]
-    floors = np.full(r_s.size, lo_f)
-    if reach_um is not None:
-        # a track may keep 1/m of its drops when m firings at the printed clock (clock_factor x
-        # the setup's) still lie within the lattice reach given the wider gap beside it
-        gaps = np.diff(r_s)
-        g = np.maximum(np.concatenate([[gaps[0]], gaps]), np.concatenate([gaps, [gaps[-1]]]))
-        reach = 1e-3 * float(reach_um)
-        b_max = np.sqrt(np.clip(reach * reach - g * g, 0.0, None))
-        m = np.floor(b_max * w_s * int(clock_factor) + 1e-9)  # 1 / w: spacing at the setup's clock
-        m = np.clip(m, 1.0 / lo_f, 1.0 / EQUALISE_MIN_SHARE)
-        floors = np.minimum(floors, 1.0 / m)
-    f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, floors, target_percentile, drop_tracks=reach_um is not None)
+    reach_mm = None if reach_um is None else 1e-3 * float(reach_um)
+    f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, target_percentile, reach_mm=reach_mm,
+                          clock_factor=int(clock_factor))
     f_all = np.empty_like(f)
     f_all[order] = f
     out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
@@ -938,7 +929,7 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
 
 #: Rounds of leaving whole tracks out (:func:`track_fractions` with ``reach_um``) and the
 #: share of the target the mm-scale level may exceed before they start.
-_DROP_ROUNDS = 3
+_DROP_ROUNDS = 6
 _DROP_TOLERANCE = 0.005
 #: Radial step of the profile :func:`track_fractions` equalises, mm.
 _EQ_STEP_MM = 0.002
@@ -948,7 +939,8 @@ _EQ_WINDOW_MM = 0.5
 
 
 def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
-                      lo_f: np.ndarray, target_percentile: float | None, drop_tracks: bool = False) -> np.ndarray:
+                      lo_f: float, target_percentile: float | None, *, reach_mm: float | None = None,
+                      clock_factor: int = 2) -> np.ndarray:
     """Shares ``(M,)`` of sorted tracks ``r_s`` (mm) with drops per mm ``w_s`` so that their radial
     profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`)."""
     import scipy.sparse as sps
@@ -990,21 +982,45 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
     target = float(np.percentile(smooth[mid], pct))
     f = np.ones(r_s.size)
     hi_f = np.ones(r_s.size)
+    drop_tracks = reach_mm is not None
+
+    def floors() -> np.ndarray:
+        """Per track the smallest share: ``lo_f``, or with a lattice reach ``1 / m`` when ``m``
+        firings at the printed clock (``clock_factor`` x the one ``w_s`` is at) still lie within
+        the reach beside the wider gap to the kept neighbouring tracks (0 for tracks left out)."""
+        out = np.full(r_s.size, lo_f)
+        on = np.flatnonzero(hi_f > 0)
+        if reach_mm is not None and on.size > 1:
+            gaps = np.diff(r_s[on])
+            g = np.maximum(np.concatenate([[gaps[0]], gaps]), np.concatenate([gaps, [gaps[-1]]]))
+            b_max = np.sqrt(np.clip(reach_mm * reach_mm - g * g, 0.0, None))
+            m = np.floor(b_max * w_s[on] * clock_factor + 1e-9)
+            m = np.clip(m, 1.0 / lo_f, 1.0 / EQUALISE_MIN_SHARE)
+            out[on] = np.minimum(lo_f, 1.0 / m)
+        return np.minimum(out, hi_f)
 
     s_k = np.clip(np.floor((r_s - g0) / step).astype(np.int64), 0, n_g - 1)
 
+    printed = (grid >= float(r_s[0])) & (grid <= float(r_s[-1]))
+    c_n = np.concatenate([[0], np.cumsum(printed)])
+    n_w = np.maximum(c_n[b_i] - c_n[a_i], 1)
+
     def level_of(f: np.ndarray) -> np.ndarray:
-        """The running mean (over _EQ_WINDOW_MM) of the profile, ``(n_g,)``."""
-        c = np.concatenate([[0.0], np.cumsum(K.T @ (f * w_s))])
-        return (c[b_i] - c[a_i]) / np.maximum(b_i - a_i, 1)
+        """The running mean (over _EQ_WINDOW_MM, within the printed range) of the profile, ``(n_g,)``."""
+        c = np.concatenate([[0.0], np.cumsum(np.where(printed, K.T @ (f * w_s), 0.0))])
+        return (c[b_i] - c[a_i]) / n_w
 
     def settle(f: np.ndarray) -> np.ndarray:
         """Multiplicative updates of the profile averaged over each track's footprint towards the target."""
-        lo_k = np.minimum(lo_f, hi_f)
+        lo_k = floors()
         for _ in range(EQUALISE_ITERATIONS):
             t = K.T @ (f * w_s)
             seen = (K @ t) / np.maximum(k_sum, 1e-300)
             f = np.clip(f * (target / np.maximum(seen, 1e-300)), lo_k, hi_f)
+        # the footprint-scale updates leave sparse stretches (tracks keeping every drop beside
+        # thinned peaks) below the target on the mm scale: scale the shares by the mm-scale level
+        for _ in range(EQUALISE_ITERATIONS // 3):
+            f = np.clip(f * np.minimum(1.0, target / np.maximum(level_of(f)[s_k], 1e-300)), lo_k, hi_f)
         return f
 
     f = settle(f)
@@ -1021,17 +1037,16 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
             need = 1.0 - target * (1.0 + _DROP_TOLERANCE) / np.maximum(level_of(f)[s_k], 1e-300)
             if not (need > 0).any():
                 break
+            on = np.flatnonzero(hi_f > 0)
+            nxt_r = np.full(r_s.size, np.inf)  # radius of the next kept track after each
+            nxt_r[on[:-1]] = r_s[on[1:]]
             debt, last = 0.0, -np.inf
-            for k in range(r_s.size):
-                if hi_f[k] == 0.0:
-                    continue
+            for k in on:
                 if need[k] > 0:
                     debt += need[k]
                 else:
                     debt = 0.0
-                nxt = r_s[k + 1:][hi_f[k + 1:] > 0][:1]
-                nxt = float(nxt[0]) if nxt.size else np.inf
-                if need[k] > 0 and debt >= 0.5 and nxt - last <= g_lim:
+                if need[k] > 0 and debt >= 0.5 and nxt_r[k] - last <= g_lim:
                     hi_f[k] = 0.0
                     debt -= 1.0
                 else:
