@@ -711,8 +711,9 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     The clock is the plan's unless ``options.setup.dpi_y`` is given. With ``equalise`` and a
     grey-level head, every site keeps its drop and its size follows the track's share; with a
     binary head every track keeps the share of its drops of :func:`track_fractions` (the same
-    volume per area everywhere) and the clock is made ``ceil(1 / smallest share)`` times finer,
-    so that no track's kept drops are farther apart than planned. Without ``equalise``,
+    volume per area everywhere; with floors by the lattice reach, so a crowded track may keep
+    less than half or none) and the clock is made :data:`EQUALISE_CLOCK_FACTOR` times finer, so
+    that no track's kept drops are farther apart than planned or than the reach allows. Without ``equalise``,
     ``balance`` keeps the shares of :func:`density_shares` at the plan's clock.
 
     Returns
