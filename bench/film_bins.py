@@ -77,11 +77,11 @@ def model_bins(head, pl: Placement, man: dict, tilt: float, d_um: float, nbins: 
     r_in, r_out = pl.radial_range_mm()
     sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
     offs = man["pass_plan"]["offsets_mm"]
-    from rotoprint.rotary.interlace import COVER_SHARE, EQUALISE_CLOCK_FACTOR
+    from rotoprint.rotary.equalise import EQUALISE_CLOCK_FACTOR, ReachFloor
+    from rotoprint.rotary.interlace import COVER_SHARE
 
     st = RotarySetup(tilt_deg=tilt, dpi_y=man["dpi_y"] / (EQUALISE_CLOCK_FACTOR if eq else 1))
-    fr = track_fractions(head, sp, offs, st, footprint_um=d_um, reach_um=COVER_SHARE * d_um,
-                         clock_factor=EQUALISE_CLOCK_FACTOR) if eq else None
+    fr = track_fractions(head, sp, offs, st, footprint_um=d_um, reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR)) if eq else None
     e = np.array([1.0, 0.0])
     rs, ws = [], []
     live = np.ones(head.nozzles, bool)

@@ -417,13 +417,14 @@ def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within):
     union's largest."""
     from rotoprint.rotary.exact import swathe_clock
     from rotoprint.rotary.head import nozzle_layout
-    from rotoprint.rotary.interlace import COVER_SHARE, EQUALISE_CLOCK_FACTOR, EQUALISE_MIN_SHARE, track_fractions
+    from rotoprint.rotary.equalise import EQUALISE_CLOCK_FACTOR, EQUALISE_MIN_SHARE, ReachFloor, track_fractions
+    from rotoprint.rotary.interlace import COVER_SHARE
     from rotoprint.rotary.swathes import pass_enabled
 
     sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=60.0, outer_radius_mm=100.0)
     pp = plan_passes(head, sp, footprint_um=49.6)
     fr = track_fractions(head, sp, pp.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp.dpi_y), footprint_um=49.6,
-                         reach_um=COVER_SHARE * 49.6, clock_factor=EQUALISE_CLOCK_FACTOR)
+                         reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
     rs, ws, fs = [], [], []
     for q, o in enumerate(pp.offsets_mm):
         for j in range(len(sp.swathes)):
@@ -444,6 +445,10 @@ def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within):
     below = _cap_share_below((edges[None, :] - r[:, None]) / a)  # (tracks, edges)
     per_bin = ((f * w)[:, None] * np.diff(below, axis=1)).sum(axis=0)
     assert np.abs(per_bin / per_bin.mean() - 1.0).max() <= within
+    with pytest.raises(ConfigError, match="reach"):
+        ReachFloor(-1.0)
+    with pytest.raises(ConfigError, match="clock factor"):
+        ReachFloor(40.0, 0)
     if tilt < 60:
         return
     # without the reach floors (every track keeps at least half) the crowded stretches stay thick
