@@ -58,6 +58,9 @@ from ..ranges import PASSES, show_value
 from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
+# the equalisation lives in its own module; its names stay importable from here
+from .equalise import (EQUALISE_CLOCK_FACTOR, EQUALISE_FLOOR, EQUALISE_ITERATIONS, EQUALISE_MIN_SHARE,  # noqa: F401
+                       EQUALISE_TARGET_PERCENTILE, GREY_FLOOR, ReachFloor, thin_print, track_fractions)
 
 __all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
 
@@ -712,8 +715,9 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     The clock is the plan's unless ``options.setup.dpi_y`` is given. With ``equalise`` and a
     grey-level head, every site keeps its drop and its size follows the track's share; with a
     binary head every track keeps the share of its drops of :func:`track_fractions` (the same
-    volume per area everywhere) and the clock is made ``ceil(1 / smallest share)`` times finer,
-    so that no track's kept drops are farther apart than planned. Without ``equalise``,
+    volume per area everywhere; with floors by the lattice reach, so a crowded track may keep
+    less than half or none) and the clock is made :data:`EQUALISE_CLOCK_FACTOR` times finer, so
+    that no track's kept drops are farther apart than planned or than the reach allows. Without ``equalise``,
     ``balance`` keeps the shares of :func:`density_shares` at the plan's clock.
 
     Returns
@@ -757,19 +761,20 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     if grey:  # by drop size: every site keeps its drop; the plan is made for the smallest drop used
         g_floor = max(1.0 / head.grey_levels, GREY_FLOOR)
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
-                                floor=g_floor, target_percentile=0.0)
+                                floor=g_floor)
         f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
         pp = plan_passes(head, sp, footprint_um=d_um * f_min ** (1.0 / 3.0), passes=n, phases=options.phases)
         clock = pp.dpi_y if st.dpi_y is None else float(st.dpi_y)
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
-                                floor=g_floor, target_percentile=0.0)
+                                floor=g_floor)
     elif equalise:
-        fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um)
-        f_min = min(float(f[f > 0].min()) for per in fracs for f in per if (f > 0).any())
-        # the shares do not change with the clock; the ordered pattern spaces kept drops at most
-        # ceil(1 / f) firings apart, so this keeps every track within the planned spacing
-        # (measured: at the plan's clock alone, thinned clusters open holes)
-        clock = clock * math.ceil(1.0 / f_min - 1e-9)
+        # the print's clock is EQUALISE_CLOCK_FACTOR x the plan's; the ordered pattern spaces kept
+        # drops at most ceil(1 / f) firings apart, so a share >= EQUALISE_FLOOR keeps every track
+        # within the planned spacing (measured: at the plan's clock alone, thinned clusters open
+        # holes), and a track keeps less only where its kept drops stay within the lattice reach
+        fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
+                                reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR))
+        clock = clock * EQUALISE_CLOCK_FACTOR
     elif options.balance:
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
     if pp.phases:
@@ -824,142 +829,3 @@ def read_passes(path) -> list:
     if not isinstance(files, list) or not files or not all(isinstance(f, str) and "/" not in f and "\\" not in f for f in files):
         raise InputFileError("passes manifest field files must be a non-empty list of file names", path=p)
     return [p.parent / f for f in files]
-
-
-_GOLDEN = 0.6180339887498949
-#: Smallest share of its drops a track keeps under equalisation.
-EQUALISE_FLOOR = 0.5
-#: Smallest share of the full volume a grey-level site keeps under equalisation (its footprint,
-#: ``cbrt`` of it, sets the passes and the clock; 0.3 allows a 3:1 radius span).
-GREY_FLOOR = 0.3
-#: Percentile of the unthinned radial thickness (at the tracks) that equalisation aims at.
-EQUALISE_TARGET_PERCENTILE = 10.0
-#: Multiplicative updates of :func:`track_fractions`.
-EQUALISE_ITERATIONS = 60
-
-
-def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
-                    footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None, floor: float | None = None,
-                    target_percentile: float | None = None) -> list[list[np.ndarray]]:
-    """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
-
-    Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
-    ``f_k`` lays ``f_k / (r_k dphi_k)`` drops per mm; averaged along the track, a drop of
-    footprint radius ``a`` adds across the radius the profile ``(1 - x^2 / a^2)^(3/2)`` (a
-    paraboloid cap integrated along the track). The radial thickness at track ``m`` is
-    ``T_m = sum_k f_k / (r_k dphi_k) * K(r_m - r_k)``; multiplicative updates
-    ``f_k <- clip(f_k * T* / T_k, EQUALISE_FLOOR, 1)`` (:data:`EQUALISE_ITERATIONS` times) drive ``T``
-    towards ``T*``, the :data:`EQUALISE_TARGET_PERCENTILE` percentile of the unthinned ``T``
-    over the tracks where every pass prints: sparse tracks keep every drop, tracks in a
-    cluster share theirs. No track keeps
-    less than :data:`EQUALISE_FLOOR` (so a clock ``ceil(1 / f_min)`` times finer keeps every
-    track's drops at most the planned spacing apart).
-
-    ``floor`` replaces :data:`EQUALISE_FLOOR` (e.g. ``1 / grey_levels`` for halftoning) and
-    ``target_percentile`` :data:`EQUALISE_TARGET_PERCENTILE` (0: the thinnest track, which
-    every other can match when the floor allows, as with grey levels).
-
-    Parameters
-    ----------
-    head : InkjetHead
-        Its ``dead_nozzles`` unless ``dead_nozzles`` is given.
-    plan : SwathePlan
-    offsets_mm : sequence of float
-        The passes' radial offsets (:attr:`PassPlan.offsets_mm`).
-    setup : RotarySetup, optional
-        Its clock (``dpi_y``, default the head's) and ``ref_radius_mm``; only the ratio of the
-        swathes' clocks matters (the shares do not change with the clock).
-    footprint_um, dead_nozzles, floor, target_percentile
-        As above.
-
-    Returns
-    -------
-    list (pass) of list (swathe) of (N,) float64
-        Shares in (0, 1] for enabled live nozzles, 0 elsewhere.
-    """
-    from .deposit import DepositOptions
-
-    st = setup or RotarySetup(tilt_deg=plan.tilt_deg)
-    dpi_y = head.dpi_y if st.dpi_y is None else float(st.dpi_y)
-    ref_radius_mm = st.ref_radius_mm
-
-    lo_f = EQUALISE_FLOOR if floor is None else float(floor)
-    if not 0 < lo_f <= 1:
-        raise ConfigError(f"floor must be in (0, 1], got {floor!r}")
-    from .exact import swathe_clock
-
-    live = np.ones(head.nozzles, bool)
-    dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
-    live[list(dead)] = False
-    a_mm = 0.5e-3 * (DepositOptions().full_footprint_um(head) if footprint_um is None else float(footprint_um))
-    psi = math.radians(plan.mount_angle_deg)
-    e = np.array([math.cos(psi), math.sin(psi)])
-    rs, ws, where = [], [], []
-    for q, o in enumerate(offsets_mm):
-        for j, sw in enumerate(plan.swathes):
-            dphi, _ = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
-            xy = nozzle_layout(head, plan.mount(j)).xy_mm + float(o) * e
-            r = np.hypot(xy[:, 0], xy[:, 1])
-            k = np.flatnonzero(pass_enabled(plan, j, r) & live)
-            rs.append(r[k])
-            ws.append(1.0 / (r[k] * dphi))
-            where.append((q, j, k))
-    r = np.concatenate(rs)
-    w = np.concatenate(ws)
-    order = np.argsort(r, kind="stable")
-    r_s, w_s = r[order], w[order]
-    # neighbour pairs within a footprint radius (both directions) and their profile weights
-    ii, jj, kk = [np.arange(r_s.size)], [np.arange(r_s.size)], [np.ones(r_s.size)]
-    shift = 1
-    while shift < r_s.size:
-        d = r_s[shift:] - r_s[:-shift]
-        near = np.flatnonzero(d < a_mm)
-        if near.size == 0:
-            break
-        kv = (1.0 - (d[near] / a_mm) ** 2) ** 1.5
-        ii += [near, near + shift]
-        jj += [near + shift, near]
-        kk += [kv, kv]
-        shift += 1
-    ii, jj, kk = np.concatenate(ii), np.concatenate(jj), np.concatenate(kk)
-    f = np.ones(r_s.size)
-    # the target is the thinnest track where every pass prints, a footprint in from either end
-    # (nearer the ends tracks lack neighbours on one side)
-    lo_t = max(float(r_s[0]), plan.inner_radius_mm + max(0.0, max(offsets_mm))) + a_mm
-    hi_t = min(float(r_s[-1]), plan.outer_radius_mm + min(0.0, min(offsets_mm))) - a_mm
-    mid = (r_s >= lo_t) & (r_s <= hi_t)
-    if not mid.any():
-        mid[:] = True
-    t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
-    pct = EQUALISE_TARGET_PERCENTILE if target_percentile is None else float(target_percentile)
-    target = float(np.percentile(t[mid], pct))
-    for _ in range(EQUALISE_ITERATIONS):
-        f = np.clip(f * (target / t), lo_f, 1.0)
-        t = np.bincount(ii, weights=kk * f[jj] * w_s[jj], minlength=r_s.size)
-    f_all = np.empty_like(f)
-    f_all[order] = f
-    out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
-    pos = 0
-    for q, j, k in where:
-        out[q][j][k] = f_all[pos:pos + k.size]
-        pos += k.size
-    return out
-
-
-def thin_print(pr, fractions: Sequence[np.ndarray], *, pass_index: int = 0):
-    """``pr`` with track ``k`` of swathe ``j`` keeping firing ``i`` only when
-    ``floor((i + 1) f + o) > floor(i f + o)`` (``f = fractions[j][k]``, ``o`` a golden-ratio
-    step per nozzle and pass): an ordered, even pattern on the absolute firing index, exactly
-    ``f`` of the firings over any run."""
-    import dataclasses
-
-    out = []
-    for sw, f in zip(pr.swathes, fractions):
-        n_f = sw.levels.shape[0]
-        i = (np.arange(n_f, dtype=np.float64) + sw.first_firing)[:, None]
-        k = np.arange(sw.levels.shape[1])
-        o = np.mod((k + 7919 * pass_index) * _GOLDEN, 1.0)[None, :]
-        ff = np.asarray(f, np.float64)[None, :]
-        keep = np.floor((i + 1) * ff + o) > np.floor(i * ff + o)
-        out.append(dataclasses.replace(sw, levels=np.where(keep, sw.levels, 0).astype(np.uint8)))
-    return dataclasses.replace(pr, swathes=tuple(out))

@@ -1,0 +1,310 @@
+"""Equalised interlaced passes: the share of its drops each track keeps (binary heads, by thinning)
+or its drop size follows (grey levels), so that every radius gets the same volume per area.
+
+Split from :mod:`rotoprint.rotary.interlace` (which re-exports these names): :func:`track_fractions`
+equalises the union's radial film profile on a uniform grid (see its docstring and
+``docs/rotary.md``, "Equalised 1 mm bins"); :func:`thin_print` realises the shares as an ordered
+pattern on the firing index.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..devices.models import InkjetHead
+from ..errors import ConfigError
+from .head import nozzle_layout
+from .options import RotarySetup
+from .swathes import SwathePlan, pass_enabled
+
+__all__ = ["EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "ReachFloor", "track_fractions", "thin_print"]
+
+
+@dataclass(frozen=True)
+class ReachFloor:
+    """Floors of :func:`track_fractions` set by the drop lattice's reach.
+
+    Parameters
+    ----------
+    reach_um : float
+        The reach ``c D`` (um): a track's kept drops, ``m`` firings apart at the printed clock,
+        stay within ``sqrt((c D)^2 - g^2)`` beside its wider gap ``g``.
+    clock_factor : int
+        The printed clock over the setup's (:data:`EQUALISE_CLOCK_FACTOR` in
+        :func:`~rotoprint.rotary.interlace.pass_prints`), 1..64.
+    """
+
+    reach_um: float
+    clock_factor: int = 2
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.reach_um, (int, float)) and math.isfinite(self.reach_um) and self.reach_um > 0):
+            raise ConfigError(f"lattice reach must be > 0 um, got {self.reach_um!r}")
+        if not (isinstance(self.clock_factor, (int, np.integer)) and 1 <= int(self.clock_factor) <= 64):
+            raise ConfigError(f"clock factor must be a whole number 1..64, got {self.clock_factor!r}")
+
+
+_GOLDEN = 0.6180339887498949
+#: Smallest share of its drops a track keeps under equalisation.
+EQUALISE_FLOOR = 0.5
+#: Smallest share of the full volume a grey-level site keeps under equalisation (its footprint,
+#: ``cbrt`` of it, sets the passes and the clock; 0.3 allows a 3:1 radius span).
+GREY_FLOOR = 0.3
+#: Percentile of the unthinned radial profile's running mean that equalisation aims at (0: its lowest).
+EQUALISE_TARGET_PERCENTILE = 0.0
+#: The clock of an equalised binary print over the plan's (``ceil(1 / EQUALISE_FLOOR)``).
+EQUALISE_CLOCK_FACTOR = 2
+#: Smallest share any track keeps when :func:`track_fractions` sets floors by the lattice reach.
+EQUALISE_MIN_SHARE = 0.25
+#: Multiplicative updates of :func:`track_fractions`.
+EQUALISE_ITERATIONS = 60
+
+
+def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
+                    footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None, floor: float | None = None,
+                    reach: ReachFloor | None = None) -> list[list[np.ndarray]]:
+    """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
+
+    Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
+    ``f_k`` lays ``f_k / (r_k dphi_k)`` drops per mm; averaged along the track, a drop of
+    footprint radius ``a`` adds across the radius the profile ``(1 - x^2 / a^2)^(3/2)`` (a
+    paraboloid cap integrated along the track). The profile ``T(x) = sum_k f_k / (r_k dphi_k)
+    K(x - r_k)`` is taken on a uniform radial grid (:data:`_EQ_STEP_MM`), so that its mean over
+    any stretch is the volume per area there (at the track radii alone it is not: where a tilted
+    head's tracks crowd or pair up, their peaks stand for less area). Multiplicative updates
+    ``f_k <- clip(f_k * T* / Tbar_k, floor_k, 1)`` (:data:`EQUALISE_ITERATIONS` times), ``Tbar_k``
+    the profile averaged over track ``k``'s footprint, drive it towards ``T*``: the
+    :data:`EQUALISE_TARGET_PERCENTILE` percentile (0: the lowest) of the unthinned profile's
+    running mean over :data:`_EQ_WINDOW_MM`, over the band where every pass prints: sparse
+    tracks keep every drop, crowded ones share theirs; then a few updates by the running mean
+    itself lower the mm-scale level where it is still above ``T*``.
+
+    Floors: every track keeps at least ``floor`` (default :data:`EQUALISE_FLOOR`; e.g. ``1 /
+    grey_levels`` for halftoning). With ``reach`` (:class:`ReachFloor`: the drop lattice's reach
+    ``c D``, :data:`~rotoprint.rotary.interlace.COVER_SHARE`), a track may keep down to ``1 / m`` (never below
+    :data:`EQUALISE_MIN_SHARE`) when ``m`` firings at the printed clock (``reach.clock_factor`` x
+    the setup's) are no farther apart than ``sqrt((c D)^2 - g^2)``, ``g`` the wider gap beside it to
+    the kept tracks; and where the mm-scale level is still above ``T*`` (a steeply tilted head's
+    tracks crowd at one end of a swathe: at 70 deg twice the tracks per mm), whole tracks are left
+    out (share 0), error-diffused by the excess, only where the gap they leave is no wider than
+    the union's largest (up to :data:`_DROP_ROUNDS` rounds). Measured (``bench/film_bins.py``,
+    a 30 px band of the test design, 60-145 mm): the planned drops per area of the 1 mm bins
+    within 1.3 / 2.7 / 1.5 / 3.7 % of their mean at tilts 0 / 20 / 45 / 70; on the grid with one
+    floor of 1/2: 1.2 / 2.8 / 10.7 / 37.6 %; at the track radii (before): 3.3 / 7.0 % at 0 / 20.
+
+    Parameters
+    ----------
+    head : InkjetHead
+        Its ``dead_nozzles`` unless ``dead_nozzles`` is given.
+    plan : SwathePlan
+    offsets_mm : sequence of float
+        The passes' radial offsets (:attr:`PassPlan.offsets_mm`).
+    setup : RotarySetup, optional
+        Its clock (``dpi_y``, default the head's) and ``ref_radius_mm``; only the ratio of the
+        swathes' clocks matters (the shares do not change with the clock).
+    footprint_um, dead_nozzles, floor
+        As above.
+    reach : ReachFloor, optional
+        ``reach_um`` and ``clock_factor`` of the floors above (None: one floor for every track,
+        no track left out).
+
+    Returns
+    -------
+    list (pass) of list (swathe) of (N,) float64
+        Shares in [0, 1] for enabled live nozzles (0: a crowded track left out, only with
+        ``reach``), 0 elsewhere.
+    """
+    from .deposit import DepositOptions
+
+    st = setup or RotarySetup(tilt_deg=plan.tilt_deg)
+    dpi_y = head.dpi_y if st.dpi_y is None else float(st.dpi_y)
+    ref_radius_mm = st.ref_radius_mm
+
+    lo_f = EQUALISE_FLOOR if floor is None else float(floor)
+    if not 0 < lo_f <= 1:
+        raise ConfigError(f"floor must be in (0, 1], got {floor!r}")
+    from .exact import swathe_clock
+
+    live = np.ones(head.nozzles, bool)
+    dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
+    live[list(dead)] = False
+    a_mm = 0.5e-3 * (DepositOptions().full_footprint_um(head) if footprint_um is None else float(footprint_um))
+    psi = math.radians(plan.mount_angle_deg)
+    e = np.array([math.cos(psi), math.sin(psi)])
+    rs, ws, where = [], [], []
+    for q, o in enumerate(offsets_mm):
+        for j, sw in enumerate(plan.swathes):
+            dphi, _ = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
+            xy = nozzle_layout(head, plan.mount(j)).xy_mm + float(o) * e
+            r = np.hypot(xy[:, 0], xy[:, 1])
+            k = np.flatnonzero(pass_enabled(plan, j, r) & live)
+            rs.append(r[k])
+            ws.append(1.0 / (r[k] * dphi))
+            where.append((q, j, k))
+    r = np.concatenate(rs)
+    w = np.concatenate(ws)
+    order = np.argsort(r, kind="stable")
+    r_s, w_s = r[order], w[order]
+    reach_mm = None if reach is None else 1e-3 * float(reach.reach_um)
+    f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
+                          clock_factor=2 if reach is None else int(reach.clock_factor))
+    f_all = np.empty_like(f)
+    f_all[order] = f
+    out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
+    pos = 0
+    for q, j, k in where:
+        out[q][j][k] = f_all[pos:pos + k.size]
+        pos += k.size
+    return out
+
+
+
+#: Rounds of leaving whole tracks out (:func:`track_fractions` with ``reach``) and the
+#: share of the target the mm-scale level may exceed before they start.
+_DROP_ROUNDS = 6
+_DROP_TOLERANCE = 0.005
+#: Radial step of the profile :func:`track_fractions` equalises, mm.
+_EQ_STEP_MM = 0.002
+#: Width of the running mean whose smallest value (over the band every pass prints) is the
+#: target of :func:`track_fractions`, mm: a mm-scale level, not a single track's peak.
+_EQ_WINDOW_MM = 0.5
+
+
+def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
+                      lo_f: float, target_percentile: float, *, reach_mm: float | None = None,
+                      clock_factor: int = 2) -> np.ndarray:
+    """Shares ``(M,)`` of sorted tracks ``r_s`` (mm) with drops per mm ``w_s`` so that their radial
+    profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`)."""
+    import scipy.sparse as sps
+
+    step = _EQ_STEP_MM
+    g0 = float(r_s[0]) - a_mm
+    n_g = int(math.ceil((float(r_s[-1]) + a_mm - g0) / step)) + 1
+    reach = int(math.ceil(a_mm / step)) + 1
+    base = np.floor((r_s - g0) / step).astype(np.int64)
+    rows, cols, vals = [], [], []
+    tr = np.arange(r_s.size)
+    for s_ in range(-reach, reach + 1):
+        idx = base + s_
+        x = (g0 + idx * step - r_s) / a_mm
+        k = np.clip(1.0 - x * x, 0.0, None) ** 1.5
+        ok = (k > 0) & (idx >= 0) & (idx < n_g)
+        rows.append(tr[ok])
+        cols.append(idx[ok])
+        vals.append(k[ok])
+    K = sps.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(r_s.size, n_g))
+    k_sum = np.asarray(K.sum(axis=1)).ravel()
+    grid = g0 + np.arange(n_g) * step
+    # the band where every pass prints, a footprint in from either end (tracks there lack
+    # neighbours on one side)
+    lo_t = max(float(r_s[0]), plan.inner_radius_mm + max(0.0, max(offsets_mm))) + a_mm
+    hi_t = min(float(r_s[-1]), plan.outer_radius_mm + min(0.0, min(offsets_mm))) - a_mm
+    t0 = K.T @ w_s
+    win = max(1, int(round(_EQ_WINDOW_MM / step)))
+    c = np.concatenate([[0.0], np.cumsum(t0)])
+    centre = np.arange(n_g)
+    a_i, b_i = np.clip(centre - win // 2, 0, n_g), np.clip(centre + win // 2 + 1, 0, n_g)
+    smooth = (c[b_i] - c[a_i]) / np.maximum(b_i - a_i, 1)
+    mid = (grid - _EQ_WINDOW_MM / 2 >= lo_t) & (grid + _EQ_WINDOW_MM / 2 <= hi_t)
+    if not mid.any():
+        mid = (grid >= lo_t) & (grid <= hi_t)
+    if not mid.any():
+        mid[:] = True
+    pct = float(target_percentile)
+    target = float(np.percentile(smooth[mid], pct))
+    f = np.ones(r_s.size)
+    hi_f = np.ones(r_s.size)
+    drop_tracks = reach_mm is not None
+
+    def floors() -> np.ndarray:
+        """Per track the smallest share: ``lo_f``, or with a lattice reach ``1 / m`` when ``m``
+        firings at the printed clock (``clock_factor`` x the one ``w_s`` is at) still lie within
+        the reach beside the wider gap to the kept neighbouring tracks (0 for tracks left out)."""
+        out = np.full(r_s.size, lo_f)
+        on = np.flatnonzero(hi_f > 0)
+        if reach_mm is not None and on.size > 1:
+            gaps = np.diff(r_s[on])
+            g = np.maximum(np.concatenate([[gaps[0]], gaps]), np.concatenate([gaps, [gaps[-1]]]))
+            b_max = np.sqrt(np.clip(reach_mm * reach_mm - g * g, 0.0, None))
+            m = np.floor(b_max * w_s[on] * clock_factor + 1e-9)
+            m = np.clip(m, 1.0 / lo_f, 1.0 / EQUALISE_MIN_SHARE)
+            out[on] = np.minimum(lo_f, 1.0 / m)
+        return np.minimum(out, hi_f)
+
+    s_k = np.clip(np.floor((r_s - g0) / step).astype(np.int64), 0, n_g - 1)
+
+    printed = (grid >= float(r_s[0])) & (grid <= float(r_s[-1]))
+    c_n = np.concatenate([[0], np.cumsum(printed)])
+    n_w = np.maximum(c_n[b_i] - c_n[a_i], 1)
+
+    def level_of(f: np.ndarray) -> np.ndarray:
+        """The running mean (over _EQ_WINDOW_MM, within the printed range) of the profile, ``(n_g,)``."""
+        c = np.concatenate([[0.0], np.cumsum(np.where(printed, K.T @ (f * w_s), 0.0))])
+        return (c[b_i] - c[a_i]) / n_w
+
+    def settle(f: np.ndarray) -> np.ndarray:
+        """Multiplicative updates of the profile averaged over each track's footprint towards the target."""
+        lo_k = floors()
+        for _ in range(EQUALISE_ITERATIONS):
+            t = K.T @ (f * w_s)
+            seen = (K @ t) / np.maximum(k_sum, 1e-300)
+            f = np.clip(f * (target / np.maximum(seen, 1e-300)), lo_k, hi_f)
+        # the footprint-scale updates leave sparse stretches (tracks keeping every drop beside
+        # thinned peaks) below the target on the mm scale: scale the shares by the mm-scale level
+        for _ in range(EQUALISE_ITERATIONS // 3):
+            f = np.clip(f * np.minimum(1.0, target / np.maximum(level_of(f)[s_k], 1e-300)), lo_k, hi_f)
+        return f
+
+    f = settle(f)
+    if drop_tracks:
+        # where even the floors leave the mm-scale level above the target (tracks crowd at one end
+        # of a steeply tilted head), whole tracks are left out, error-diffused by the excess, and
+        # only where the gap they leave is no wider than the union's largest gap (so the drop
+        # lattice the plan chose still closes); then the shares settle again
+        inside = (r_s >= lo_t) & (r_s <= hi_t)
+        gaps = np.diff(r_s)
+        both = inside[1:] & inside[:-1]
+        g_lim = float(gaps[both].max()) if both.any() else float(gaps.max())
+        for _ in range(_DROP_ROUNDS):
+            need = 1.0 - target * (1.0 + _DROP_TOLERANCE) / np.maximum(level_of(f)[s_k], 1e-300)
+            if not (need > 0).any():
+                break
+            on = np.flatnonzero(hi_f > 0)
+            nxt_r = np.full(r_s.size, np.inf)  # radius of the next kept track after each
+            nxt_r[on[:-1]] = r_s[on[1:]]
+            debt, last = 0.0, -np.inf
+            for k in on:
+                if need[k] > 0:
+                    debt += need[k]
+                else:
+                    debt = 0.0
+                if need[k] > 0 and debt >= 0.5 and nxt_r[k] - last <= g_lim:
+                    hi_f[k] = 0.0
+                    debt -= 1.0
+                else:
+                    last = r_s[k]
+            f = settle(np.where(hi_f > 0, np.maximum(f, 0.5), 0.0))
+    return f
+
+
+def thin_print(pr, fractions: Sequence[np.ndarray], *, pass_index: int = 0):
+    """``pr`` with track ``k`` of swathe ``j`` keeping firing ``i`` only when
+    ``floor((i + 1) f + o) > floor(i f + o)`` (``f = fractions[j][k]``, ``o`` a golden-ratio
+    step per nozzle and pass): an ordered, even pattern on the absolute firing index, exactly
+    ``f`` of the firings over any run."""
+    import dataclasses
+
+    out = []
+    for sw, f in zip(pr.swathes, fractions):
+        n_f = sw.levels.shape[0]
+        i = (np.arange(n_f, dtype=np.float64) + sw.first_firing)[:, None]
+        k = np.arange(sw.levels.shape[1])
+        o = np.mod((k + 7919 * pass_index) * _GOLDEN, 1.0)[None, :]
+        ff = np.asarray(f, np.float64)[None, :]
+        keep = np.floor((i + 1) * ff + o) > np.floor(i * ff + o)
+        out.append(dataclasses.replace(sw, levels=np.where(keep, sw.levels, 0).astype(np.uint8)))
+    return dataclasses.replace(pr, swathes=tuple(out))
