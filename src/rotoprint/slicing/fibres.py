@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -192,10 +193,11 @@ def slice_mesh(mesh: Mesh, device, options: SliceOptions | None = None, **keywor
     >>> int((next(iter(job)).image > 0).sum())  # 2 mm / 19.836 um -> 100 columns, 1 mm / 19.838 um -> 50 rows
     5000
     """
-    from ..devices import as_device
-
     opts = slice_options_from(options, keywords)
-    device = as_device(device)
+    if isinstance(device, (str, Path)):  # a name or file; a device model is used as it is
+        from ..devices import as_device
+
+        device = as_device(device)
     lo, hi = mesh.bounds
     plan = plan_layers(float(lo[2]), float(hi[2]), opts.layer_height_mm)
     grid = make_grid(
