@@ -124,9 +124,9 @@ class SliceJob:
         args = (a[:, 0], a[:, 1], b[:, 0], b[:, 1], self._n_fib, self._n_samp, self.fill)
         if self.backend == "numpy":
             return fill_numpy(*args)
-        from ._kernels import fill_jit
+        from ._fill import fill_fast
 
-        return fill_jit(*args)
+        return fill_fast(*args)
 
     def layer(self, index: int) -> Layer:
         """Slice one layer."""
