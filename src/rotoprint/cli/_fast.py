@@ -175,7 +175,6 @@ def try_dlp(argv: list[str]) -> int | None:
 
 
 def _run(params: dict[str, Any], app_quiet: bool, app_verbose: bool) -> int:
-    from .. import _jitnotice
     from ..errors import RotoprintError
     from ._base import _FLAGS, EXIT_BAD_INPUT, error_line, setup_logging
     from ._dlp_run import PlainUI, RichUI, run_dlp
@@ -187,8 +186,11 @@ def _run(params: dict[str, Any], app_quiet: bool, app_verbose: bool) -> int:
     # rich only when something may be drawn on a terminal (the progress bar); else plain lines
     ui = RichUI() if not quiet and _maybe_terminal() else PlainUI()
     console = _LazyConsole()
+    notice = None
     if _maybe_terminal() or os.environ.get("ROTOPRINT_COMPILE_NOTICE") == "1":
-        _jitnotice.install(console)  # (it asks the console whether it is a terminal)
+        from .. import _jitnotice as notice
+
+        notice.install(console)  # (it asks the console whether it is a terminal)
     try:
         run_dlp(**params, ui=ui)
         return 0
@@ -199,7 +201,8 @@ def _run(params: dict[str, Any], app_quiet: bool, app_verbose: bool) -> int:
         sys.stderr.write("rotoprint: aborted\n")
         return 130
     finally:
-        _jitnotice.finish(console)
+        if notice is not None:
+            notice.finish(console)
 
 
 def _maybe_terminal() -> bool:
