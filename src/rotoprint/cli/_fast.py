@@ -179,6 +179,11 @@ def _run(params: dict[str, Any], app_quiet: bool, app_verbose: bool) -> int:
     from ._base import _FLAGS, EXIT_BAD_INPUT, error_line, setup_logging
     from ._dlp_run import PlainUI, RichUI, run_dlp
 
+    if "numpy" not in sys.modules:
+        # OpenBLAS starts a thread per core when numpy is imported (about a third of numpy's
+        # import); the DLP path's only matrix products are 3 x 3, which it never threads.
+        # A value the user set is kept.
+        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     _FLAGS.quiet, _FLAGS.verbose = app_quiet, app_verbose  # as the app callback sets them
     if app_verbose:
         setup_logging(True)

@@ -138,9 +138,15 @@ def _png_chunk(kind: bytes, data: bytes) -> bytes:
     return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
 
-def rgb_png(rgb: np.ndarray, *, level: int = 9) -> bytes:
+def _deflate_rle(data: bytes) -> bytes:
+    z = zlib.compressobj(9, zlib.DEFLATED, 15, 9, zlib.Z_RLE)
+    return z.compress(data) + z.flush()
+
+
+def rgb_png(rgb: np.ndarray) -> bytes:
     """An 8-bit RGB PNG of ``rgb`` ``(H, W, 3) uint8``: every row filtered "Up" (a flat
-    background is all zero bytes), one zlib stream."""
+    background is all zero bytes), one zlib stream, run-length strategy (a third of level 9's
+    time on such rows, about as small)."""
     h, w, _ = rgb.shape
     rows = rgb.reshape(h, w * 3)
     up = np.empty((h, w * 3 + 1), np.uint8)
@@ -148,7 +154,7 @@ def rgb_png(rgb: np.ndarray, *, level: int = 9) -> bytes:
     up[0, 1:] = rows[0]
     np.subtract(rows[1:], rows[:-1], out=up[1:, 1:])  # modulo 256, as the filter is defined
     ihdr = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
-    return b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", ihdr) + _png_chunk(b"IDAT", zlib.compress(up.tobytes(), level)) + \
+    return b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", ihdr) + _png_chunk(b"IDAT", _deflate_rle(up.tobytes())) + \
         _png_chunk(b"IEND", b"")
 
 
