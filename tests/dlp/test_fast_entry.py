@@ -199,13 +199,17 @@ def test_help_is_typers(run_cli):
 
 
 # ----------------------------------------------------------------------- no heavy imports
-@pytest.mark.parametrize("quiet", [True, False])
-def test_fast_path_imports_no_typer_rich_pydantic_numba(tmp_path, part, quiet):
+@pytest.mark.parametrize("quiet,mode", [(True, "coverage"), (False, "coverage"), (True, "binary"), (True, "smooth")])
+def test_fast_path_imports_no_typer_rich_pydantic_numba(tmp_path, part, quiet, mode):
+    from rotoprint._accel import native
+
+    if native is None and mode != "coverage":
+        pytest.skip("binary and smooth masks use the numba fill without the C extension")
     code = (
         "import sys\n"
         "from rotoprint.cli.entry import main\n"
-        f"rc = main(['dlp', {str(part)!r}, '-d', 'prusa-sl1s', '--layer-height', '0.5', '-o', {str(tmp_path / 'j.sl1s')!r}]"
-        f" + (['--quiet'] if {quiet} else []))\n"
+        f"rc = main(['dlp', {str(part)!r}, '-d', 'prusa-sl1s', '--layer-height', '0.5', '-o', {str(tmp_path / 'j.sl1s')!r},"
+        f" '--mode', {mode!r}] + (['--quiet'] if {quiet} else []))\n"
         "heavy = sorted({m.split('.')[0] for m in sys.modules} & {'typer', 'click', 'rich', 'pydantic', 'pydantic_core', 'numba'})\n"
         "print(rc, heavy)\n"
     )
