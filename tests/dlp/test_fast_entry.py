@@ -142,7 +142,7 @@ def _both(run_cli, monkeypatch, tmp_path, *args):
     res = []
     for way in ("fast", "typer"):
         monkeypatch.setenv("ROTOPRINT_FAST_CLI", "1" if way == "fast" else "0")
-        d = tmp_path / way
+        d = tmp_path / ("fast" if way == "fast" else "slow")  # same length: a tab stop falls alike
         d.mkdir(exist_ok=True)
         argv = [str(a).replace("OUT", str(d)) for a in args]
         code, out, err = run_cli(*argv)
@@ -281,3 +281,12 @@ def test_plain_reader_leaves_anything_else_to_pydantic(tmp_path, edit):
         load_device(p)
     except Exception as exc:  # noqa: BLE001
         assert type(exc).__name__ in ("DeviceError", "InputFileError"), exc
+
+
+def test_same_summary_and_error_for_names_with_tabs_and_wide_characters(run_cli, monkeypatch, tmp_path, part):
+    fast, slow = _both(run_cli, monkeypatch, tmp_path, "dlp", part, "--layer-height", "0.5", "-d", "perfactory-sxga",
+                       "-o", "OUT/j\tob 部品.sl1")
+    assert fast[0] == slow[0] == 0 and fast[1:] == slow[1:]
+    fast, slow = _both(run_cli, monkeypatch, tmp_path, "dlp", tmp_path / "no\tsuch 部品.stl", "--layer-height", "0.5",
+                       "-d", "perfactory-sxga", "-o", "OUT/j.sl1")
+    assert fast[0] == slow[0] == 2 and fast[1:] == slow[1:]

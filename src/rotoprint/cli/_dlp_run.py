@@ -37,6 +37,9 @@ class PlainUI:
         return _NoBar()
 
     def say(self, text: str) -> None:
+        if not (text.isascii() and text.isprintable()):  # tabs, wide characters: as rich lays them out
+            RichUI().say(text)
+            return
         sys.stderr.write(escape_controls(text, keep_newlines=True) + "\n")
 
 

@@ -223,7 +223,7 @@ def _maybe_terminal() -> bool:
 
 def _say_error(text: str) -> None:
     """``rotoprint: error: ...`` as the typer app prints it (red on a terminal)."""
-    if _maybe_terminal():
+    if _maybe_terminal() or not (text.isascii() and text.isprintable()):  # (rich's layout of the rest)
         from ._console import console
         from ._common import styled
 
