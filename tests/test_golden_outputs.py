@@ -32,13 +32,14 @@ from rotoprint.testing import torus_mesh
 #: branch filmbuild (issue 14 on the build: every layer in interlaced passes at the pass plan's
 #: clock, one image per pass, the deposit model's coverage, the printed resistance on the
 #: deposited film, 24 silver cycles in the examples), then the builds on main after the plan,
-#: plan2 and dlp merges (the pass planner's clock capped at 2 x native and its new offsets);
+#: plan2 and dlp merges (the pass planner's clock capped at 2 x native and its new offsets),
+#: then the SL1 on branch fastdlp (issue 16: thumbnails drawn and encoded with numpy and zlib);
 #: the first values were from main d2285d8. GOLDEN is what the
 #: numba / Pillow path writes (ROTOPRINT_NATIVE=0 or no C compiler), GOLDEN_NATIVE what the C
 #: extension writes (its zlib encodes other, equally valid, PNG bytes).
 GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
-    "sl1": ("5a0f15311e6983c5f6264fc812a7fead917e9b44fd6b2bf4fe0f1f5accfe03b0", 1),
+    "sl1": ("b311c72eeac6b5ed945ace7361c8769099a0cb81de94450dbccbe527e60ba2a6", 1),
     "rotary-slices": ("68981c4252b5f2495f200f5876e9b1e8f8f8493ea88089088fce8ce8b8b20c69", 26),
     "build-coil-no-check": ("80546e5423a9ba581a8a0d71cf9337feff695c813e4470915bf4ddc63c62162f", 737),
     "build-gas": ("36e5a3307dd79258467f99623f559d4170273741a63dfbe59964824a8c48a0db", 407),
@@ -46,7 +47,7 @@ GOLDEN = {
 
 GOLDEN_NATIVE = {
     "layer-folder": ("a7387385431f11fad6a75c3f1655d0c5721d3b034f209090b5cf3ed906dc52ca", 10),
-    "sl1": ("d69b3a5600c86cadb121b3e54f5be9630d7a45ea06e93cfb1963d4aa5015b9da", 1),
+    "sl1": ("8ab11667833cbd09409bbe35e638ce26203024f3a353cea8f535959258d13370", 1),
     "rotary-slices": ("585a4ab0b9ac22ca671763e163c949164b4e23ecfc8113af30d25476783ad1c8", 26),
     "build-coil-no-check": ("b5345f8e03419dcd07077f847b38ce4f85216e5eefe926d4bc0dd6a97b2a5064", 737),
     "build-gas": ("0e02f13df7935f9ceefe70403cd8389de8276f348e3b809bca5ee6209eb97537", 407),

@@ -106,6 +106,33 @@ def test_section_matches_the_numpy_reference():
             assert np.array_equal(getattr(a, f), getattr(b, f)), f
 
 
+def test_fill_matches_the_jit_kernel_and_numpy():
+    """The binary fibre fill: random segments (on and off the fibres and samples, outside the
+    image, degenerate), both rules, empty images; and a real part's layers."""
+    from rotoprint import load_device, slice_mesh
+    from rotoprint.slicing._fill import fill_fast, fill_numpy
+    from rotoprint.slicing._kernels import fill_jit
+
+    rng = np.random.default_rng(3)
+    for t in range(200):
+        n, n_fib, n_samp = int(rng.integers(0, 60)), int(rng.integers(0, 40)), int(rng.integers(0, 50))
+        P = rng.uniform(-5, 45, (n, 4))
+        if t % 3 == 0:
+            P = np.round(P)  # vertices exactly on fibres and samples
+        if t % 7 == 0 and n:
+            P[:, 3] = P[:, 1]  # horizontal segments: no crossing
+        args = (P[:, 0], P[:, 1], P[:, 2], P[:, 3], n_fib, n_samp)
+        for rule in ("nonzero", "evenodd"):
+            got = fill_fast(*args, rule)
+            assert got.shape == (n_fib, n_samp) and got.dtype == np.uint8
+            assert np.array_equal(got, fill_jit(*args, rule)), (t, rule)
+            assert np.array_equal(got, fill_numpy(*args, rule)), (t, rule)
+    job = slice_mesh(torus_mesh(6.0, 2.0, 90, 40), load_device("omnidot760"), layer_height_mm=0.5)
+    numpy_job = slice_mesh(job.mesh, load_device("omnidot760"), layer_height_mm=0.5, backend="numpy")
+    for i in range(0, len(job), 2):
+        assert np.array_equal(job.layer(i).image, numpy_job.layer(i).image), i
+
+
 def test_coverage_matches_the_jit_kernels_and_numpy(monkeypatch):
     from rotoprint import load_device, slice_mesh
     from rotoprint.masks.coverage import coverage_mask

@@ -1,6 +1,8 @@
 /* rotoprint._native: the DLP path's hot kernels in C, built with the machine's compiler at
  * install (setuptools; optional: without a compiler the numba kernels are used).
  *
+ * - fill():      the binary fibre fill of a cross-section (slicing/_kernels.fill_jit, the same
+ *                crossings, operations and sort).
  * - section():   a mesh's cross-section at height z (same operations, in the same order, as
  *                slicing/_kernels.section_kernel and _sections.section_numpy).
  * - coverage():  exact area coverage into uint8 grey levels (masks/_coverage_kernels:
@@ -14,7 +16,7 @@
  *                short runs and runs of up to 1024 Up rows, which are deflated with the other
  *                rows; those are left unfiltered ("None"); zlib's run-length strategy.
  *
- * All three release the GIL. Inputs are buffers (numpy arrays); the Python side (the
+ * All of them release the GIL. Inputs are buffers (numpy arrays); the Python side (the
  * validating public functions) checks shapes, dtypes and contiguity before calling.
  */
 #define PY_SSIZE_T_CLEAN
@@ -765,7 +767,126 @@ native_first_two(PyObject *self, PyObject *args)
     Py_RETURN_NONE;
 }
 
+/* --------------------------------------------------------------------------- fill */
+
+/* slicing/_kernels._fibre_range: the fibres j0 <= j < j1 a span lv..hv of v crosses (the
+ * range is empty unless j0 < n_fib); computed in double so that no value is converted to an
+ * integer out of range. */
+static int
+fibre_range(double lv, double hv, long n_fib, long *j0, long *j1)
+{
+    double a = lv > 0.0 ? ceil(lv) : 0.0;
+    double b = hv > 0.0 ? (hv < (double)n_fib ? ceil(hv) : (double)n_fib) : 0.0;
+    if (!(a < (double)n_fib) || !(b > a)) return 0;
+    *j0 = (long)a;
+    *j1 = (long)b;
+    return 1;
+}
+
+static PyObject *
+native_fill(PyObject *self, PyObject *args)
+{
+    /* fill(ua, va, ub, vb, n_fib, n_samp, evenodd, out[n_fib * n_samp] uint8 zeroed): the
+     * fibre fill of slicing/_kernels.fill_jit (bucket_crossings then _fill_spans: the same
+     * crossings, the same floating-point operations, the same stable sort), 255 inside. */
+    Py_buffer UA, VA, UB, VB, OUT;
+    long n_fib, n_samp;
+    int evenodd;
+    if (!PyArg_ParseTuple(args, "y*y*y*y*llpw*", &UA, &VA, &UB, &VB, &n_fib, &n_samp, &evenodd, &OUT)) return NULL;
+    const double *ua = (const double *)UA.buf, *va = (const double *)VA.buf;
+    const double *ub = (const double *)UB.buf, *vb = (const double *)VB.buf;
+    Py_ssize_t n_seg = UA.len / (Py_ssize_t)sizeof(double);
+    uint8_t *out = (uint8_t *)OUT.buf;
+    int64_t *per = (int64_t *)calloc((size_t)n_fib + 1, sizeof(int64_t));
+    int64_t *start = (int64_t *)calloc((size_t)n_fib + 1, sizeof(int64_t));
+    int64_t *pos = NULL;
+    int8_t *sgn = NULL;
+    int oom = per == NULL || start == NULL;
+    if (!oom) {
+        Py_BEGIN_ALLOW_THREADS
+        /* pass 1: crossings per fibre, by a difference array over fibres */
+        long jlo = n_fib, jhi = 0, j0, j1;
+        for (Py_ssize_t s = 0; s < n_seg; s++) {
+            double v0 = va[s], v1 = vb[s];
+            if (v0 == v1) continue;
+            double lv = v0 < v1 ? v0 : v1, hv = v0 < v1 ? v1 : v0;
+            if (fibre_range(lv, hv, n_fib, &j0, &j1)) {
+                per[j0] += 1;
+                per[j1] -= 1;
+                if (j0 < jlo) jlo = j0;
+                if (j1 > jhi) jhi = j1;
+            }
+        }
+        if (jhi < jlo) jhi = jlo;
+        int64_t acc = 0, run = 0;
+        for (long j = jlo; j < jhi; j++) {
+            run += per[j];
+            start[j] = acc;
+            acc += run;
+        }
+        for (long j = jhi; j <= n_fib; j++) start[j] = acc;
+        pos = (int64_t *)malloc((size_t)(acc > 0 ? acc : 1) * sizeof(int64_t));
+        sgn = (int8_t *)malloc((size_t)(acc > 0 ? acc : 1));
+        oom = pos == NULL || sgn == NULL;
+        if (!oom) {
+            int64_t *cur = per; /* per is not needed any more: the next free slot per fibre */
+            memcpy(cur, start, (size_t)n_fib * sizeof(int64_t));
+            /* pass 2: where each crossing counts from (first sample with u >= u_c), its sign */
+            for (Py_ssize_t s = 0; s < n_seg; s++) {
+                double v0 = va[s], v1 = vb[s];
+                if (v0 == v1) continue;
+                int sign;
+                double lu, lv, hu, hv;
+                if (v0 < v1) { sign = -1; lu = ua[s]; lv = v0; hu = ub[s]; hv = v1; }
+                else { sign = 1; lu = ub[s]; lv = v1; hu = ua[s]; hv = v0; }
+                if (!fibre_range(lv, hv, n_fib, &j0, &j1)) continue;
+                double slope = (hu - lu) / (hv - lv);
+                for (long j = j0; j < j1; j++) {
+                    double u = lu + ((double)j - lv) * slope;
+                    int64_t i = u <= 0.0 ? 0 : (u >= (double)n_samp ? (int64_t)n_samp : (int64_t)ceil(u));
+                    int64_t k = cur[j];
+                    pos[k] = i;
+                    sgn[k] = (int8_t)sign;
+                    cur[j] = k + 1;
+                }
+            }
+            /* pass 3: each fibre's crossings sorted along it (stable insertion sort) */
+            for (long j = jlo; j < jhi; j++) {
+                int64_t a = start[j], b = start[j + 1];
+                for (int64_t k = a + 1; k < b; k++) {
+                    int64_t p = pos[k];
+                    int8_t q = sgn[k];
+                    int64_t m = k - 1;
+                    while (m >= a && pos[m] > p) { pos[m + 1] = pos[m]; sgn[m + 1] = sgn[m]; m--; }
+                    pos[m + 1] = p;
+                    sgn[m + 1] = q;
+                }
+            }
+            /* per fibre, the spans the fill rule puts inside */
+            for (long j = jlo; j < jhi; j++) {
+                uint8_t *row = out + (size_t)j * (size_t)n_samp;
+                int64_t w = 0, prev = 0;
+                for (int64_t k = start[j]; k < start[j + 1]; k++) {
+                    int64_t i = pos[k];
+                    int inside = evenodd ? (w & 1) != 0 : w != 0;
+                    if (inside && i > prev) memset(row + prev, 255, (size_t)(i - prev));
+                    w += sgn[k];
+                    prev = i;
+                }
+                int inside = evenodd ? (w & 1) != 0 : w != 0;
+                if (inside && prev < n_samp) memset(row + prev, 255, (size_t)(n_samp - prev));
+            }
+        }
+        Py_END_ALLOW_THREADS
+    }
+    free(per); free(start); free(pos); free(sgn);
+    PyBuffer_Release(&UA); PyBuffer_Release(&VA); PyBuffer_Release(&UB); PyBuffer_Release(&VB); PyBuffer_Release(&OUT);
+    if (oom) return PyErr_NoMemory();
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
+    {"fill", native_fill, METH_VARARGS, "fill(ua, va, ub, vb, n_fib, n_samp, evenodd, out)"},
     {"merge_keys", native_merge_keys, METH_VARARGS, "merge_keys(keys, first, ids) -> number of distinct keys"},
     {"first_two", native_first_two, METH_VARARGS, "first_two(ids, n, a, b)"},
     {"merge_rows", native_merge_rows, METH_VARARGS, "merge_rows(rows, first, inverse) -> number of distinct rows"},

@@ -71,11 +71,12 @@ def release_free_memory() -> None:
     """Hand freed heap memory back to the operating system (glibc ``malloc_trim``), after
     the large temporaries of mesh loading; a no-op where that call does not exist."""
     import ctypes
-    import ctypes.util
 
     try:  # libc.so.6 first: find_library runs ldconfig / gcc in subprocesses (~20 ms)
         libc = ctypes.CDLL("libc.so.6")
     except OSError:  # pragma: no cover - not glibc
+        import ctypes.util  # (imports subprocess: only here)
+
         try:
             libc = ctypes.CDLL(ctypes.util.find_library("c"))
         except (OSError, TypeError):

@@ -3,12 +3,7 @@
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
-import math
-import logging
 import sys
-import unicodedata
-from pathlib import Path
 from typing import Annotated, Any
 
 import typer
@@ -16,46 +11,26 @@ from rich.console import Console
 from rich.text import Text
 
 from .. import ranges as R
-from ..errors import ConfigError
 from ..ranges import check_direction, check_range
 
-def escape_controls(text: str, *, keep_newlines: bool = False) -> str:
-    """``text`` with control characters shown, not sent: ESC as ``\\x1b``, DEL, C1 controls,
-    bidirectional and other format characters (U+202E ...) and lone surrogates (bytes of a
-    file name that are not UTF-8) as ``\\xNN`` / ``\\uNNNN``; a backslash stays as it is.
-
-    File names and other user strings reach the terminal through this, so a name holding
-    ``\\e[2J`` cannot clear the screen. ``keep_newlines`` keeps ``\\n`` and ``\\t`` (multi-line
-    reports); errors are one line, so there they are escaped too.
-    """
-    if text.isprintable():
-        return text
-    out = []
-    for ch in text:
-        if ch.isprintable() or (keep_newlines and ch in "\n\t"):
-            out.append(ch)
-        elif unicodedata.category(ch) == "Zs":  # a non-breaking or other space: harmless
-            out.append(ch)
-        else:
-            o = ord(ch)
-            out.append(f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}" if o < 0x10000 else f"\\U{o:08x}")
-    return "".join(out)
-
-
-class _SafeConsole(Console):
-    """A Console whose strings have their control characters escaped (see :func:`escape_controls`);
-    rich's own styling codes are added after, so colours still work."""
-
-    def render_str(self, text: str, **kwargs: Any) -> Text:
-        return super().render_str(escape_controls(text, keep_newlines=True), **kwargs)
-
-
-# No markup and no emoji codes: paths and option values are printed as they are (a "[" or
-# ":b:" in a file name must not be read as rich markup). Styles go through rich.text.Text.
-console = _SafeConsole(stderr=True, highlight=False, markup=False, emoji=False)
-out_console = _SafeConsole(highlight=False, markup=False, emoji=False)
-
-EXIT_BAD_INPUT = 2
+# The typer- and rich-free helpers live in ._base (the fast `rotoprint dlp` entry uses them
+# without importing typer); they are re-exported here for the commands.
+from ._base import (  # noqa: F401
+    EXIT_BAD_INPUT,
+    _FLAGS,
+    _AppFlags,
+    _SafeFormatter,
+    check_scale,
+    device_input,
+    escape_controls,
+    is_quiet,
+    is_verbose,
+    load_mesh_from_options,
+    parse_pair,
+    parse_triple,
+    setup_logging,
+)
+from ._console import _SafeConsole, console, out_console  # noqa: F401
 
 DeviceOpt = Annotated[str, typer.Option("--device", "-d", help="Preset name (omnidot760, perfactory-sxga) or a device .toml file.")]
 
@@ -69,6 +44,7 @@ def in_range(rng: R.Range):
             return None
         return check_range(value, rng, _opt_name(param))
 
+    _check.range = rng  # read by the fast dlp entry's tests (tests/test_fast_dlp.py)
     return _check
 
 
@@ -80,12 +56,7 @@ def direction_cb(param: typer.CallbackParam, value):
 def scale_cb(param: typer.CallbackParam, value):
     """Option callback: a uniform scale whose magnitude is in :data:`rotoprint.ranges.SCALE`
     (negative mirrors)."""
-    if value is None:
-        return None
-    name = _opt_name(param)
-    if not (isinstance(value, float) and math.isfinite(value) and abs(value) in R.SCALE):
-        raise ConfigError(f"{name} must be a number whose size is {R.SCALE.text()}, got {value:g}")
-    return value
+    return None if value is None else check_scale(value, _opt_name(param))
 
 
 def _opt_name(param) -> str:
@@ -99,67 +70,8 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print the result as JSON 
 ForceOpt = Annotated[bool, typer.Option("--force", help="Replace an existing output even if it is not provably an earlier rotoprint output.")]
 
 
-def device_input(device: str) -> Path | None:
-    """The device file named by ``--device`` (None for a preset name): an input the output must not replace."""
-    p = Path(device)
-    return p if p.suffix.lower() == ".toml" or p.exists() else None
-
-
-def parse_triple(text: str | None, name: str, default: tuple[float, float, float], rng: R.Range | None = None) -> tuple[float, float, float]:
-    """'X,Y,Z' into three floats (each in ``rng`` if given), or a ConfigError naming the option."""
-    if text is None:
-        return default
-    try:
-        vals = tuple(float(t) for t in text.split(","))
-    except ValueError:
-        raise ConfigError(f"{name} must be three numbers 'X,Y,Z', got {text!r}") from None
-    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
-        raise ConfigError(f"{name} must be three finite numbers 'X,Y,Z', got {text!r}")
-    if rng is not None:
-        for axis, v in zip("XYZ", vals):
-            check_range(v, rng, f"{name} {axis}")
-    return vals  # type: ignore[return-value]
-
-
-def parse_pair(text: str | None, name: str, rng: R.Range | None = R.COORD_MM) -> tuple[float, float]:
-    """'X,Y' into two floats (each in ``rng``), or a ConfigError naming the option."""
-    if text is None:
-        return (0.0, 0.0)
-    try:
-        vals = tuple(float(t) for t in text.split(","))
-    except ValueError:
-        raise ConfigError(f"{name} must be two numbers 'X,Y', got {text!r}") from None
-    if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
-        raise ConfigError(f"{name} must be two finite numbers 'X,Y', got {text!r}")
-    if rng is not None:
-        for axis, v in zip("XY", vals):
-            check_range(v, rng, f"{name} {axis}")
-    return vals  # type: ignore[return-value]
-
-
 def print_json(data: Any) -> None:
     sys.stdout.write(json.dumps(data, indent=2, sort_keys=False) + "\n")
-
-
-@dataclass
-class _AppFlags:
-    """The app-level ``--quiet`` / ``--verbose`` (set by :func:`rotoprint.cli.options.app_options`)."""
-
-    quiet: bool = False
-    verbose: bool = False
-
-
-_FLAGS = _AppFlags()
-
-
-def is_quiet(quiet: bool = False) -> bool:
-    """The command's ``--quiet`` or the app's."""
-    return bool(quiet) or _FLAGS.quiet
-
-
-def is_verbose(verbose: bool = False) -> bool:
-    """The command's ``--verbose`` or the app's."""
-    return bool(verbose) or _FLAGS.verbose
 
 
 def progress(quiet: bool = False):
@@ -177,32 +89,6 @@ def progress(quiet: bool = False):
         disable=is_quiet(quiet) or not console.is_terminal,
         transient=True,
     )
-
-
-class _SafeFormatter(logging.Formatter):
-    """Log lines with control characters escaped (they hold file names)."""
-
-    def format(self, record: logging.LogRecord) -> str:
-        return escape_controls(super().format(record), keep_newlines=True)
-
-
-def setup_logging(verbose: bool) -> None:
-    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
-    for h in logging.getLogger().handlers:
-        if isinstance(h, logging.StreamHandler) and type(h.formatter) is logging.Formatter:
-            h.setFormatter(_SafeFormatter(h.formatter._fmt))
-
-
-def load_mesh_from_options(path: Path, units: str, scale: float, rotate: str | None, translate: str | None,
-                           fill_holes: bool = True):
-    from ..io.mesh import load_mesh, make_transform
-
-    T = make_transform(
-        translate_mm=parse_triple(translate, "--translate", (0.0, 0.0, 0.0), R.COORD_MM),
-        rotate_deg=parse_triple(rotate, "--rotate", (0.0, 0.0, 0.0), R.ANGLE_DEG),
-        scale=scale,
-    )
-    return load_mesh(path, units=units, transform=T, fill_holes=fill_holes)
 
 
 ScaleOpt = Annotated[float, typer.Option("--scale", help="Uniform scale applied after unit conversion (size 1e-6 to 1e6; negative mirrors).", callback=scale_cb)]

@@ -16,6 +16,7 @@ os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 import typer  # noqa: E402
 
 from ..errors import RotoprintError  # noqa: E402
+from ._base import error_line, log_warning  # noqa: E402
 from ._common import EXIT_BAD_INPUT, console, styled  # noqa: E402
 from .options import app_options  # noqa: E402
 
@@ -56,20 +57,22 @@ def _register() -> None:
 _register()
 
 
-def _log_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """Library warnings (matplotlib, numpy, ...) go to the log (seen with --verbose), not stderr."""
-    logging.getLogger("rotoprint.warnings").info("%s: %s (%s:%d)", category.__name__, message, filename, lineno)
+_log_warning = log_warning  # the name it had here
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point: runs the app; a RotoprintError becomes one line on stderr and exit 2.
 
     Python warnings raised while the command runs are logged at INFO level instead of being
-    printed as stray lines on stderr.
+    printed as stray lines on stderr. ``rotoprint dlp`` is read by its fast entry
+    (:mod:`rotoprint.cli._fast`) when it can be, else by the typer app.
     """
+    from ._fast import try_dlp
+
     with warnings.catch_warnings():  # the filters in force stay (under pytest: warnings are errors)
         warnings.showwarning = _log_warning
-        return _run(argv)
+        code = try_dlp(sys.argv[1:] if argv is None else list(argv))
+        return _run(argv) if code is None else code
 
 
 def _run(argv: list[str] | None) -> int:
@@ -87,13 +90,8 @@ def _run_app(argv: list[str] | None) -> int:
         result = app(args=argv, prog_name="rotoprint", standalone_mode=False)
         if isinstance(result, int) and not isinstance(result, bool):  # typer.Exit(code) lands here
             return result
-    except RotoprintError as exc:
-        console.print(styled(("rotoprint: error:", "red"), f" {exc}"), soft_wrap=True)
-        return EXIT_BAD_INPUT
-    except OSError as exc:  # a file system refusal we did not foresee: still one line, exit 2
-        where = exc.filename if exc.filename is not None else ""
-        what = exc.strerror or str(exc)
-        console.print(styled(("rotoprint: error:", "red"), f" {where}: {what}" if where else f" {what}"), soft_wrap=True)
+    except (RotoprintError, OSError) as exc:  # OSError: a file system refusal we did not foresee
+        console.print(styled(("rotoprint: error:", "red"), f" {error_line(exc)}"), soft_wrap=True)
         return EXIT_BAD_INPUT
     except typer.Exit as exc:
         return int(exc.exit_code or 0)

@@ -1,4 +1,5 @@
-"""PNG writing and reading for layer images (8-bit greyscale)."""
+"""PNG writing and reading for layer images (8-bit greyscale). Pillow is imported where it
+is used (reading; writing without the C extension)."""
 
 from __future__ import annotations
 
@@ -11,7 +12,6 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
-from PIL import Image
 
 from ..errors import ImageError, InputFileError
 
@@ -34,6 +34,8 @@ def open_image(data: bytes, path: str | Path, what: str = "image") -> Iterator[I
     what : str
         ``"design image"``, ``"mask"``, ...
     """
+    from PIL import Image  # Pillow is imported by the readers, not by a job's start-up
+
     limit = Image.MAX_IMAGE_PIXELS
     try:
         with warnings.catch_warnings():
@@ -79,6 +81,8 @@ def png_bytes(image: np.ndarray, *, compress_level: int = 3) -> bytes:
         h, w = image.shape
         return native.png_grey(np.ascontiguousarray(image), w, h, 0, 0, h, w, False, False, int(compress_level))
     buf = io.BytesIO()
+    from PIL import Image
+
     Image.fromarray(image, mode=None).save(buf, format="PNG", compress_level=compress_level)
     return buf.getvalue()
 

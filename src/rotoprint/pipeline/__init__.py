@@ -13,9 +13,21 @@ read and write formats; this package runs them in order (see docs/architecture.m
 
 from __future__ import annotations
 
-from .build import BuildResult, run_build
 from .outputs import write_dlp_job, write_layer_folder, write_rotary_slices
 from .producer import LayerSource, Rendered, RunOptions, produce_layers
+
+_LAZY = {"BuildResult": ".build", "run_build": ".build"}  # `rotoprint build` only: not imported by the others
+
+
+def __getattr__(name: str):
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "BuildResult",

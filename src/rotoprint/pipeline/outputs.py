@@ -119,8 +119,6 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
         The run would need more disk or memory than is available (checked before any mask is
         written).
     """
-    from PIL import Image
-
     from ..io.archives import Encoded, format_from_path, write_encoded
     from ..masks.pipeline import plain_from_image
 
@@ -135,6 +133,8 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
         footprint = np.zeros((job.grid.height, job.grid.width), np.uint8)
 
         def on_resumed(i: int, rec: dict, folder: Path) -> None:  # resumed layers: footprints from their files
+            from PIL import Image
+
             for name in rec["files"]:
                 with Image.open(folder / name) as im:
                     np.maximum(footprint, plain_from_image(np.asarray(im.convert("L")), options), out=footprint)

@@ -15,9 +15,8 @@ import os
 import re
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor  # the process pool is imported when used
 from dataclasses import dataclass, field
-from multiprocessing import get_context
 from typing import Any
 
 from ..errors import ConfigError
@@ -180,6 +179,9 @@ def _produce_local(source: LayerSource, indices: list[int], workers: int, window
         with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rotoprint-layer") as ex:
             yield from ordered(lambda i: ex.submit(render_one, source, i), indices, window or 2 * threads)
         return
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
     ctx = get_context("spawn")  # no fork: the parent may hold threads (progress bars, BLAS)
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=_pool_init, initargs=(source,)) as ex:
         yield from ordered(lambda i: ex.submit(_pool_render, i), indices, window or 4 * workers)

@@ -52,14 +52,14 @@ class MeshJob:
 
     def __call__(self):
         from .._resources import release_free_memory
-        from ..devices import _validate
+        from .._plain_device import device_from_dump
         from ..mesh import Mesh, PrebuiltTopology
         from ..slicing import slice_mesh
 
         mesh = Mesh(vertices=self.vertices, faces=self.faces, source=self.source)  # already repaired
         if self.face_edges is not None and self.suspect_edges is not None:
             object.__setattr__(mesh, "_topology", PrebuiltTopology(self.face_edges, self.suspect_edges))
-        device = _validate(self.device, "task device")
+        device = device_from_dump(self.device, "task device")  # a projector without pydantic
         if self.rotary_options is not None:
             from ..rotary.direct import slice_rotary
 

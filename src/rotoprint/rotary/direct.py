@@ -217,9 +217,9 @@ def rasterize_section(seg: Segments, part: PartPlacement, design: Placement, *, 
         from ..slicing._fill import fill_numpy
 
         return fill_numpy(*args)
-    from ..slicing._kernels import fill_jit
+    from ..slicing._fill import fill_fast
 
-    return fill_jit(*args)
+    return fill_fast(*args)
 
 
 @dataclass(frozen=True, eq=False)

@@ -48,3 +48,22 @@ def fill_numpy(ua, va, ub, vb, n_fib: int, n_samp: int, rule: str) -> np.ndarray
     w = winding_numpy(ua, va, ub, vb, n_fib, n_samp)
     inside = (w & 1).astype(bool) if rule == "evenodd" else w != 0
     return inside.astype(np.uint8) * np.uint8(255)
+
+
+def fill_fast(ua, va, ub, vb, n_fib: int, n_samp: int, rule: str) -> np.ndarray:
+    """:func:`fill_numpy`'s image by the fast kernel: the C extension's ``fill`` when it is
+    built (no numba import, no compile on a first run), else the numba kernel
+    :func:`rotoprint.slicing._kernels.fill_jit` (the two give the same bytes)."""
+    from .._accel import native
+
+    if native is None:
+        from ._kernels import fill_jit
+
+        return fill_jit(ua, va, ub, vb, n_fib, n_samp, rule)
+    out = np.zeros((n_fib, n_samp), np.uint8)
+    if n_fib and n_samp:
+        a = [np.ascontiguousarray(x, dtype=np.float64) for x in (ua, va, ub, vb)]
+        if not len(a[0]) == len(a[1]) == len(a[2]) == len(a[3]):
+            raise ValueError("the four coordinate arrays must have one length")
+        native.fill(*a, int(n_fib), int(n_samp), rule == "evenodd", out)
+    return out

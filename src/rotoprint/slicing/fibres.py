@@ -9,6 +9,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -123,9 +124,9 @@ class SliceJob:
         args = (a[:, 0], a[:, 1], b[:, 0], b[:, 1], self._n_fib, self._n_samp, self.fill)
         if self.backend == "numpy":
             return fill_numpy(*args)
-        from ._kernels import fill_jit
+        from ._fill import fill_fast
 
-        return fill_jit(*args)
+        return fill_fast(*args)
 
     def layer(self, index: int) -> Layer:
         """Slice one layer."""
@@ -192,10 +193,11 @@ def slice_mesh(mesh: Mesh, device, options: SliceOptions | None = None, **keywor
     >>> int((next(iter(job)).image > 0).sum())  # 2 mm / 19.836 um -> 100 columns, 1 mm / 19.838 um -> 50 rows
     5000
     """
-    from ..devices import as_device
-
     opts = slice_options_from(options, keywords)
-    device = as_device(device)
+    if isinstance(device, (str, Path)):  # a name or file; a device model is used as it is
+        from ..devices import as_device
+
+        device = as_device(device)
     lo, hi = mesh.bounds
     plan = plan_layers(float(lo[2]), float(hi[2]), opts.layer_height_mm)
     grid = make_grid(

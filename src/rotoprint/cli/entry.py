@@ -1,0 +1,31 @@
+"""The ``rotoprint`` console script: ``rotoprint dlp`` through its fast entry
+(:mod:`rotoprint.cli._fast`, no typer, rich, pydantic or numba at start-up) when it can read
+the command line, everything else through the typer app (:func:`rotoprint.cli.main.main`)."""
+
+from __future__ import annotations
+
+import os
+import sys
+import warnings
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; as :func:`rotoprint.cli.main.main` (which is imported only when needed)."""
+    os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")  # as rotoprint.cli.main does
+    from ._base import log_warning
+    from ._fast import try_dlp
+
+    with warnings.catch_warnings():
+        warnings.showwarning = log_warning
+        code = try_dlp(sys.argv[1:] if argv is None else list(argv))
+    if code is not None:
+        return code
+    from .main import _run, _log_warning
+
+    with warnings.catch_warnings():
+        warnings.showwarning = _log_warning
+        return _run(argv)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
