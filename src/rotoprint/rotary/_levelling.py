@@ -71,8 +71,8 @@ def _conv_same(a: np.ndarray, kernel_f: np.ndarray, shape: tuple[int, int], hy: 
     (centred at ``(hy, hx)``) is ``kernel_f``; output aligned with ``a``."""
     f = sfft.rfft2(a, s=shape, workers=1)
     f *= kernel_f
-    out = sfft.irfft2(f, s=shape, workers=1)
-    return np.roll(np.roll(out, -hy, axis=0), -hx, axis=1)[: a.shape[0], : a.shape[1]]
+    out = sfft.irfft2(f, s=shape, workers=1, overwrite_x=True)
+    return out[hy: hy + a.shape[0], hx: hx + a.shape[1]]
 
 
 def level_window(film: np.ndarray, kernel: np.ndarray, core_rows: slice) -> np.ndarray:

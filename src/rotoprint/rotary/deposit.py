@@ -395,7 +395,7 @@ def deposit_film(
     pairs: Sequence[tuple[int, int]] = (),
     keep_map: bool = False,
     use_jit: bool = True,
-    level: LevelOptions | None = None,
+    level: LevelOptions | Sequence[LevelOptions | None] | None = None,
 ) -> Deposit:
     """Deposit every drop set on a fine grid over the design and measure the films.
 
@@ -417,10 +417,11 @@ def deposit_film(
         levelled map when levelling.
     use_jit : bool
         numba kernels (default) or the numpy reference (slow; for tests).
-    level : LevelOptions, optional
+    level : LevelOptions or sequence of (LevelOptions or None), optional
         Level each film under surface tension after all its drops landed (``set_time_s >
-        0``): every film gets :attr:`FilmReport.levelled` beside its as-landed figures, which
-        are unchanged. The grid is deposited a second time in windows with halos.
+        0``; one for all films, or one per drop set, e.g. per ink): such a film gets
+        :attr:`FilmReport.levelled` beside its as-landed figures, which are unchanged. The grid
+        is deposited a second time in windows with halos.
 
     Returns
     -------
@@ -515,6 +516,17 @@ def deposit_film(
                 bins_sum=np.zeros(0), bins_n=np.zeros(0, np.int64), covered_design=0) for _ in range(nsets)]
     pair_acc = [[0, 0] for _ in pairs]
     full = np.zeros((rows, cols), np.float64) if keep_map else None
+    def interior_cells(r0: int, r1: int, inter_bits: np.ndarray):
+        """The interior's (row, col) and radial bin of grid rows r0..r1 from the packed
+        interior mask of the first pass (the levelling pass does not recompute distances)."""
+        inter = np.unpackbits(inter_bits[r0:r1], axis=1, count=cols).astype(bool)
+        ii, jj = np.nonzero(inter)
+        bidx = None
+        if ii.size:
+            X, Y = placement.to_platform((jj + 0.5 - ox) / nx, (ii + r0 + 0.5 - oy) / ny)
+            bidx = np.floor(np.hypot(X, Y)).astype(np.int64)
+        return ii, jj, bidx
+
     def geometry(r0: int, r1: int):
         """Design, interior and band cells of grid rows r0..r1, the interior's (row, col)
         and radial bin (independent of the strips: the distance reaches ``margin``)."""
@@ -550,13 +562,19 @@ def deposit_film(
             strip_fn(u[lo:hi], v[lo:hi], vol[lo:hi], a[lo:hi], rs[lo:hi], hh[lo:hi], norm[lo:hi], gx, gy, r0, film)
         return film
 
-    lev_opts = level if level is not None and level.active else None
+    levels = list(level) if isinstance(level, (list, tuple)) else [level] * len(drop_sets)
+    if len(levels) != len(drop_sets):
+        raise ConfigError(f"level: {len(levels)} options for {len(drop_sets)} drop sets")
+    levels = [lv if lv is not None and lv.active else None for lv in levels]
     n_design_cells = int(mask.sum()) * nx * ny
     sample_stride = max(1, n_design_cells // 2_000_000)
     samples: list[list[np.ndarray]] = [[] for _ in range(nsets)]
+    inter_bits = np.zeros((rows, (cols + 7) // 8), np.uint8) if any(lv is not None for lv in levels) else None
     for r0 in range(0, rows, strip_rows):
         r1 = min(rows, r0 + strip_rows)
         des, inter, band, ii, jj, bidx = geometry(r0, r1)
+        if inter_bits is not None:
+            inter_bits[r0:r1] = np.packbits(inter, axis=1)
         covered = []
         for si in range(nsets):
             film = deposit_rows(si, r0, r1)
@@ -575,7 +593,7 @@ def deposit_film(
             ac["band_unc"] += int((band & ~cov).sum())
             if ii.size:
                 t = film[ii, jj]
-                if lev_opts is not None:
+                if levels[si] is not None:
                     samples[si].append(t[t > 0][::sample_stride])
                 ac["unc"] += int((t <= 0).sum())
                 ac["tmin"] = min(ac["tmin"], float(t.min()))
@@ -592,10 +610,10 @@ def deposit_film(
             pair_acc[pi][1] += int((cj_ & ~ci_).sum())
     levelled: list[LevelledFilm | None] = [None] * nsets
     full_lev = None
-    if lev_opts is not None:
-        for si in range(nsets):
-            levelled[si], lmap = _level_film(si, lev_opts, samples[si], acc[si], rows, cols, gx, gy, area_mm2,
-                                             geometry, deposit_rows, keep_map and si == 0)
+    for si in range(nsets):
+        if levels[si] is not None:
+            levelled[si], lmap = _level_film(si, levels[si], samples[si], acc[si], rows, cols, gx, gy, area_mm2,
+                                             lambda a, b: interior_cells(a, b, inter_bits), deposit_rows, keep_map and si == 0)
             if lmap is not None:
                 full_lev = lmap
     films = []
@@ -667,7 +685,7 @@ def _bins_spread(bins_sum: np.ndarray, bins_n: np.ndarray, area_mm2: float):
     return tuple(bins), spread
 
 
-def _level_film(si, lev: LevelOptions, samples, ac, rows, cols, gx, gy, area_mm2, geometry, deposit_rows, keep_map):
+def _level_film(si, lev: LevelOptions, samples, ac, rows, cols, gx, gy, area_mm2, interior, deposit_rows, keep_map):
     """Level film ``si`` window by window; its figures and (``keep_map``) its map."""
     from . import _levelling as _lv
 
@@ -699,7 +717,7 @@ def _level_film(si, lev: LevelOptions, samples, ac, rows, cols, gx, gy, area_mm2
         if full is not None:
             full[r0:r1] = lv
         tot += float(lv.sum())
-        _, _, _, ii, jj, bidx = geometry(r0, r1)
+        ii, jj, bidx = interior(r0, r1)
         if ii.size:
             t = lv[ii, jj]
             n_int += int(ii.size)
