@@ -32,7 +32,10 @@ from rotoprint.testing import torus_mesh
 #: branch filmbuild (issue 14 on the build: every layer in interlaced passes at the pass plan's
 #: clock, one image per pass, the deposit model's coverage, the printed resistance on the
 #: deposited film, 24 silver cycles in the examples), then the builds on main after the plan,
-#: plan2 and dlp merges (the pass planner's clock capped at 2 x native and its new offsets);
+#: plan2 and dlp merges (the pass planner's clock capped at 2 x native and its new offsets),
+#: then the rotary slices and builds on branch level (issue 14's film levelling: sidecars and
+#: plan.json carry the head's viscosity_mpa_s, surface_tension_mn_m and set_time_s, the
+#: build's overlays and coverage the levelled film beside the as-landed one);
 #: the first values were from main d2285d8. GOLDEN is what the
 #: numba / Pillow path writes (ROTOPRINT_NATIVE=0 or no C compiler), GOLDEN_NATIVE what the C
 #: extension writes (its zlib encodes other, equally valid, PNG bytes).
@@ -47,9 +50,9 @@ GOLDEN = {
 GOLDEN_NATIVE = {
     "layer-folder": ("a7387385431f11fad6a75c3f1655d0c5721d3b034f209090b5cf3ed906dc52ca", 10),
     "sl1": ("d69b3a5600c86cadb121b3e54f5be9630d7a45ea06e93cfb1963d4aa5015b9da", 1),
-    "rotary-slices": ("585a4ab0b9ac22ca671763e163c949164b4e23ecfc8113af30d25476783ad1c8", 26),
-    "build-coil-no-check": ("b5345f8e03419dcd07077f847b38ce4f85216e5eefe926d4bc0dd6a97b2a5064", 737),
-    "build-gas": ("0e02f13df7935f9ceefe70403cd8389de8276f348e3b809bca5ee6209eb97537", 407),
+    "rotary-slices": ("334c6cf8e3fe3f562642fc295b6b1b5b4dc5a88776df3ab32daf1b205e24b80b", 26),
+    "build-coil-no-check": ("8906582f5ae60dcc4af9d6f89e817e099c2d3cd1e4876726300aa02de1f95dca", 737),
+    "build-gas": ("63b70d0794575b8e94f92a2030b94388082c5bed860f888bd002e76a953c683a", 407),
 }
 
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")
