@@ -42,9 +42,9 @@ from rotoprint.testing import torus_mesh
 GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
     "sl1": ("5a0f15311e6983c5f6264fc812a7fead917e9b44fd6b2bf4fe0f1f5accfe03b0", 1),
-    "rotary-slices": ("68981c4252b5f2495f200f5876e9b1e8f8f8493ea88089088fce8ce8b8b20c69", 26),
-    "build-coil-no-check": ("80546e5423a9ba581a8a0d71cf9337feff695c813e4470915bf4ddc63c62162f", 737),
-    "build-gas": ("36e5a3307dd79258467f99623f559d4170273741a63dfbe59964824a8c48a0db", 407),
+    "rotary-slices": ("0c5d921fee18ebb8ca445ce77fcda3ee991fa6d4ea0e6bc896818305206c442c", 26),
+    "build-coil-no-check": ("3ec8247e3678a121b8b2c5d295348edceff614c97098e46c6a199374c1ab2b9e", 737),
+    "build-gas": ("5bbe91b5c7ab100373285aee4fba117816fc526aa2b29191399360fa4d63691d", 407),
 }
 
 GOLDEN_NATIVE = {
