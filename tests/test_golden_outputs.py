@@ -34,23 +34,26 @@ from rotoprint.testing import torus_mesh
 #: deposited film, 24 silver cycles in the examples), then the builds on main after the plan,
 #: plan2 and dlp merges (the pass planner's clock capped at 2 x native and its new offsets),
 #: then the SL1 on branch fastdlp (issue 16: thumbnails drawn and encoded with numpy and zlib);
+#: then the rotary slices and builds on branch level (issue 14's film levelling: sidecars and
+#: plan.json carry the head's viscosity_mpa_s, surface_tension_mn_m and set_time_s, the
+#: build's overlays and coverage the levelled film beside the as-landed one);
 #: the first values were from main d2285d8. GOLDEN is what the
 #: numba / Pillow path writes (ROTOPRINT_NATIVE=0 or no C compiler), GOLDEN_NATIVE what the C
 #: extension writes (its zlib encodes other, equally valid, PNG bytes).
 GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
     "sl1": ("b311c72eeac6b5ed945ace7361c8769099a0cb81de94450dbccbe527e60ba2a6", 1),
-    "rotary-slices": ("68981c4252b5f2495f200f5876e9b1e8f8f8493ea88089088fce8ce8b8b20c69", 26),
-    "build-coil-no-check": ("80546e5423a9ba581a8a0d71cf9337feff695c813e4470915bf4ddc63c62162f", 737),
-    "build-gas": ("36e5a3307dd79258467f99623f559d4170273741a63dfbe59964824a8c48a0db", 407),
+    "rotary-slices": ("0c5d921fee18ebb8ca445ce77fcda3ee991fa6d4ea0e6bc896818305206c442c", 26),
+    "build-coil-no-check": ("3ec8247e3678a121b8b2c5d295348edceff614c97098e46c6a199374c1ab2b9e", 737),
+    "build-gas": ("5bbe91b5c7ab100373285aee4fba117816fc526aa2b29191399360fa4d63691d", 407),
 }
 
 GOLDEN_NATIVE = {
     "layer-folder": ("a7387385431f11fad6a75c3f1655d0c5721d3b034f209090b5cf3ed906dc52ca", 10),
     "sl1": ("8ab11667833cbd09409bbe35e638ce26203024f3a353cea8f535959258d13370", 1),
-    "rotary-slices": ("585a4ab0b9ac22ca671763e163c949164b4e23ecfc8113af30d25476783ad1c8", 26),
-    "build-coil-no-check": ("b5345f8e03419dcd07077f847b38ce4f85216e5eefe926d4bc0dd6a97b2a5064", 737),
-    "build-gas": ("0e02f13df7935f9ceefe70403cd8389de8276f348e3b809bca5ee6209eb97537", 407),
+    "rotary-slices": ("334c6cf8e3fe3f562642fc295b6b1b5b4dc5a88776df3ab32daf1b205e24b80b", 26),
+    "build-coil-no-check": ("8906582f5ae60dcc4af9d6f89e817e099c2d3cd1e4876726300aa02de1f95dca", 737),
+    "build-gas": ("63b70d0794575b8e94f92a2030b94388082c5bed860f888bd002e76a953c683a", 407),
 }
 
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")

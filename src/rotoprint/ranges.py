@@ -26,6 +26,9 @@ quantity                range                  used for
 ``DROP_UM``             [0.1, 1e4] um          drop diameter
 ``JITTER_UM``           [0, 10000] um          drop misdirection
 ``SPREAD``              (0, 20]                footprint / in-flight diameter
+``VISCOSITY_MPA_S``     [0.1, 1e6] mPa s       ink viscosity (film levelling)
+``SURFACE_TENSION_MN_M`` [1, 200] mN/m         ink surface tension (film levelling)
+``SET_TIME_S``          [0, 3600] s            wet film's flow time before it sets (0: none)
 ``EVEN_RATIO``          [1, 100]               largest / mean track gap taken as even
 ``WORKERS``             1 ... 1024             worker processes
 ``COUNT``               0 ... 1000000          layer and overlay counts
@@ -97,6 +100,10 @@ OFFSET_UM = Range(0.0, 2000.0, "um")  # = masks.pipeline.FIRST_LAYER_OFFSET_MAX_
 DROP_UM = Range(0.1, 10_000.0, "um")
 JITTER_UM = Range(0.0, 10_000.0, "um")
 SPREAD = Range(0.0, 20.0, lo_open=True)  # footprint / in-flight diameter (devices.models spread_factor)
+VISCOSITY_MPA_S = Range(0.1, 1e6, "mPa s")  # ink viscosity (film levelling, rotary.deposit)
+SURFACE_TENSION_MN_M = Range(1.0, 200.0, "mN/m")  # ink surface tension (film levelling)
+PERCENT = Range(0.0, 100.0, "%")
+SET_TIME_S = Range(0.0, 3600.0, "s")  # time the wet film flows before it sets; 0 = no levelling
 EVEN_RATIO = Range(1.0, 100.0)
 WORKERS = Range(1, 1024, integer=True)
 COUNT = Range(0, 1_000_000, integer=True)

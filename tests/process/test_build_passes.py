@@ -157,6 +157,10 @@ def test_build_in_passes_headline_coverage_machine_and_sidecars(tmp_path):
     cov = plan["coverage"]["plaster"]
     assert cov["model"] == "deposit" and cov["uncovered_fraction"] <= 0.01 and res.summary["coverage"] == plan["coverage"]
     assert all(o["deposit"]["uncovered_fraction"] <= 0.01 and o["reagent_pairs"] for o in plan["overlays"])
+    # the preset's inks level (set time 1 s): the headline thinnest / mean is the levelled film's
+    assert cov["thinnest_to_mean_basis"] == "levelled" and cov["thinnest_to_mean"] == cov["thinnest_to_mean_levelled"]
+    assert cov["thinnest_to_mean_as_landed"] is not None and cov["levelling"][0]["set_time_s"] == 1.0
+    assert all(abs(f["levelled"]["volume_error_fraction"]) < 1e-9 for o in plan["overlays"] for f in o["inks"].values())
     n = plan["heads"][0]["passes"]
     im = plan["layers_detail"][0]["images"][0]
     assert [p["pass"] for p in im["passes"]] == list(range(n))
@@ -168,6 +172,7 @@ def test_build_in_passes_headline_coverage_machine_and_sidecars(tmp_path):
     table = table[: table.index("</table>")]
     assert "<td>plaster</td>" in table and f"<b>{100 * cov['uncovered_fraction']:.2f} %</b>" in table
     assert "true volume per area of the planned drops" in html
+    assert "Thinnest / mean is that of the <b>levelled</b> film for plaster" in html and "set time 1 s" in html
     prog = json.loads((tmp_path / "out" / "machine" / "program.json").read_text())
     rev = [s for L in prog["layers"] for s in L["steps"] if s["kind"] == "revolution"]
     assert [s["interlace"] for s in rev if s["head"] == "H1" and s["repeat"] == 0] == [c % n for c in range(4)]
