@@ -21,7 +21,8 @@ PX = 25.4 / 360
 
 @pytest.fixture(scope="module")
 def head():
-    return load_device("omnidot760").head
+    # the preset's nominal film figures with levelling switched on (the preset has it off)
+    return load_device("omnidot760").head.model_copy(update={"set_time_s": 1.0})
 
 
 def lattice(w_px, h_px, step_px, vol=8.0):
@@ -158,8 +159,9 @@ def test_level_options_refuse_bad_values(kw):
 
 
 def test_head_fields_and_preset(head):
-    assert head.set_time_s == 1.0 and head.viscosity_mpa_s == 10.0 and head.surface_tension_mn_m == 30.0
     dev = load_device("omnidot760")
+    assert dev.head.set_time_s == 0.0  # levelling is opt-in
+    assert head.set_time_s == 1.0 and head.viscosity_mpa_s == 10.0 and head.surface_tension_mn_m == 30.0
     assert {"viscosity_mpa_s", "surface_tension_mn_m", "set_time_s"} <= set(dev.nominal)
     base = head.model_dump()
     for k, v in (("viscosity_mpa_s", 0.0), ("surface_tension_mn_m", 0.5), ("set_time_s", -0.1), ("set_time_s", 1e5)):
@@ -179,17 +181,17 @@ def test_simulate_reports_both_films(run_cli, tmp_path):
     code, _, err = run_cli("transform", design_png, "--device", "omnidot760", "--tilt", "0", "--radius", "60",
                            "--out", out)
     assert code == 0, err
-    code, o1, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--json")
+    code, o1, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--json", "--set-time", "1")
     assert code == 0, err
     dep = json.loads(o1)["deposit"]
     assert dep["levelled"]["set_time_s"] == 1.0 and abs(dep["levelled"]["volume_error_fraction"]) < 1e-9
-    code, o0, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--json", "--set-time", "0", "--force")
+    code, o0, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--json", "--force")  # the preset: off
     assert code == 0, err
     dep0 = json.loads(o0)["deposit"]
     assert "levelled" not in dep0
     dep.pop("levelled")
     assert dep == dep0
-    code, text, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--force", "--viscosity", "20")
+    code, text, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--force", "--set-time", "1", "--viscosity", "20")
     assert code == 0, err
     assert "levelled film (headline; set time 1 s, viscosity 20 mPa s" in text
     code, _, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--force", "--set-time", "-1")
