@@ -21,7 +21,7 @@ slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs nati
 overlap), then the cost table.
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
-before it sets, ``LevelOptions.from_head``: the preset's nominal 1 s, 10 mPa s, 30 mN/m, h0 the
+before it sets, ``LevelOptions.from_head``: set time 1 s (the preset has levelling off), the preset's nominal 10 mPa s, 30 mN/m, h0 the
 10th percentile of the as-landed wet interior film) beside the as-landed figures; a third table
 is the sensitivity at the first tilt given after 0 (default 20), default plan: set time 0.1 / 1 /
 10 s with h0 at the 10th percentile, and at 1 s h0 at the 1st and 50th. ``--quick``: only the
@@ -148,7 +148,7 @@ def main() -> None:
             prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
         sensitivity_table(prs, d, head0, tilt)
         return
-    level = LevelOptions.from_head(head0) if level_on else None
+    level = LevelOptions.from_head(head0, set_time_s=1.0) if level_on else None
     sens_tilt = next((t for t in tilts if t != 0.0), tilts[0])
     sens_prs = None
     print("| tilt deg | print | passes | largest track gap um | clock dpi | uncovered interior % | uncovered band % | "
