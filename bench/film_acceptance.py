@@ -41,7 +41,7 @@ import numpy as np
 from rotoprint import load_device
 from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
-from rotoprint.rotary.deposit import LevelOptions, deposit_print
+from rotoprint.rotary.deposit import DepositOptions, LevelOptions, deposit_print
 from rotoprint.rotary.files import read_print
 from rotoprint.rotary.interlace import PassOptions, pass_overlap_mm, phase_angles, plan_passes, read_passes
 from rotoprint.pipeline.prints import transform_passes
@@ -69,7 +69,7 @@ def sensitivity_table(prs, d, head, tilt) -> None:
     for st, pct in ((0.1, 10.0), (1.0, 1.0), (1.0, 10.0), (1.0, 50.0), (10.0, 10.0)):
         if True:
             t = time.perf_counter()
-            f = deposit_print(prs, d, level=LevelOptions.from_head(head, set_time_s=st, h0_percentile=pct)).films[0]
+            f = deposit_print(prs, d, options=DepositOptions(level=LevelOptions.from_head(head, set_time_s=st, h0_percentile=pct))).films[0]
             lv = f.levelled
             print(f"| {st:g} | p{pct:g} | {lv.h0_um:.2f} | {lv.levelling_length_um:.0f} | {lv.thinnest_to_mean:.3f} | "
                   f"{100 * lv.radial_spread:.1f} | {100 * lv.below_half_landed_mean_fraction:.3f} | "
@@ -162,7 +162,7 @@ def main() -> None:
         t = time.perf_counter()
         if not quick and "--equalised-only" not in sys.argv:  # else only the equalised rows (and their dead-nozzle row)
             pr = transform_exact(d, head0, pl, tilt_deg=tilt)
-            f = deposit_print(pr, d, level=level).films[0]
+            f = deposit_print(pr, d, options=DepositOptions(level=level)).films[0]
             base = simulate(pr, d).report.disc_uncovered_fraction
             g1 = plan_passes(head0, sp, footprint_um=49.6, passes=4).single_pass_largest_gap_mm
             print(film_row("one pass, native clock", tilt, 1, g1 * 1000, head0.dpi_y, f, time.perf_counter() - t,
@@ -189,7 +189,7 @@ def main() -> None:
                 except GeometryError as exc:
                     print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)
                     continue
-                f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles, level=level).films[0]
+                f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles, options=DepositOptions(level=level)).films[0]
                 if tilt == sens_tilt and head is head0 and not eq and not inter:
                     sens_prs = prs
                 pp = m["pass_plan"]

@@ -14,7 +14,7 @@ from rotoprint.devices.models import InkjetHead
 from rotoprint.errors import ConfigError
 from rotoprint.rotary import Placement
 from rotoprint.rotary import _levelling as LV
-from rotoprint.rotary.deposit import InkDrops, LevelOptions, deposit_film, levelling_rate_um4_per_s
+from rotoprint.rotary.deposit import DepositOptions, InkDrops, LevelOptions, deposit_film, levelling_rate_um4_per_s
 
 PX = 25.4 / 360
 
@@ -82,8 +82,8 @@ def test_set_time_zero_is_the_film_as_landed(head):
     mask = np.ones((24, 24), bool)
     drops = lattice(24, 24, 0.55)
     plain = deposit_film(mask, pl, head, [drops]).films[0]
-    zero = deposit_film(mask, pl, head, [drops], level=LevelOptions(set_time_s=0.0)).films[0]
-    lev = deposit_film(mask, pl, head, [drops], level=LevelOptions(set_time_s=0.2)).films[0]
+    zero = deposit_film(mask, pl, head, [drops], options=DepositOptions(level=LevelOptions(set_time_s=0.0))).films[0]
+    lev = deposit_film(mask, pl, head, [drops], options=DepositOptions(level=LevelOptions(set_time_s=0.2))).films[0]
     assert zero.levelled is None and "levelled" not in zero.to_json()
     assert zero.to_json() == plain.to_json()
     d = lev.to_json()
@@ -97,7 +97,7 @@ def test_levelling_evens_the_drop_scale_ripple_and_conserves_volume(head):
     pl = Placement(n, n, PX, PX, inner_radius_mm=60.0)
     mask = np.ones((n, n), bool)
     drops = lattice(n, n, 0.48)
-    d = deposit_film(mask, pl, head, [drops], keep_map=True, level=LevelOptions(set_time_s=1e-3))
+    d = deposit_film(mask, pl, head, [drops], keep_map=True, options=DepositOptions(level=LevelOptions(set_time_s=1e-3)))
     f = d.films[0]
     lv = f.levelled
     assert f.uncovered_fraction == 0.0 and f.thinnest_to_mean < 0.4
@@ -121,7 +121,7 @@ def test_tiling_does_not_change_the_levelled_film_and_dry_stays_dry(head):
     maps = []
     for cells in (10_000, 200_000, 50_000_000):
         d = deposit_film(mask, pl, head, [drops], keep_map=True,
-                         level=LevelOptions(set_time_s=0.1, window_cells=cells))
+                         options=DepositOptions(level=LevelOptions(set_time_s=0.1, window_cells=cells)))
         lv = d.films[0].levelled
         assert abs(lv.volume_error_fraction) < 1e-9
         landed, lev = d.thickness, d.levelled_thickness
@@ -141,9 +141,9 @@ def test_h0_choice(head):
     pl = Placement(n, n, PX, PX, inner_radius_mm=60.0)
     mask = np.ones((n, n), bool)
     drops = lattice(n, n, 0.48)
-    lo = deposit_film(mask, pl, head, [drops], level=LevelOptions(set_time_s=0.01, h0_percentile=5)).films[0].levelled
-    hi = deposit_film(mask, pl, head, [drops], level=LevelOptions(set_time_s=0.01, h0_percentile=90)).films[0].levelled
-    fixed = deposit_film(mask, pl, head, [drops], level=LevelOptions(set_time_s=0.01, h0_um=3.0)).films[0].levelled
+    lo = deposit_film(mask, pl, head, [drops], options=DepositOptions(level=LevelOptions(set_time_s=0.01, h0_percentile=5))).films[0].levelled
+    hi = deposit_film(mask, pl, head, [drops], options=DepositOptions(level=LevelOptions(set_time_s=0.01, h0_percentile=90))).films[0].levelled
+    fixed = deposit_film(mask, pl, head, [drops], options=DepositOptions(level=LevelOptions(set_time_s=0.01, h0_um=3.0))).films[0].levelled
     assert lo.h0_um < hi.h0_um and lo.levelling_length_um < hi.levelling_length_um
     assert fixed.h0_um == 3.0 and fixed.h0_rule == "fixed"
     # L = (sigma h0^3 t / (3 eta))^(1/4): a thinner h0 levels over a shorter length

@@ -102,9 +102,9 @@ def simulate_command(
         for q, (o, _, _) in enumerate(prints[1:])
     ]
     film = deposit_film(sim.inked, pr.placement, pr.head, [InkDrops.concat(parts)],
-                        options=DepositOptions(spread_factor=spread, footprint_um=footprint),
-                        level=LevelOptions.from_head(pr.head, set_time_s=set_time, viscosity_mpa_s=viscosity,
-                                                     surface_tension_mn_m=surface_tension, h0_percentile=h0_percentile)).films[0]
+                        options=DepositOptions(spread_factor=spread, footprint_um=footprint,
+                                               level=LevelOptions.from_head(pr.head, set_time_s=set_time, viscosity_mpa_s=viscosity,
+                                                                            surface_tension_mn_m=surface_tension, h0_percentile=h0_percentile))).films[0]
     overlay = render_overlay(sim, scale=scale)
     from PIL import Image
     import io

@@ -243,7 +243,7 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
     secondary the simulator's cell model of the first ink's pass 0 (``iou``,
     ``uncovered_fraction``: pixels of the design whose nearest site of that pass's lattice
     fired; each pass's lattice tiles the design by itself)."""
-    from ..rotary.deposit import InkDrops, LevelOptions, deposit_film, ink_drops
+    from ..rotary.deposit import DepositOptions, InkDrops, LevelOptions, deposit_film, ink_drops
     from ..rotary.simulate import place_drops, render_overlay, simulate
 
     pick = _simulate_layers(present, job.spec.process.simulate_layers)
@@ -275,7 +275,7 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
                     parts.append(InkDrops(d.col, d.row, d.volume_pl * float(w)))
                 sets.append(InkDrops.concat(parts))
             dep = deposit_film(ref, weighted[inks[0]][0][0].placement, head, sets,
-                               pairs=[(0, 1)] if len(sets) == 2 else [], level=levels)
+                               pairs=[(0, 1)] if len(sets) == 2 else [], options=DepositOptions(level=tuple(levels)))
             films = {ink: {k: v for k, v in f.to_json().items() if k != "radial_bins"} for ink, f in zip(inks, dep.films)}
             name = f"overlays/layer_{i:05d}-{mname}.png"
             (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))

@@ -129,12 +129,18 @@ class DepositOptions:
         design pixel), 2..50.
     strip_cells : int
         Cells per strip and film processed at once (memory: 8 bytes each, a few arrays).
+    level : LevelOptions or tuple of (LevelOptions or None), optional
+        Level each film under surface tension after all its drops landed (``set_time_s >
+        0``; one for all films, or one per drop set, e.g. per ink): such a film gets
+        :attr:`FilmReport.levelled` beside its as-landed figures, which are unchanged. The grid
+        is deposited a second time in windows with halos.
     """
 
     spread_factor: float | None = None
     footprint_um: float | None = None
     cells_per_footprint: float = 5.0
     strip_cells: int = 2_000_000
+    level: "LevelOptions | tuple[LevelOptions | None, ...] | None" = None
 
     def __post_init__(self) -> None:
         for name in ("spread_factor", "footprint_um"):
@@ -145,6 +151,8 @@ class DepositOptions:
             raise ConfigError(f"cells_per_footprint must be in 2..50, got {self.cells_per_footprint!r}")
         if not 10_000 <= int(self.strip_cells) <= 1_000_000_000:
             raise ConfigError(f"strip_cells must be in 10000..1e9, got {self.strip_cells!r}")
+        if isinstance(self.level, list):
+            object.__setattr__(self, "level", tuple(self.level))
 
     def full_footprint_um(self, head: InkjetHead) -> float:
         """Footprint diameter of the head's full drop, um."""
@@ -162,8 +170,8 @@ def levelling_rate_um4_per_s(surface_tension_mn_m: float, viscosity_mpa_s: float
 
     Examples
     --------
-    >>> levelling_rate_um4_per_s(30.0, 10.0, 10.0)  # 30 mN/m, 10 mPa s, 10 um: 1e-15 m^4/s
-    1000000000.0
+    >>> f"{levelling_rate_um4_per_s(30.0, 10.0, 10.0):.6g}"  # 30 mN/m, 10 mPa s, 10 um: 1e-15 m^4/s
+    '1e+09'
     """
     # sigma [N/m] h0^3 [m^3] / (3 eta [Pa s]) [m^4/s] * 1e24 [um^4/m^4]
     return float(surface_tension_mn_m * 1e-3 * (h0_um * 1e-6) ** 3 / (3.0 * viscosity_mpa_s * 1e-3) * 1e24)
@@ -395,7 +403,6 @@ def deposit_film(
     pairs: Sequence[tuple[int, int]] = (),
     keep_map: bool = False,
     use_jit: bool = True,
-    level: LevelOptions | Sequence[LevelOptions | None] | None = None,
 ) -> Deposit:
     """Deposit every drop set on a fine grid over the design and measure the films.
 
@@ -417,11 +424,6 @@ def deposit_film(
         levelled map when levelling.
     use_jit : bool
         numba kernels (default) or the numpy reference (slow; for tests).
-    level : LevelOptions or sequence of (LevelOptions or None), optional
-        Level each film under surface tension after all its drops landed (``set_time_s >
-        0``; one for all films, or one per drop set, e.g. per ink): such a film gets
-        :attr:`FilmReport.levelled` beside its as-landed figures, which are unchanged. The grid
-        is deposited a second time in windows with halos.
 
     Returns
     -------
@@ -562,6 +564,7 @@ def deposit_film(
             strip_fn(u[lo:hi], v[lo:hi], vol[lo:hi], a[lo:hi], rs[lo:hi], hh[lo:hi], norm[lo:hi], gx, gy, r0, film)
         return film
 
+    level = opts.level
     levels = list(level) if isinstance(level, (list, tuple)) else [level] * len(drop_sets)
     if len(levels) != len(drop_sets):
         raise ConfigError(f"level: {len(levels)} options for {len(drop_sets)} drop sets")
@@ -753,7 +756,7 @@ def _level_film(si, lev: LevelOptions, samples, ac, rows, cols, gx, gy, area_mm2
 
 
 def deposit_print(prints, design: np.ndarray, *, options: DepositOptions | None = None, dead_nozzles: tuple[int, ...] = (),
-                  jitter_um: float = 0.0, seed: int = 0, keep_map: bool = False, level: LevelOptions | None = None) -> Deposit:
+                  jitter_um: float = 0.0, seed: int = 0, keep_map: bool = False) -> Deposit:
     """The film of one or more prints of one design (e.g. the passes of a layer), as one set.
 
     Parameters
@@ -762,8 +765,8 @@ def deposit_print(prints, design: np.ndarray, *, options: DepositOptions | None 
         Prints on the same placement and head.
     design : (H, W) uint8
         The design (binary or grey; see :func:`~rotoprint.rotary.simulate.design_mask`).
-    options, keep_map, level
-        As in :func:`deposit_film`.
+    options, keep_map
+        As in :func:`deposit_film` (``options.level`` levels the film).
     dead_nozzles, jitter_um, seed
         As in :func:`~rotoprint.rotary.simulate.place_drops`.
 
@@ -782,4 +785,4 @@ def deposit_print(prints, design: np.ndarray, *, options: DepositOptions | None 
             raise ConfigError("the prints of one film must share the placement and the head")
     parts = [ink_drops(place_drops(p, jitter_um=jitter_um, dead_nozzles=dead_nozzles, seed=seed + q), head) for q, p in enumerate(prs)]
     mask = design_mask(np.asarray(design), head.grey_levels)
-    return deposit_film(mask, pl, head, [InkDrops.concat(parts)], options=options, keep_map=keep_map, level=level)
+    return deposit_film(mask, pl, head, [InkDrops.concat(parts)], options=options, keep_map=keep_map)
