@@ -55,36 +55,33 @@ def device_input(device: str) -> Path | None:
     return p if p.suffix.lower() == ".toml" or p.exists() else None
 
 
-def parse_triple(text: str | None, name: str, default: tuple[float, float, float], rng: R.Range | None = None) -> tuple[float, float, float]:
-    """'X,Y,Z' into three floats (each in ``rng`` if given), or a ConfigError naming the option."""
-    if text is None:
-        return default
+_COUNT_WORDS = {2: "two", 3: "three"}
+
+
+def _parse_numbers(text: str, name: str, axes: str, rng: R.Range | None) -> tuple[float, ...]:
+    """Comma-separated numbers, one per letter of ``axes`` (each in ``rng`` if given), or a
+    ConfigError naming the option."""
+    word, form = _COUNT_WORDS[len(axes)], ",".join(axes)
     try:
         vals = tuple(float(t) for t in text.split(","))
     except ValueError:
-        raise ConfigError(f"{name} must be three numbers 'X,Y,Z', got {text!r}") from None
-    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
-        raise ConfigError(f"{name} must be three finite numbers 'X,Y,Z', got {text!r}")
+        raise ConfigError(f"{name} must be {word} numbers '{form}', got {text!r}") from None
+    if len(vals) != len(axes) or not all(math.isfinite(v) for v in vals):
+        raise ConfigError(f"{name} must be {word} finite numbers '{form}', got {text!r}")
     if rng is not None:
-        for axis, v in zip("XYZ", vals):
+        for axis, v in zip(axes, vals):
             check_range(v, rng, f"{name} {axis}")
-    return vals  # type: ignore[return-value]
+    return vals
+
+
+def parse_triple(text: str | None, name: str, default: tuple[float, float, float], rng: R.Range | None = None) -> tuple[float, float, float]:
+    """'X,Y,Z' into three floats (each in ``rng`` if given), or a ConfigError naming the option."""
+    return default if text is None else _parse_numbers(text, name, "XYZ", rng)  # type: ignore[return-value]
 
 
 def parse_pair(text: str | None, name: str, rng: R.Range | None = R.COORD_MM) -> tuple[float, float]:
     """'X,Y' into two floats (each in ``rng``), or a ConfigError naming the option."""
-    if text is None:
-        return (0.0, 0.0)
-    try:
-        vals = tuple(float(t) for t in text.split(","))
-    except ValueError:
-        raise ConfigError(f"{name} must be two numbers 'X,Y', got {text!r}") from None
-    if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
-        raise ConfigError(f"{name} must be two finite numbers 'X,Y', got {text!r}")
-    if rng is not None:
-        for axis, v in zip("XY", vals):
-            check_range(v, rng, f"{name} {axis}")
-    return vals  # type: ignore[return-value]
+    return (0.0, 0.0) if text is None else _parse_numbers(text, name, "XY", rng)  # type: ignore[return-value]
 
 
 @dataclass
