@@ -21,8 +21,7 @@ PX = 25.4 / 360
 
 @pytest.fixture(scope="module")
 def head():
-    # the preset's nominal film figures with levelling switched on (the preset has it off)
-    return load_device("omnidot760").head.model_copy(update={"set_time_s": 1.0})
+    return load_device("omnidot760").head  # the preset levels (set time 1 s)
 
 
 def lattice(w_px, h_px, step_px, vol=8.0):
@@ -227,7 +226,7 @@ def test_level_options_refuse_bad_values(kw):
 
 def test_head_fields_and_preset(head):
     dev = load_device("omnidot760")
-    assert dev.head.set_time_s == 0.0  # levelling is opt-in
+    assert dev.head.set_time_s == 1.0  # the preset levels by default
     assert head.set_time_s == 1.0 and head.viscosity_mpa_s == 10.0 and head.surface_tension_mn_m == 30.0
     assert {"viscosity_mpa_s", "surface_tension_mn_m", "set_time_s"} <= set(dev.nominal)
     base = head.model_dump()
@@ -248,17 +247,17 @@ def test_simulate_reports_both_films(run_cli, tmp_path):
     code, _, err = run_cli("transform", design_png, "--device", "omnidot760", "--tilt", "0", "--radius", "60",
                            "--out", out)
     assert code == 0, err
-    code, o1, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--json", "--set-time", "1")
+    code, o1, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--json")  # the preset: 1 s
     assert code == 0, err
     dep = json.loads(o1)["deposit"]
     assert dep["levelled"]["set_time_s"] == 1.0 and abs(dep["levelled"]["volume_error_fraction"]) < 1e-9
-    code, o0, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--json", "--force")  # the preset: off
+    code, o0, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--json", "--set-time", "0", "--force")
     assert code == 0, err
     dep0 = json.loads(o0)["deposit"]
     assert "levelled" not in dep0
     dep.pop("levelled")
     assert dep == dep0
-    code, text, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--force", "--set-time", "1", "--viscosity", "20")
+    code, text, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--force", "--viscosity", "20")
     assert code == 0, err
     assert "levelled film (headline; set time 1 s, viscosity 20 mPa s" in text
     code, _, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--force", "--set-time", "-1")
