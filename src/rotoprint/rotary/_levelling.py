@@ -18,6 +18,12 @@ exchange between pairs of wet cells: cells ``i`` and ``j`` trade ``g(j - i) (h_i
 conserved exactly; a flat film stays flat up to its pinned edge (no flow into dry cells: what
 would go there stays, ``1 - N``); inside a wide wet area ``N = 1`` and this is the plain spectral
 filter ``g * h``.
+
+The two convolutions (``g * (w h)`` and ``N = g * w``) may run on a grid ``f`` cells coarse
+(``_levelling_kernels``: restriction ``Q^T``, the adjoint of bilinear interpolation ``Q``, and
+:func:`levelling_kernel` with ``factor=f``): the operator ``Q G Q^T / f^2`` is symmetric and
+passes a constant, so the exchange stays pairwise (the volume is conserved exactly) and ``N = 1``
+inside a wide wet area.
 """
 
 from __future__ import annotations

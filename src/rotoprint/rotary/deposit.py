@@ -132,8 +132,9 @@ class DepositOptions:
     level : LevelOptions or tuple of (LevelOptions or None), optional
         Level each film under surface tension after all its drops landed (``set_time_s >
         0``; one for all films, or one per drop set, e.g. per ink): such a film gets
-        :attr:`FilmReport.levelled` beside its as-landed figures, which are unchanged. The grid
-        is deposited a second time in windows with halos.
+        :attr:`FilmReport.levelled` beside its as-landed figures, which are unchanged. The
+        convolutions run on a coarse grid (:attr:`LevelOptions.coarse_per_length`); the films
+        as landed are kept for it or deposited again (:attr:`LevelOptions.window_cells`).
     """
 
     spread_factor: float | None = None
