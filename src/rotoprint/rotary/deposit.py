@@ -614,8 +614,8 @@ def deposit_film(
         des, inter, band, ii, jj, bidx = geometry(r0, r1)
         if inter_bits is not None:
             inter_bits[r0:r1] = np.packbits(inter, axis=1)
-        if keep_landed:
-            strip_interior[r0] = (ii, jj, bidx)
+        if keep_landed:  # int32: 12 bytes an interior cell
+            strip_interior[r0] = (ii.astype(np.int32), jj.astype(np.int32), None if bidx is None else bidx.astype(np.int32))
         covered = []
         for si in range(nsets):
             film = deposit_rows(si, r0, r1)
