@@ -16,6 +16,7 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 from .. import ranges as R
+from .._projector import ProjectorGeometry
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 __all__ = ["InkjetHead", "InkjetDevice", "Projector", "ProjectorDevice", "Device"]
@@ -107,29 +108,13 @@ class Projector(_Strict):
     printer_model: str = "rotoprint"
 
 
-class ProjectorDevice(_Strict):
+class ProjectorDevice(_Strict, ProjectorGeometry):
     kind: Literal["projector"]
     name: str
     description: str = ""
     source: str = ""
     nominal: tuple[str, ...] = ()
     projector: Projector
-
-    @property
-    def pitch_x_mm(self) -> float:
-        return self.projector.width_mm / self.projector.pixels_x
-
-    @property
-    def pitch_y_mm(self) -> float:
-        return self.projector.height_mm / self.projector.pixels_y
-
-    @property
-    def field_px(self) -> tuple[int, int] | None:
-        return (self.projector.pixels_x, self.projector.pixels_y)
-
-    @property
-    def fibre_axis(self) -> str:
-        return "x"
 
 
 Device = Annotated[InkjetDevice | ProjectorDevice, Field(discriminator="kind")]
