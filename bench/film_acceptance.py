@@ -21,7 +21,7 @@ slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs nati
 overlap), then the cost table.
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
-before it sets, ``LevelOptions.from_head``: set time 1 s (the preset has levelling off), the preset's nominal 10 mPa s, 30 mN/m, h0 the
+before it sets, ``LevelOptions.from_head``: set time 1 s (the preset's nominal; the convolutions on the coarse grid, ``levelled.coarse_factor``), the preset's nominal 10 mPa s, 30 mN/m, h0 the
 10th percentile of the as-landed wet interior film) beside the as-landed figures; a third table
 is the sensitivity at the first tilt given after 0 (default 20), default plan: set time 0.1 / 1 /
 10 s with h0 at the 10th percentile, and at 1 s h0 at the 1st and 50th. ``--quick``: only the

@@ -37,24 +37,27 @@ from rotoprint.testing import torus_mesh
 #: then the rotary slices and builds on branch level (issue 14's film levelling: sidecars and
 #: plan.json carry the head's viscosity_mpa_s, surface_tension_mn_m and set_time_s, the
 #: build's overlays and coverage the levelled film beside the as-landed one), then the same
-#: with the preset's set_time_s = 0 (levelling opt-in: the builds' films as landed);
+#: with the preset's set_time_s = 0 (levelling opt-in: the builds' films as landed); then on
+#: branch level6 the preset's set_time_s = 1 again (levelling on by default, its convolutions on
+#: the coarse grid: sidecars and plan.json carry set_time_s 1, the overlays and coverage the
+#: levelled film with its coarse_factor beside the as-landed one, which is unchanged);
 #: the first values were from main d2285d8. GOLDEN is what the
 #: numba / Pillow path writes (ROTOPRINT_NATIVE=0 or no C compiler), GOLDEN_NATIVE what the C
 #: extension writes (its zlib encodes other, equally valid, PNG bytes).
 GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
     "sl1": ("b311c72eeac6b5ed945ace7361c8769099a0cb81de94450dbccbe527e60ba2a6", 1),
-    "rotary-slices": ("1902b99a90a449283844b567cf57a6450253d00433734dc1a45eb44b06b8d2cb", 26),
-    "build-coil-no-check": ("d190513eab5a2f72ce7483409683ee31dc8e4ecfdfbc1113395a70e8c6f7dbf0", 737),
-    "build-gas": ("a90733eda6c4bad25db45ffc3b569776f07b38ccead559f98f91556f131109b3", 407),
+    "rotary-slices": ("0c5d921fee18ebb8ca445ce77fcda3ee991fa6d4ea0e6bc896818305206c442c", 26),
+    "build-coil-no-check": ("2e1e6c3322313834f0912e534ed51a690c257c8e16d72d97a42d222200fcc3a6", 737),
+    "build-gas": ("90f92c9dd90ea52a041ac24794f7930f460c830d76285757289a6bdf29f85e4e", 407),
 }
 
 GOLDEN_NATIVE = {
     "layer-folder": ("a7387385431f11fad6a75c3f1655d0c5721d3b034f209090b5cf3ed906dc52ca", 10),
     "sl1": ("8ab11667833cbd09409bbe35e638ce26203024f3a353cea8f535959258d13370", 1),
-    "rotary-slices": ("0aa618518085d8e4291c8310b6732685a6caf6d293b119c0ed2fd417ef504115", 26),
-    "build-coil-no-check": ("8d6581301204778ecfcaf8afd0f6798631c37b749dee23c6d251f9e61756a722", 737),
-    "build-gas": ("de22f44b4f4cf63d3131dcd764b0afa171704eb93aff18a2a000e6f1cea1e9b7", 407),
+    "rotary-slices": ("334c6cf8e3fe3f562642fc295b6b1b5b4dc5a88776df3ab32daf1b205e24b80b", 26),
+    "build-coil-no-check": ("23ef6d5bac2a9bcbb1434a7b9831bd86a3f12d6b35241fcb440665f8e73f12f5", 737),
+    "build-gas": ("c53bcd6209d5d2f72b5a610153a11e21e51a0443282ba08d992de47ef1cd99c2", 407),
 }
 
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")

@@ -26,11 +26,11 @@ def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None, cap=None, set_
         from importlib.resources import files
 
         text = (files("rotoprint.devices") / "presets" / "omnidot760.toml").read_text(encoding="utf-8")
-        assert "dead_nozzles = []" in text and "set_time_s = 0.0" in text
+        assert "dead_nozzles = []" in text and "set_time_s = 1.0" in text
         if dead is not None:
             text = text.replace("dead_nozzles = []", f"dead_nozzles = {list(dead)}")
         if set_time_s is not None:
-            text = text.replace("set_time_s = 0.0", f"set_time_s = {set_time_s!r}")
+            text = text.replace("set_time_s = 1.0", f"set_time_s = {set_time_s!r}")
         (tmp_path / "dev.toml").write_text(text, encoding="utf-8")
         printer["device"] = "dev.toml"
     d = {"job": {"name": "small", "layer_height_mm": 0.05}, "printer": printer, "placement": {"inner_radius_mm": 60.0},
@@ -155,21 +155,21 @@ def test_dead_nozzles_are_covered_by_the_plan(tmp_path):
 
 
 def test_build_without_levelling_reports_the_film_as_landed(tmp_path):
-    # the preset's set_time_s is 0 (levelling is opt-in): the headline is the film as landed
-    run_build(_job(cycles=4), tmp_path / "out", check=False)
+    # a device whose set_time_s is 0 (no levelling): the headline is the film as landed
+    run_build(_job(tmp_path, cycles=4, set_time_s=0.0), tmp_path / "out", check=False)
     cov = json.loads((tmp_path / "out" / "plan.json").read_text())["coverage"]["plaster"]
     assert cov["thinnest_to_mean_basis"] == "as landed" and cov["thinnest_to_mean"] == cov["thinnest_to_mean_as_landed"]
     assert cov["thinnest_to_mean_levelled"] is None and cov["levelling"] == []
 
 
 def test_build_in_passes_headline_coverage_machine_and_sidecars(tmp_path):
-    job = _job(tmp_path, cycles=4, set_time_s=1.0)
+    job = _job(cycles=4)
     res = run_build(job, tmp_path / "out", check=False)
     plan = json.loads((tmp_path / "out" / "plan.json").read_text())
     cov = plan["coverage"]["plaster"]
     assert cov["model"] == "deposit" and cov["uncovered_fraction"] <= 0.01 and res.summary["coverage"] == plan["coverage"]
     assert all(o["deposit"]["uncovered_fraction"] <= 0.01 and o["reagent_pairs"] for o in plan["overlays"])
-    # the device's inks level (set time 1 s): the headline thinnest / mean is the levelled film's
+    # the preset's inks level (set time 1 s): the headline thinnest / mean is the levelled film's
     assert cov["thinnest_to_mean_basis"] == "levelled" and cov["thinnest_to_mean"] == cov["thinnest_to_mean_levelled"]
     assert cov["thinnest_to_mean_as_landed"] is not None and cov["levelling"][0]["set_time_s"] == 1.0
     assert all(abs(f["levelled"]["volume_error_fraction"]) < 1e-9 for o in plan["overlays"] for f in o["inks"].values())

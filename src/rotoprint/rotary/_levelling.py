@@ -18,6 +18,12 @@ exchange between pairs of wet cells: cells ``i`` and ``j`` trade ``g(j - i) (h_i
 conserved exactly; a flat film stays flat up to its pinned edge (no flow into dry cells: what
 would go there stays, ``1 - N``); inside a wide wet area ``N = 1`` and this is the plain spectral
 filter ``g * h``.
+
+The two convolutions (``g * (w h)`` and ``N = g * w``) may run on a grid ``f`` cells coarse
+(``_levelling_kernels``: restriction ``Q^T``, the adjoint of bilinear interpolation ``Q``, and
+:func:`levelling_kernel` with ``factor=f``): the operator ``Q G Q^T / f^2`` is symmetric and
+passes a constant, so the exchange stays pairwise (the volume is conserved exactly) and ``N = 1``
+inside a wide wet area.
 """
 
 from __future__ import annotations
@@ -27,10 +33,21 @@ import math
 import numpy as np
 from scipy import fft as sfft
 
-__all__ = ["levelling_kernel", "level_window"]
+__all__ = ["levelling_kernel", "level_window", "convolve_rows"]
 
 
-def levelling_kernel(dt_um4: float, gx_um: float, gy_um: float, halo_lengths: float) -> np.ndarray:
+def _interp_response(k: np.ndarray, cell_um: float, factor: int) -> np.ndarray:
+    """Response ``T(k)^2`` of linear interpolation from a grid ``factor`` times coarser than
+    ``cell_um`` to it (one axis; ``T`` is the box of ``factor`` cells), 1 at ``k = 0``."""
+    if factor == 1:
+        return np.ones_like(k)
+    num = np.sin(0.5 * k * cell_um * factor)
+    den = factor * np.sin(0.5 * k * cell_um)
+    t = np.divide(num, den, out=np.ones_like(k), where=den != 0.0)
+    return t * t
+
+
+def levelling_kernel(dt_um4: float, gx_um: float, gy_um: float, halo_lengths: float, factor: int = 1) -> np.ndarray:
     """The truncated, renormalised levelling kernel, ``(2 hy + 1, 2 hx + 1) float64``.
 
     Parameters
@@ -41,23 +58,35 @@ def levelling_kernel(dt_um4: float, gx_um: float, gy_um: float, halo_lengths: fl
         Grid cell, um.
     halo_lengths : float
         Truncation radius in levelling lengths ``L = (D t)^(1/4)``.
+    factor : int
+        The kernel of the coarse grid whose cell is ``factor`` cells (``>= 1``): sampled at
+        its spacing and divided, wavenumber by wavenumber, by the response of the restriction
+        and interpolation around it (``T^4`` per axis, ``_levelling_kernels``), so that the
+        round trip ``Q G Q^T`` passes the long waves as the fine kernel does. ``1``: the fine
+        grid's kernel itself.
 
     Returns
     -------
     (2 hy + 1, 2 hx + 1) float64
-        Symmetric in both axes (exactly), sums to 1.
+        Symmetric in both axes (exactly), sums to 1; ``hx = ceil(halo_lengths L / (factor
+        gx_um))``, likewise ``hy``.
     """
     length_um = dt_um4 ** 0.25
-    hx = max(1, math.ceil(halo_lengths * length_um / gx_um))
-    hy = max(1, math.ceil(halo_lengths * length_um / gy_um))
+    cx, cy = gx_um * factor, gy_um * factor
+    hx = max(1, math.ceil(halo_lengths * length_um / cx))
+    hy = max(1, math.ceil(halo_lengths * length_um / cy))
     # sample the continuous kernel on a grid wide enough that its periodic images are
     # negligible (the tail at 4 halos is far below rounding)
     mx = sfft.next_fast_len(max(64, 4 * (2 * hx + 1)))
     my = sfft.next_fast_len(max(64, 4 * (2 * hy + 1)))
-    kx = 2.0 * math.pi * sfft.rfftfreq(mx, d=gx_um)
-    ky = 2.0 * math.pi * sfft.fftfreq(my, d=gy_um)
+    kx = 2.0 * math.pi * sfft.rfftfreq(mx, d=cx)
+    ky = 2.0 * math.pi * sfft.fftfreq(my, d=cy)
     k2 = ky[:, None] ** 2 + kx[None, :] ** 2
-    g = sfft.irfft2(np.exp(-dt_um4 * k2 * k2), s=(my, mx))
+    spec = np.exp(-dt_um4 * k2 * k2)
+    if factor > 1:
+        ty, tx = _interp_response(ky, gy_um, factor), _interp_response(kx, gx_um, factor)
+        spec /= (ty[:, None] * tx[None, :]) ** 2
+    g = sfft.irfft2(spec, s=(my, mx))
     g = np.roll(np.roll(g, hy, axis=0), hx, axis=1)[: 2 * hy + 1, : 2 * hx + 1]
     # one quadrant (the average of the four), mirrored: exactly even in x and y
     q = 0.25 * (g[hy:, hx:] + g[hy::-1, hx:] + g[hy:, hx::-1] + g[hy::-1, hx::-1])
@@ -108,3 +137,38 @@ def level_window(film: np.ndarray, kernel: np.ndarray, core_rows: slice) -> np.n
     gh = _conv_same(h, kf, shape, hy, hx)[core_rows]
     hc = h[core_rows]
     return np.where(wet[core_rows], hc * (1.0 - n) + gh, 0.0)
+
+
+def convolve_rows(arrays: list[np.ndarray], kernel: np.ndarray, window_cells: int) -> list[np.ndarray]:
+    """Each array convolved with ``kernel`` (zero beyond its edges), in row windows of at
+    most about ``window_cells`` cells (a core strip and ``hy`` halo rows each side: the same
+    cells as one window over the whole array, to rounding).
+
+    Parameters
+    ----------
+    arrays : list of (R, C) float64
+    kernel : (2 hy + 1, 2 hx + 1) float64
+        Even in both axes (:func:`levelling_kernel`).
+    window_cells : int
+
+    Returns
+    -------
+    list of (R, C) float64
+    """
+    hy, hx = (kernel.shape[0] - 1) // 2, (kernel.shape[1] - 1) // 2
+    rows, cols = arrays[0].shape
+    core = max(2 * hy, int(window_cells) // (cols + 2 * hx) - 2 * hy, 1)
+    outs = [np.empty_like(a) for a in arrays]
+    spectra: dict[tuple[int, int], np.ndarray] = {}
+    for r0 in range(0, rows, core):
+        r1 = min(rows, r0 + core)
+        e0, e1 = max(0, r0 - hy), min(rows, r1 + hy)
+        shape = (sfft.next_fast_len(e1 - e0 + 2 * hy, real=True), sfft.next_fast_len(cols + 2 * hx, real=True))
+        kf = spectra.get(shape)
+        if kf is None:
+            kp = np.zeros(shape, np.float64)
+            kp[: kernel.shape[0], : kernel.shape[1]] = kernel
+            kf = spectra[shape] = sfft.rfft2(kp, workers=1)
+        for a, o in zip(arrays, outs):
+            o[r0:r1] = _conv_same(a[e0:e1], kf, shape, hy, hx)[r0 - e0: r1 - e0]
+    return outs

@@ -132,8 +132,9 @@ class DepositOptions:
     level : LevelOptions or tuple of (LevelOptions or None), optional
         Level each film under surface tension after all its drops landed (``set_time_s >
         0``; one for all films, or one per drop set, e.g. per ink): such a film gets
-        :attr:`FilmReport.levelled` beside its as-landed figures, which are unchanged. The grid
-        is deposited a second time in windows with halos.
+        :attr:`FilmReport.levelled` beside its as-landed figures, which are unchanged. The
+        convolutions run on a coarse grid (:attr:`LevelOptions.coarse_per_length`); the films
+        as landed are kept for it or deposited again (:attr:`LevelOptions.window_cells`).
     """
 
     spread_factor: float | None = None
@@ -200,7 +201,19 @@ class LevelOptions:
         weight beyond 10 L is 0.5 %), 4..40.
     window_cells : int
         Cells of one levelling window (a strip plus halos, whole grid width), bounding the
-        memory (about 40 bytes a cell); a window is at least ``4 halo`` rows.
+        memory (about 40 bytes a cell); a window is at least ``4 halo`` rows. The films as
+        landed are kept for the levelling pass (8 bytes a cell and levelled film) when they
+        fit in this many cells together, else deposited again.
+    coarse_per_length : float
+        The convolutions of the model (``g * (w h)`` and ``g * w``) are computed on a grid
+        ``f`` times coarser than the deposit's, ``f`` the largest whole number that keeps its
+        cell within ``L / coarse_per_length`` (the kernel is smooth at ``L``): restricted by
+        the adjoint of bilinear interpolation, convolved with the coarse kernel (which undoes
+        the round trip's damping of long waves) and interpolated back, so the levelling
+        still conserves the volume exactly, keeps dry cells dry and does not depend on the
+        tiling. 2..100.
+    exact : bool
+        Convolve on the deposit grid itself (``f = 1``; slow when ``L`` spans many cells).
     """
 
     set_time_s: float = 0.0
@@ -210,6 +223,8 @@ class LevelOptions:
     h0_um: float | None = None
     halo_lengths: float = 10.0
     window_cells: int = 24_000_000
+    coarse_per_length: float = 6.0
+    exact: bool = False
 
     def __post_init__(self) -> None:
         from .. import ranges as R
@@ -227,6 +242,8 @@ class LevelOptions:
             raise ConfigError(f"halo_lengths must be in 4..40, got {self.halo_lengths!r}")
         if not 10_000 <= int(self.window_cells) <= 2_000_000_000:
             raise ConfigError(f"window_cells must be in 10000..2e9, got {self.window_cells!r}")
+        if not (isinstance(self.coarse_per_length, (int, float)) and 2.0 <= self.coarse_per_length <= 100.0):
+            raise ConfigError(f"coarse_per_length must be in 2..100, got {self.coarse_per_length!r}")
 
     @classmethod
     def from_head(cls, head: InkjetHead, **overrides) -> LevelOptions:
@@ -240,6 +257,13 @@ class LevelOptions:
     @property
     def active(self) -> bool:
         return self.set_time_s > 0.0
+
+    def coarse_factor(self, length_um: float, cell_um: float) -> int:
+        """``f``: the coarse grid's cell in deposit cells for levelling length ``length_um``
+        on cells of ``cell_um`` (the larger side), 1 if :attr:`exact`."""
+        if self.exact:
+            return 1
+        return max(1, int(length_um / (self.coarse_per_length * cell_um)))
 
 
 @dataclass(frozen=True)
@@ -264,6 +288,8 @@ class LevelledFilm:
     thinnest_to_mean: float
     radial_spread: float
     below_half_landed_mean_fraction: float
+    #: the convolutions' grid in deposit cells (``f``; 1: the deposit grid itself)
+    coarse_factor: int = 1
     radial_bins: tuple[tuple[float, float, float], ...] = field(default=())
 
     def to_json(self) -> dict:
@@ -573,16 +599,30 @@ def deposit_film(
     sample_stride = max(1, n_design_cells // 2_000_000)
     samples: list[list[np.ndarray]] = [[] for _ in range(nsets)]
     inter_bits = np.zeros((rows, (cols + 7) // 8), np.uint8) if any(lv is not None for lv in levels) else None
+    # the levelled films as landed and the interior's cells of each strip, kept for the
+    # levelling pass when they fit in every levelled film's window_cells (else recomputed)
+    n_lev = sum(lv is not None for lv in levels)
+    keep_landed = n_lev > 0 and rows * cols * n_lev <= min(int(lv.window_cells) for lv in levels if lv is not None)
+    landed: dict[int, np.ndarray] = {}
+    if keep_landed:
+        for si in range(nsets):
+            if levels[si] is not None:
+                landed[si] = full if (full is not None and si == 0) else np.zeros((rows, cols), np.float64)
+    strip_interior: dict[int, tuple] = {}
     for r0 in range(0, rows, strip_rows):
         r1 = min(rows, r0 + strip_rows)
         des, inter, band, ii, jj, bidx = geometry(r0, r1)
         if inter_bits is not None:
             inter_bits[r0:r1] = np.packbits(inter, axis=1)
+        if keep_landed:  # int32: 12 bytes an interior cell
+            strip_interior[r0] = (ii.astype(np.int32), jj.astype(np.int32), None if bidx is None else bidx.astype(np.int32))
         covered = []
         for si in range(nsets):
             film = deposit_rows(si, r0, r1)
             if full is not None and si == 0:
                 full[r0:r1] = film
+            if si in landed and landed[si] is not full:
+                landed[si][r0:r1] = film
             cov = film > 0
             covered.append(cov)
             ac = acc[si]
@@ -611,14 +651,17 @@ def deposit_film(
             ci_, cj_ = covered[i] & des, covered[j] & des
             pair_acc[pi][0] += int((ci_ & ~cj_).sum())
             pair_acc[pi][1] += int((cj_ & ~ci_).sum())
-    levelled: list[LevelledFilm | None] = [None] * nsets
-    full_lev = None
-    for si in range(nsets):
-        if levels[si] is not None:
-            levelled[si], lmap = _level_film(si, levels[si], samples[si], acc[si], rows, cols, gx, gy, area_mm2,
-                                             lambda a, b: interior_cells(a, b, inter_bits), deposit_rows, keep_map and si == 0)
-            if lmap is not None:
-                full_lev = lmap
+    def landed_rows(si: int, r0: int, r1: int) -> np.ndarray:
+        return landed[si][r0:r1] if si in landed else deposit_rows(si, r0, r1)
+
+    def interior_of(r0: int, r1: int):
+        hit = strip_interior.get(r0)
+        if hit is not None and r1 == min(rows, r0 + strip_rows):
+            return hit
+        return interior_cells(r0, r1, inter_bits)
+
+    levelled, full_lev = _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows, interior_of,
+                                      landed_rows, keep_map)
     films = []
     for si, (s, ac, prep) in enumerate(zip(drop_sets, acc, prepared)):
         planned = float(np.sum(s.volume_pl))
@@ -688,71 +731,161 @@ def _bins_spread(bins_sum: np.ndarray, bins_n: np.ndarray, area_mm2: float):
     return tuple(bins), spread
 
 
-def _level_film(si, lev: LevelOptions, samples, ac, rows, cols, gx, gy, area_mm2, interior, deposit_rows, keep_map):
-    """Level film ``si`` window by window; its figures and (``keep_map``) its map."""
+class _LevelledStats:
+    """The levelled film's interior figures, strip by strip."""
+
+    def __init__(self, landed_mean: float):
+        self.landed_mean = landed_mean
+        self.tot = self.tsum = 0.0
+        self.tmin = math.inf
+        self.n_int = self.below = 0
+        self.bins_sum, self.bins_n = np.zeros(0), np.zeros(0, np.int64)
+
+    def add(self, lv: np.ndarray, ii: np.ndarray, jj: np.ndarray, bidx) -> None:
+        self.tot += float(lv.sum())
+        if ii.size:
+            t = lv[ii, jj]
+            self.n_int += int(ii.size)
+            self.tmin = min(self.tmin, float(t.min()))
+            self.tsum += float(t.sum())
+            self.below += int((t < 0.5 * self.landed_mean).sum())
+            nb = int(bidx.max()) + 1
+            if self.bins_sum.size < nb:
+                self.bins_sum = np.pad(self.bins_sum, (0, nb - self.bins_sum.size))
+                self.bins_n = np.pad(self.bins_n, (0, nb - self.bins_n.size))
+            self.bins_sum[:nb] += np.bincount(bidx, weights=t, minlength=nb)
+            self.bins_n[:nb] += np.bincount(bidx, minlength=nb)
+
+    def film(self, lev: LevelOptions, h0: float, rule: str, rate: float, halo: tuple[int, int], factor: int,
+             deposited: float, area_mm2: float) -> LevelledFilm:
+        n_int = self.n_int
+        mean = self.tsum / n_int if n_int else float("nan")
+        bins, spread = _bins_spread(self.bins_sum, self.bins_n, area_mm2)
+        return LevelledFilm(
+            set_time_s=float(lev.set_time_s),
+            viscosity_mpa_s=float(lev.viscosity_mpa_s),
+            surface_tension_mn_m=float(lev.surface_tension_mn_m),
+            h0_um=h0,
+            h0_rule=rule,
+            rate_um4_per_s=rate,
+            levelling_length_um=(rate * lev.set_time_s) ** 0.25,
+            halo_cells=halo,
+            volume_error_fraction=self.tot / deposited - 1.0 if deposited else 0.0,
+            thinnest_um=self.tmin if n_int else float("nan"),
+            mean_um=mean,
+            thinnest_to_mean=self.tmin / mean if n_int and mean > 0 else float("nan"),
+            radial_spread=spread,
+            below_half_landed_mean_fraction=self.below / n_int if n_int else 0.0,
+            coarse_factor=factor,
+            radial_bins=bins,
+        )
+
+
+def _film_h0(lev: LevelOptions, samples) -> tuple[float, str] | None:
+    if lev.h0_um is not None:
+        return float(lev.h0_um), "fixed"
+    wet = np.concatenate(samples) if samples else np.zeros(0)
+    if not wet.size:
+        return None
+    h0 = float(np.percentile(wet, lev.h0_percentile))
+    return (h0, f"p{lev.h0_percentile:g} of the as-landed wet interior film") if h0 > 0.0 else None
+
+
+def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows, interior, landed_rows, keep_map):
+    """Level every film with options in ``levels``: its :class:`LevelledFilm` (or None) per
+    film, and the first film's levelled map (``keep_map``, else None).
+
+    A film whose coarse factor is 1 (:meth:`LevelOptions.coarse_factor`) is levelled on the
+    deposit grid in windows with halos (:func:`_level_film_exact`); the others share one
+    pass restricting their wet films to their coarse grids, the coarse convolutions, and one
+    pass interpolating back, strip by strip (``landed_rows`` gives a film's rows as landed,
+    ``interior`` a strip's interior cells and radial bins).
+    """
+    from . import _levelling as _lv
+    from . import _levelling_kernels as _lk
+
+    nsets = len(levels)
+    out: list[LevelledFilm | None] = [None] * nsets
+    full_lev = None
+    coarse = {}
+    for si, lev in enumerate(levels):
+        if lev is None:
+            continue
+        got = _film_h0(lev, samples[si])
+        if got is None:
+            continue
+        h0, rule = got
+        rate = levelling_rate_um4_per_s(lev.surface_tension_mn_m, lev.viscosity_mpa_s, h0)
+        dt = rate * lev.set_time_s
+        f = lev.coarse_factor(dt ** 0.25, max(gx, gy))
+        landed_mean = acc[si]["tsum"] / acc[si]["interior"] if acc[si]["interior"] else float("nan")
+        if f == 1:
+            stats, lmap = _level_film_exact(si, lev, dt, gx, gy, rows, cols, landed_mean, interior, landed_rows,
+                                            keep_map and si == 0)
+            out[si] = stats.film(lev, h0, rule, rate, stats.halo, 1, acc[si]["dep"], area_mm2)
+            if lmap is not None:
+                full_lev = lmap
+            continue
+        rc, cc = -(-rows // f) + 2, -(-cols // f) + 2
+        need = 4 * rc * cc * 8
+        if need > 2_000_000_000:
+            raise RasterTooLargeError(f"levelling film {si}: the coarse grids would take {need / 1e9:.1f} GB "
+                                      f"({cc} x {rc} nodes of {f} cells); raise coarse_per_length")
+        coarse[si] = dict(lev=lev, h0=h0, rule=rule, rate=rate, dt=dt, f=f, landed_mean=landed_mean,
+                          h=np.zeros((rc, cc)), w=np.zeros((rc, cc)), cols=_lk.axis_weights(cols, f))
+    if not coarse:
+        return out, full_lev
+    for r0 in range(0, rows, strip_rows):
+        r1 = min(rows, r0 + strip_rows)
+        for si, c in coarse.items():
+            _lk.restrict_wet_jit(landed_rows(si, r0, r1), r0, c["f"], c["cols"][0], c["cols"][1], c["h"], c["w"])
+    for si, c in coarse.items():
+        f = c["f"]
+        kernel = _lv.levelling_kernel(c["dt"], gx, gy, c["lev"].halo_lengths, factor=f)
+        c["halo"] = (f * ((kernel.shape[1] - 1) // 2), f * ((kernel.shape[0] - 1) // 2))
+        c["g"], c["n"] = _lv.convolve_rows([c["h"], c["w"]], kernel, c["lev"].window_cells)
+        scale = 1.0 / (f * f)
+        c["g"] *= scale
+        c["n"] *= scale
+        del c["h"], c["w"]
+        c["stats"] = _LevelledStats(c["landed_mean"])
+    first = 0 if keep_map and 0 in coarse else None
+    if first is not None:
+        full_lev = np.zeros((rows, cols), np.float64)
+    for r0 in range(0, rows, strip_rows):
+        r1 = min(rows, r0 + strip_rows)
+        ii, jj, bidx = interior(r0, r1)
+        for si, c in coarse.items():
+            film = landed_rows(si, r0, r1)
+            lv = full_lev[r0:r1] if si == first else np.empty_like(film)
+            _lk.prolong_combine_jit(film, r0, c["f"], c["cols"][0], c["cols"][1], c["n"], c["g"], lv)
+            c["stats"].add(lv, ii, jj, bidx)
+    for si, c in coarse.items():
+        out[si] = c["stats"].film(c["lev"], c["h0"], c["rule"], c["rate"], c["halo"], c["f"], acc[si]["dep"], area_mm2)
+    return out, full_lev
+
+
+def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean, interior, landed_rows, keep_map):
+    """Level film ``si`` on the deposit grid, window by window: its :class:`_LevelledStats`
+    (with ``halo``, deposit cells) and (``keep_map``) its map."""
     from . import _levelling as _lv
 
-    if lev.h0_um is not None:
-        h0, rule = float(lev.h0_um), "fixed"
-    else:
-        wet = np.concatenate(samples) if samples else np.zeros(0)
-        if not wet.size:
-            return None, None
-        h0, rule = float(np.percentile(wet, lev.h0_percentile)), f"p{lev.h0_percentile:g} of the as-landed wet interior film"
-    if not h0 > 0.0:
-        return None, None
-    rate = levelling_rate_um4_per_s(lev.surface_tension_mn_m, lev.viscosity_mpa_s, h0)
-    kernel = _lv.levelling_kernel(rate * lev.set_time_s, gx, gy, lev.halo_lengths)
+    kernel = _lv.levelling_kernel(dt, gx, gy, lev.halo_lengths)
     hy, hx = (kernel.shape[0] - 1) // 2, (kernel.shape[1] - 1) // 2
     core_rows = max(2 * hy, int(lev.window_cells) // (cols + 2 * hx) - 2 * hy, 1)
-    tot = tsum = 0.0
-    tmin = math.inf
-    n_int = below = 0
-    landed_mean = ac["tsum"] / ac["interior"] if ac["interior"] else float("nan")
-    bins_sum, bins_n = np.zeros(0), np.zeros(0, np.int64)
+    stats = _LevelledStats(landed_mean)
+    stats.halo = (hx, hy)
     full = np.zeros((rows, cols), np.float64) if keep_map else None
     for r0 in range(0, rows, core_rows):
         r1 = min(rows, r0 + core_rows)
         e0, e1 = max(0, r0 - hy), min(rows, r1 + hy)
-        film_w = deposit_rows(si, e0, e1)
+        film_w = landed_rows(si, e0, e1)
         lv = _lv.level_window(film_w, kernel, slice(r0 - e0, r1 - e0))
         del film_w
         if full is not None:
             full[r0:r1] = lv
-        tot += float(lv.sum())
-        ii, jj, bidx = interior(r0, r1)
-        if ii.size:
-            t = lv[ii, jj]
-            n_int += int(ii.size)
-            tmin = min(tmin, float(t.min()))
-            tsum += float(t.sum())
-            below += int((t < 0.5 * landed_mean).sum())
-            nb = int(bidx.max()) + 1
-            if bins_sum.size < nb:
-                bins_sum = np.pad(bins_sum, (0, nb - bins_sum.size))
-                bins_n = np.pad(bins_n, (0, nb - bins_n.size))
-            bins_sum[:nb] += np.bincount(bidx, weights=t, minlength=nb)
-            bins_n[:nb] += np.bincount(bidx, minlength=nb)
-    mean = tsum / n_int if n_int else float("nan")
-    bins, spread = _bins_spread(bins_sum, bins_n, area_mm2)
-    out = LevelledFilm(
-        set_time_s=float(lev.set_time_s),
-        viscosity_mpa_s=float(lev.viscosity_mpa_s),
-        surface_tension_mn_m=float(lev.surface_tension_mn_m),
-        h0_um=h0,
-        h0_rule=rule,
-        rate_um4_per_s=rate,
-        levelling_length_um=(rate * lev.set_time_s) ** 0.25,
-        halo_cells=(hx, hy),
-        volume_error_fraction=tot / ac["dep"] - 1.0 if ac["dep"] else 0.0,
-        thinnest_um=tmin if n_int else float("nan"),
-        mean_um=mean,
-        thinnest_to_mean=tmin / mean if n_int and mean > 0 else float("nan"),
-        radial_spread=spread,
-        below_half_landed_mean_fraction=below / n_int if n_int else 0.0,
-        radial_bins=bins,
-    )
-    return out, full
+        stats.add(lv, *interior(r0, r1))
+    return stats, full
 
 
 def deposit_print(prints, design: np.ndarray, *, options: DepositOptions | None = None, dead_nozzles: tuple[int, ...] = (),

@@ -1,0 +1,84 @@
+"""Levelling on a coarse grid: restriction to and interpolation from it (numba kernels).
+
+The coarse grid has a node per ``f x f`` block of deposit cells, its centre at the block's
+centre, and one ghost node beyond each edge (node index ``= block index + 1``), so every
+deposit cell lies between four nodes. Deposit cell ``(r, c)`` sits at coarse coordinate
+``((r + 0.5) / f - 0.5, (c + 0.5) / f - 0.5)``; :func:`prolong_combine_jit` reads the coarse
+fields there by bilinear interpolation ``Q`` and :func:`restrict_wet_jit` applies its adjoint
+``Q^T`` (each wet cell spreads its value over the four nodes with the same weights). With
+``f = 1`` both are the identity (on the nodes 1..n).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["axis_weights", "restrict_wet_jit", "prolong_combine_jit"]
+
+
+def axis_weights(n: int, f: int) -> tuple[np.ndarray, np.ndarray]:
+    """For cells ``0..n-1`` of one axis, the lower coarse node ``(n,) int64`` (ghost-shifted)
+    and the weight ``t`` of the upper one ``(n,) float64`` (the lower has ``1 - t``)."""
+    u = (np.arange(n, dtype=np.float64) + 0.5) / f - 0.5
+    i0 = np.floor(u)
+    return i0.astype(np.int64) + 1, u - i0
+
+
+@njit(cache=True, nogil=True)
+def restrict_wet_jit(film, row0, f, cx0, ctx, h_c, w_c):
+    """Add ``Q^T`` of the wet film (``film > 0``) to ``h_c`` and of the wet indicator to
+    ``w_c`` (both ``(Rc + 2, Cc + 2) float64``); ``film`` ``(rows, cols) float64`` holds grid
+    rows ``row0..``; ``cx0, ctx`` from :func:`axis_weights` for the columns."""
+    rows, cols = film.shape
+    for i in range(rows):
+        u = (row0 + i + 0.5) / f - 0.5
+        fy = math.floor(u)
+        ty = u - fy
+        iy = int(fy) + 1
+        for j in range(cols):
+            h = film[i, j]
+            if h > 0.0:
+                a = cx0[j]
+                tx = ctx[j]
+                w00 = (1.0 - ty) * (1.0 - tx)
+                w01 = (1.0 - ty) * tx
+                w10 = ty * (1.0 - tx)
+                w11 = ty * tx
+                h_c[iy, a] += w00 * h
+                h_c[iy, a + 1] += w01 * h
+                h_c[iy + 1, a] += w10 * h
+                h_c[iy + 1, a + 1] += w11 * h
+                w_c[iy, a] += w00
+                w_c[iy, a + 1] += w01
+                w_c[iy + 1, a] += w10
+                w_c[iy + 1, a + 1] += w11
+
+
+@njit(cache=True, nogil=True)
+def prolong_combine_jit(film, row0, f, cx0, ctx, n_c, g_c, out):
+    """The levelled film ``h (1 - N) + G`` on the wet cells of ``film`` (0 on dry ones) into
+    ``out`` (the shape of ``film``), ``N`` and ``G`` interpolated (``Q``) from the coarse
+    ``n_c`` and ``g_c``."""
+    rows, cols = film.shape
+    for i in range(rows):
+        u = (row0 + i + 0.5) / f - 0.5
+        fy = math.floor(u)
+        ty = u - fy
+        iy = int(fy) + 1
+        for j in range(cols):
+            h = film[i, j]
+            if h > 0.0:
+                a = cx0[j]
+                tx = ctx[j]
+                w00 = (1.0 - ty) * (1.0 - tx)
+                w01 = (1.0 - ty) * tx
+                w10 = ty * (1.0 - tx)
+                w11 = ty * tx
+                n = w00 * n_c[iy, a] + w01 * n_c[iy, a + 1] + w10 * n_c[iy + 1, a] + w11 * n_c[iy + 1, a + 1]
+                g = w00 * g_c[iy, a] + w01 * g_c[iy, a + 1] + w10 * g_c[iy + 1, a] + w11 * g_c[iy + 1, a + 1]
+                out[i, j] = h * (1.0 - n) + g
+            else:
+                out[i, j] = 0.0
