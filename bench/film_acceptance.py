@@ -34,6 +34,7 @@ from __future__ import annotations
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -69,7 +70,7 @@ def sensitivity_table(prs, d, head, tilt) -> None:
     for st, pct in ((0.1, 10.0), (1.0, 1.0), (1.0, 10.0), (1.0, 50.0), (10.0, 10.0)):
         if True:
             t = time.perf_counter()
-            f = deposit_print(prs, d, options=DepositOptions(level=LevelOptions.from_head(head, set_time_s=st, h0_percentile=pct))).films[0]
+            f = deposit_print(prs, d, options=DepositOptions(level=LevelOptions.from_head(head, set_time_s=st, h0_percentile=pct, coats=len(prs)))).films[0]
             lv = f.levelled
             print(f"| {st:g} | p{pct:g} | {lv.h0_um:.2f} | {lv.levelling_length_um:.0f} | {lv.thinnest_to_mean:.3f} | "
                   f"{100 * lv.radial_spread:.1f} | {100 * lv.below_half_landed_mean_fraction:.3f} | "
@@ -189,7 +190,8 @@ def main() -> None:
                 except GeometryError as exc:
                     print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)
                     continue
-                f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles, options=DepositOptions(level=level)).films[0]
+                f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles,
+                                  options=DepositOptions(level=level and replace(level, coats=len(prs)))).films[0]
                 if tilt == sens_tilt and head is head0 and not eq and not inter:
                     sens_prs = prs
                 pp = m["pass_plan"]

@@ -23,7 +23,7 @@ with tempfile.TemporaryDirectory() as td:
     transform_passes(d, head, pl, Path(td)/"p.png", PassOptions(RotarySetup(tilt_deg=20.0), passes="auto"))
     prs=[read_print(q)[0] for q in read_passes(Path(td)/"p-passes.json")]
 for st in (0.1, 1.0):
-    dep=deposit_print(prs, d, keep_map=True, options=DepositOptions(level=LevelOptions.from_head(head, set_time_s=st)))
+    dep=deposit_print(prs, d, keep_map=True, options=DepositOptions(level=LevelOptions.from_head(head, set_time_s=st, coats=len(prs))))
     f=dep.films[0]; lv=f.levelled
     L=dep.levelled_thickness; T=dep.thickness
     nx,ny=dep.cells_per_pixel; ox,oy=dep.origin_cells

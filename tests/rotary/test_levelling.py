@@ -262,3 +262,30 @@ def test_simulate_reports_both_films(run_cli, tmp_path):
     assert "levelled film (headline; set time 1 s, viscosity 20 mPa s" in text
     code, _, err = run_cli("simulate", out, "--out", tmp_path / "ov.png", "--force", "--set-time", "-1")
     assert code == 2 and "--set-time" in err
+
+
+def test_coats_level_as_one_coat_each(head):
+    """A film of c identical coats, each set before the next lands (``coats = c``), levels as
+    c times one coat levelled by itself: the same map to rounding, h0 one coat's; with
+    ``coats = 1`` the same ink levels farther (h0 c times larger, the length c^(3/4))."""
+    n, c = 30, 4
+    pl = Placement(n, n, PX, PX, inner_radius_mm=60.0)
+    mask = np.ones((n, n), bool)
+    mask[10:14, 8:22] = False
+    one = lattice(n, n, 0.48)
+    many = InkDrops.concat([one] * c)
+    lo = LevelOptions(set_time_s=2e-4)
+    d1 = deposit_film(mask, pl, head, [one], keep_map=True, options=DepositOptions(level=lo))
+    dc = deposit_film(mask, pl, head, [many], keep_map=True,
+                      options=DepositOptions(level=LevelOptions(set_time_s=2e-4, coats=c)))
+    dw = deposit_film(mask, pl, head, [many], keep_map=True, options=DepositOptions(level=lo))
+    f1, fc, fw = d1.films[0].levelled, dc.films[0].levelled, dw.films[0].levelled
+    assert fc.h0_um == pytest.approx(f1.h0_um, rel=1e-12) and fw.h0_um == pytest.approx(c * f1.h0_um, rel=1e-12)
+    assert fc.h0_rule.endswith(f"/ {c} coats")
+    scale = float(d1.levelled_thickness.max())
+    assert np.abs(dc.levelled_thickness - c * d1.levelled_thickness).max() < 1e-9 * c * scale
+    assert fc.thinnest_to_mean == pytest.approx(f1.thinnest_to_mean, rel=1e-9)
+    assert fw.levelling_length_um == pytest.approx(fc.levelling_length_um * c ** 0.75, rel=1e-9)
+    assert np.abs(dw.levelled_thickness - dc.levelled_thickness).max() > 0.01 * c * scale  # not the same film
+    with pytest.raises(ConfigError, match="coats must be a number in 1..1e6"):
+        LevelOptions(coats=0.5)

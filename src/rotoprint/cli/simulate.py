@@ -104,7 +104,8 @@ def simulate_command(
     film = deposit_film(sim.inked, pr.placement, pr.head, [InkDrops.concat(parts)],
                         options=DepositOptions(spread_factor=spread, footprint_um=footprint,
                                                level=LevelOptions.from_head(pr.head, set_time_s=set_time, viscosity_mpa_s=viscosity,
-                                                                            surface_tension_mn_m=surface_tension, h0_percentile=h0_percentile))).films[0]
+                                                                            surface_tension_mn_m=surface_tension, h0_percentile=h0_percentile,
+                                                                            coats=len(parts)))).films[0]  # a coat per pass
     overlay = render_overlay(sim, scale=scale)
     from PIL import Image
     import io

@@ -26,7 +26,7 @@ import json
 import math
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -274,8 +274,11 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
                     d = ink_drops(place_drops(pr), head)
                     parts.append(InkDrops(d.col, d.row, d.volume_pl * float(w)))
                 sets.append(InkDrops.concat(parts))
+            # each cycle's coat (one pass, repeats) sets before the next lands: h0 is one coat's
+            coats = [max(1.0, float(sum(w for _, w in weighted[ink]))) for ink in inks]
+            lv = tuple(replace(lev, coats=c) for lev, c in zip(levels, coats))
             dep = deposit_film(ref, weighted[inks[0]][0][0].placement, head, sets,
-                               pairs=[(0, 1)] if len(sets) == 2 else [], options=DepositOptions(level=tuple(levels)))
+                               pairs=[(0, 1)] if len(sets) == 2 else [], options=DepositOptions(level=lv))
             films = {ink: {k: v for k, v in f.to_json().items() if k != "radial_bins"} for ink, f in zip(inks, dep.films)}
             name = f"overlays/layer_{i:05d}-{mname}.png"
             (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))

@@ -196,6 +196,14 @@ class LevelOptions:
         percentile is the conservative choice), 0..100.
     h0_um : float, optional
         A fixed ``h0`` instead of the percentile, um.
+    coats : float
+        The film is this many coats, each landed and set before the next lands (the cycles
+        and interlaced passes of a layer: a pass's revolution takes about as long as the set
+        time), so ``h0`` is one coat's: the percentile of the whole film over ``coats`` (not
+        applied to a fixed ``h0_um``). Levelling the whole film at one coat's ``h0`` is the
+        sum of the coats levelled one by one where they have one shape; levelling it at the
+        whole film's ``h0`` (``coats = 1``) would let ink flow as if every coat stayed wet
+        together, ``coats^(3/4)`` times farther. 1..1e6.
     halo_lengths : float
         The kernel is truncated at this many levelling lengths ``L = (D t)^(1/4)`` (its
         weight beyond 10 L is 0.5 %), 4..40.
@@ -221,6 +229,7 @@ class LevelOptions:
     surface_tension_mn_m: float = 30.0
     h0_percentile: float = 10.0
     h0_um: float | None = None
+    coats: float = 1.0
     halo_lengths: float = 10.0
     window_cells: int = 24_000_000
     coarse_per_length: float = 6.0
@@ -238,6 +247,9 @@ class LevelOptions:
             raise ConfigError(f"h0_percentile must be in 0..100, got {self.h0_percentile!r}")
         if self.h0_um is not None and not (math.isfinite(self.h0_um) and 0 < self.h0_um <= 1e5):
             raise ConfigError(f"h0_um must be a number in (0, 1e5], got {self.h0_um!r}")
+        if not (isinstance(self.coats, (int, float)) and not isinstance(self.coats, bool)
+                and math.isfinite(self.coats) and 1.0 <= self.coats <= 1e6):
+            raise ConfigError(f"coats must be a number in 1..1e6, got {self.coats!r}")
         if not (math.isfinite(self.halo_lengths) and 4.0 <= self.halo_lengths <= 40.0):
             raise ConfigError(f"halo_lengths must be in 4..40, got {self.halo_lengths!r}")
         if not 10_000 <= int(self.window_cells) <= 2_000_000_000:
@@ -787,8 +799,9 @@ def _film_h0(lev: LevelOptions, samples) -> tuple[float, str] | None:
     wet = np.concatenate(samples) if samples else np.zeros(0)
     if not wet.size:
         return None
-    h0 = float(np.percentile(wet, lev.h0_percentile))
-    return (h0, f"p{lev.h0_percentile:g} of the as-landed wet interior film") if h0 > 0.0 else None
+    h0 = float(np.percentile(wet, lev.h0_percentile)) / lev.coats
+    rule = f"p{lev.h0_percentile:g} of the as-landed wet interior film" + (f" / {lev.coats:g} coats" if lev.coats != 1 else "")
+    return (h0, rule) if h0 > 0.0 else None
 
 
 def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows, interior, landed_rows, keep_map):
