@@ -37,6 +37,11 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   inside its owned band, and a pass prints with the nozzles whose moved track lies in the band
   (:func:`~rotoprint.rotary.swathes.pass_enabled`). Every pass then prints the design's inner
   edge and both sides of every seam, each radius with one swathe per pass (no doubled volume).
+- Dead nozzles (``spread_dead``, on by default): :func:`pass_prints` plans the swathes with an
+  overlap of :data:`DEAD_SPREAD_PERIODS` row periods and :func:`plan_passes` may then shift the
+  passes by whole row pitches, so that a dead nozzle's missing tracks (one per pass) lie apart
+  instead of side by side; kept only where the largest gap stays within
+  :data:`DEAD_GAP_TOLERANCE` (at tilt 0; a tilted head's interleave changes with whole shifts).
 
 Both are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``): the
 interior closes at every tilt; the thinnest point stays below half the mean at tilted settings
@@ -63,7 +68,7 @@ from .swathes import SwathePlan, pass_enabled
 from .equalise import (EQUALISE_CLOCK_FACTOR, EQUALISE_FLOOR, EQUALISE_ITERATIONS, EQUALISE_MIN_SHARE,  # noqa: F401
                        EQUALISE_TARGET_PERCENTILE, GREY_FLOOR, ReachFloor, thin_print, track_fractions)
 
-__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
+__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "DEAD_SPREAD_PERIODS", "DEAD_GAP_TOLERANCE", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
 
 #: A tilt interleaves evenly when its largest track gap is at most this times the mean gap.
 EVEN_RATIO = 1.25
@@ -300,7 +305,11 @@ def plan_passes(
         Nozzles and native clock; its ``dead_nozzles`` unless ``dead_nozzles`` is given.
     plan : SwathePlan
         The swathes of pass 0 (:func:`~rotoprint.rotary.plan_swathes`); its radial range is
-        the range the union is judged over.
+        the range the union is judged over. With dead nozzles and an ``overlap_mm`` wider than
+        one row period (:func:`pass_overlap_mm` ``(head, dead_spread=True)``) the offsets may
+        span that overlap: whole row-pitch shifts between the passes are tried so that a dead
+        nozzle's missing tracks lie apart (kept when the largest gap stays within
+        :data:`DEAD_GAP_TOLERANCE` of the best plan's).
     footprint_um : float
         Footprint diameter of a drop (:mod:`rotoprint.rotary.deposit`).
     passes : int, optional
