@@ -75,7 +75,8 @@ def model_bins(head, pl: Placement, man: dict, tilt: float, d_um: float, nbins: 
     from rotoprint.rotary.swathes import pass_enabled
 
     r_in, r_out = pl.radial_range_mm()
-    sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
+    sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out,
+                      overlap_mm=man["pass_plan"]["swathe_overlap_mm"])
     offs = man["pass_plan"]["offsets_mm"]
     from rotoprint.rotary.equalise import EQUALISE_CLOCK_FACTOR, ReachFloor
     from rotoprint.rotary.interlace import COVER_SHARE

@@ -37,6 +37,11 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   inside its owned band, and a pass prints with the nozzles whose moved track lies in the band
   (:func:`~rotoprint.rotary.swathes.pass_enabled`). Every pass then prints the design's inner
   edge and both sides of every seam, each radius with one swathe per pass (no doubled volume).
+- Dead nozzles (``spread_dead``, on by default): :func:`pass_prints` plans the swathes with an
+  overlap of :data:`DEAD_SPREAD_PERIODS` row periods and :func:`plan_passes` may then shift the
+  passes by whole row pitches, so that a dead nozzle's missing tracks (one per pass) lie apart
+  instead of side by side; kept only where the largest gap stays within
+  :data:`DEAD_GAP_TOLERANCE` (at tilt 0; a tilted head's interleave changes with whole shifts).
 
 Both are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``): the
 interior closes at every tilt; the thinnest point stays below half the mean at tilted settings
@@ -46,6 +51,7 @@ pinholes between the passes' drops, with no steady gain).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -62,7 +68,7 @@ from .swathes import SwathePlan, pass_enabled
 from .equalise import (EQUALISE_CLOCK_FACTOR, EQUALISE_FLOOR, EQUALISE_ITERATIONS, EQUALISE_MIN_SHARE,  # noqa: F401
                        EQUALISE_TARGET_PERCENTILE, GREY_FLOOR, ReachFloor, thin_print, track_fractions)
 
-__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
+__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "DEAD_SPREAD_PERIODS", "DEAD_GAP_TOLERANCE", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
 
 #: A tilt interleaves evenly when its largest track gap is at most this times the mean gap.
 EVEN_RATIO = 1.25
@@ -86,6 +92,17 @@ _PROFILE_STEP_MM = 0.002
 _LOCAL_MEAN_MM = 0.25
 #: Largest gaps within this of each other count as equal (then the profile decides), um.
 _GAP_QUANTUM_UM = 0.25
+#: With dead nozzles the passes' offsets may span this many row periods (and the swathes are
+#: planned with that overlap, :func:`pass_overlap_mm`): whole-pitch shifts between the passes
+#: then put the passes' missing tracks (one per dead nozzle and pass, at ``r_k + delta_q``)
+#: several pitches apart, each a single missing track among live ones, instead of side by side
+#: within one row period (measured at tilt 0: there the 4 passes paired up, 2 x 2 coinciding,
+#: and the 4 missing tracks of a dead nozzle lay within 106 um, a ring the equalisation could
+#: not fill).
+DEAD_SPREAD_PERIODS = 4
+#: With spread dead tracks, largest gaps within this share of the smallest found count as equal
+#: (then the film profile decides; see :func:`plan_passes`).
+DEAD_GAP_TOLERANCE = 0.05
 
 
 @dataclass(frozen=True)
@@ -155,10 +172,11 @@ def best_tilt(rows: Sequence[TiltRow]) -> TiltRow | None:
     return min(even, key=lambda r: (r.mean_pitch_mm, r.largest_gap_mm)) if even else None
 
 
-def pass_overlap_mm(head: InkjetHead) -> float:
+def pass_overlap_mm(head: InkjetHead, *, dead_spread: bool = False) -> float:
     """The swathe overlap interlaced passes are planned with: the span of their offsets (one
-    row period, ``rows * pitch``), so every pass covers the design's edges and the seams."""
-    return float(head.rows * head.pitch_mm)
+    row period, ``rows * pitch``; :data:`DEAD_SPREAD_PERIODS` of them with ``dead_spread``), so
+    every pass covers the design's edges and the seams."""
+    return float(head.rows * head.pitch_mm) * (DEAD_SPREAD_PERIODS if dead_spread else 1)
 
 
 def _pass_radii(head: InkjetHead, plan: SwathePlan, live: np.ndarray) -> list[np.ndarray]:
@@ -287,7 +305,11 @@ def plan_passes(
         Nozzles and native clock; its ``dead_nozzles`` unless ``dead_nozzles`` is given.
     plan : SwathePlan
         The swathes of pass 0 (:func:`~rotoprint.rotary.plan_swathes`); its radial range is
-        the range the union is judged over.
+        the range the union is judged over. With dead nozzles and an ``overlap_mm`` wider than
+        one row period (:func:`pass_overlap_mm` ``(head, dead_spread=True)``) the offsets may
+        span that overlap: whole row-pitch shifts between the passes are tried so that a dead
+        nozzle's missing tracks lie apart (kept when the largest gap stays within
+        :data:`DEAD_GAP_TOLERANCE` of the best plan's).
     footprint_um : float
         Footprint diameter of a drop (:mod:`rotoprint.rotary.deposit`).
     passes : int, optional
@@ -358,6 +380,9 @@ def plan_passes(
     d_mm = footprint_um * 1e-3
     a_mm = 0.5 * d_mm
     period = head.rows * head.pitch_mm  # the tracks of one row repeat after about this
+    # the offsets' range: one row period, or with dead nozzles and a swathe overlap that allows
+    # it (pass_overlap_mm(head, dead_spread=True)) several, to spread the missing tracks apart
+    span = max(period, float(plan.overlap_mm)) if dead and plan.overlap_mm > period + 1e-12 else period
     grid0 = lo + a_mm
     n_grid = max(2, int(math.floor((hi - a_mm - grid0) / _PROFILE_STEP_MM)) + 1)
     refs = [sw.last_track_mm for sw in plan.swathes]
@@ -370,6 +395,16 @@ def plan_passes(
         return cache[key]
 
     win = max(1, int(round(_LOCAL_MEAN_MM / _PROFILE_STEP_MM)))
+
+    def ripple(t: np.ndarray) -> np.ndarray:
+        """Mean squared deviation of the profile from its local mean, rows ``(C, G)``: passes
+        paired over each other ripple at twice the pitch everywhere (below the shortfall
+        target of :func:`score`, yet their drops leave pinholes along the track)."""
+        c = np.cumsum(np.pad(t, ((0, 0), (1, 0))), axis=1)
+        i = np.arange(t.shape[1])
+        lo_i, hi_i = np.maximum(0, i - win), np.minimum(t.shape[1], i + win + 1)
+        local = (c[:, hi_i] - c[:, lo_i]) / (hi_i - lo_i)
+        return np.mean((t / np.maximum(local, 1e-300) - 1.0) ** 2, axis=1)
 
     def score(t: np.ndarray) -> np.ndarray:
         """Shortfall of the profile below PROFILE_TARGET x its local mean (over _LOCAL_MEAN_MM:
@@ -405,14 +440,16 @@ def plan_passes(
                 best, best_key = offs, key
         return best
 
-    def descend(offs: list[float]) -> list[float]:
+    def descend(offs: list[float], base: Sequence[float] | None = None) -> list[float]:
+        """Coordinate descent of pass q's offset over one row period (from ``base[q]``, default 0)."""
         n = len(offs)
         coarse = np.linspace(0.0, period, _CANDIDATES, endpoint=False)
         step = period / _CANDIDATES
+        b0 = [0.0] * n if base is None else [float(b) for b in base]
         for rnd in range(_ROUNDS + 1 if n > 1 else 0):
             for q in range(1, n):
                 # rounds over the whole row period, then one finer round about each offset
-                cand = coarse if rnd < _ROUNDS else np.mod(offs[q] + np.linspace(-step, step, 33), period)
+                cand = b0[q] + (coarse if rnd < _ROUNDS else np.mod(offs[q] - b0[q] + np.linspace(-step, step, 33), period))
                 rest = np.concatenate([radii(offs[p])[0] for p in range(n) if p != q])
                 r = np.concatenate([np.broadcast_to(rest, (cand.size, rest.size)), radii(cand)], axis=1)
                 gmax, _ = _gap_score(r, lo, hi)
@@ -430,6 +467,52 @@ def plan_passes(
         r = np.concatenate([radii(o)[0] for o in offs])[None, :]
         return float(_gap_score(r, lo, hi)[0][0])
 
+    def row_pitch() -> float:
+        """Median radial spacing of neighbouring tracks of one row (swathe 0, offset 0), mm."""
+        from .head import nozzle_offsets
+
+        row = nozzle_offsets(head)[2]
+        r = np.hypot(*nozzle_layout(head, plan.mount(0)).xy_mm.T)
+        d = [np.diff(np.sort(r[row == k])) for k in range(head.rows)]
+        return float(np.median(np.concatenate(d)))
+
+    def spread_dead(offs: list[float]) -> list[float]:
+        """With dead nozzles and offsets allowed over ``span`` (several row periods): the
+        fractions the passes would take without dead nozzles, each pass shifted by a whole
+        number of a row's pitches ``m_q`` (every combination within ``span``; the same for the
+        even split of the track pitch), so that a dead nozzle's
+        missing tracks (one per pass) lie apart; judged with ``offs`` (planned within one row
+        period) by the largest gap, gaps within :data:`DEAD_GAP_TOLERANCE` of the smallest
+        counting as equal, then by the distance between the passes' offsets (the missing tracks
+        of one dead nozzle: the widest within 10 %), then by the film profile's ripple
+        (:func:`ripple`)."""
+        n = len(offs)
+        # the whole shift: one nozzle of a row (its tracks are evenly spaced, the rows' not)
+        unit = row_pitch()
+        free = plan_passes(head, plan, footprint_um=footprint_um, passes=n, dead_nozzles=(), cover_share=cover_share)
+        combos = [list(offs)]
+        for base in (free.offsets_mm, [q * pitch / n for q in range(n)]):
+            frac = [float(o) % unit for o in base]
+            shifts = [[frac[q] + m * unit for m in range(int((span - frac[q]) // unit) + 1)] for q in range(1, n)]
+            combos += [[0.0, *c] for c in itertools.product(*shifts)]
+        # a tilted head's tracks do not all move by the pivot's shift (those off the mount's
+        # radial line move less), so whole shifts change the interleave: descend again within
+        # one row period about the widest whole shifts, from the free plan's fractions
+        m = max(1, int(span / unit) // n)
+        at = [q * m * unit for q in range(n)]
+        if at[-1] + period <= span + 1e-9:
+            frac = [float(o) % period for o in free.offsets_mm]
+            combos.append(descend([w + f for w, f in zip(at, frac)], base=at))
+        gaps = np.array([round(largest_gap(c) * 1e3 / _GAP_QUANTUM_UM) for c in combos], np.float64)
+        ok = np.flatnonzero(gaps <= gaps.min() * (1.0 + DEAD_GAP_TOLERANCE))
+        # the passes' missing tracks of one dead nozzle lie |delta_q - delta_q'| apart: as far as
+        # the span allows (within 10 % of the widest), so each is one missing track among live
+        # ones whose shares can make it up
+        sep = np.array([min(abs(a - b) for a, b in itertools.combinations(combos[i], 2)) for i in ok])
+        ok = ok[sep >= 0.9 * sep.max()]
+        pen = ripple(np.stack([sum((profile(o) for o in combos[i]), np.zeros(n_grid)) for i in ok]))
+        return combos[int(ok[int(np.argmin(pen))])]
+
     if passes is not None:
         offs = optimise(int(passes))
         gmax = largest_gap(offs)
@@ -439,6 +522,9 @@ def plan_passes(
             gmax = largest_gap(offs)
             if gmax <= cover_share * d_mm / math.sqrt(2):
                 break
+    if span > period and len(offs) > 1:
+        offs = spread_dead(offs)
+        gmax = largest_gap(offs)
     t_union = sum((profile(o) for o in offs), np.zeros(n_grid))
     profile_ratio = float(t_union.min() / t_union.mean()) if t_union.mean() > 0 else 0.0
     union = np.concatenate([radii(o)[0] for o in offs])
@@ -644,6 +730,12 @@ class PassOptions:
         Swathes planned with an overlap of :func:`pass_overlap_mm`, so that every pass prints
         the design's edges and the seams (less of the boundary band uncovered: 1.80 -> 0.35 %
         at tilt 0). Off by default (see ``phases``).
+    spread_dead : bool
+        With dead nozzles (and more than one pass): the passes' offsets may span
+        :data:`DEAD_SPREAD_PERIODS` row periods, with the swathes planned with that overlap
+        (:func:`pass_overlap_mm` ``(dead_spread=True)``, as ``edge_overlap`` does), so that a
+        dead nozzle's missing tracks (one per pass) lie apart. On by default; False plans
+        the offsets within one row period (as before).
     """
 
     setup: RotarySetup
@@ -653,6 +745,7 @@ class PassOptions:
     balance: bool = False
     phases: bool = False
     edge_overlap: bool = False
+    spread_dead: bool = True
 
     def __post_init__(self) -> None:
         parse_passes(self.passes)
@@ -748,12 +841,21 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     st = options.setup
     n = parse_passes(options.passes)
     r_in, r_out = placement.radial_range_mm()
-    overlap = pass_overlap_mm(head) if options.edge_overlap else 0.0
+    spread = bool(options.spread_dead and head.dead_nozzles and n != 1)
+    overlap = pass_overlap_mm(head, dead_spread=spread) if (options.edge_overlap or spread) else 0.0
     sp = plan_swathes(head, tilt_deg=st.tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
                       mount_angle_deg=st.mount_angle_deg, direction=st.direction, max_swathes=st.max_swathes,
                       overlap_mm=overlap)
     d_um = DepositOptions(footprint_um=options.footprint_um).full_footprint_um(head)
     pp = plan_passes(head, sp, footprint_um=d_um, passes=n, phases=options.phases)
+    if spread and max(pp.offsets_mm) <= head.rows * head.pitch_mm:
+        # the passes' missing tracks could not be spread (a tilted head: whole shifts change
+        # the interleave, and the gaps they leave are wider): plan as without the spread
+        overlap = pass_overlap_mm(head) if options.edge_overlap else 0.0
+        sp = plan_swathes(head, tilt_deg=st.tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
+                          mount_angle_deg=st.mount_angle_deg, direction=st.direction, max_swathes=st.max_swathes,
+                          overlap_mm=overlap)
+        pp = plan_passes(head, sp, footprint_um=d_um, passes=n, phases=options.phases)
     clock = pp.dpi_y if st.dpi_y is None else float(st.dpi_y)
     fracs = None
     equalise = options.equalise
