@@ -3,13 +3,21 @@
 The bundled examples' builds take 10-30 s each, so the tests that only read a build share
 one per session (:func:`coil_build`, :func:`gas_build`, :func:`coil_demo`); their files are
 made read-only so that a test that would change them fails instead (copy what you change).
+
+Under pytest-xdist (``make test`` runs ``pytest -n 2 --dist loadgroup``) a shared build is
+still made once per run: the first worker that needs it builds it under a file lock in the
+run's common temporary folder, the others wait and read it (:func:`_once_per_run`). The tests
+that use a shared build are put in one xdist group, scheduled first, so that one worker makes
+and reads them while the other runs the rest (:func:`pytest_collection_modifyitems`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import io
+import json
 import os
+import shutil
 import stat
 from dataclasses import dataclass
 from pathlib import Path
@@ -97,21 +105,71 @@ def _set_writable(top: Path, writable: bool) -> None:
         p.chmod((mode | stat.S_IWUSR) if writable else (mode & ~w))
 
 
+#: the session fixtures whose tests form one xdist group (one worker makes and reads them)
+SHARED_BUILDS = ("coil_build", "gas_build", "coil_demo")
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Put the tests that read a shared build in the xdist group ``builds`` and first in the
+    run (the group is the longest chain: scheduled first, it overlaps everything else)."""
+    uses = [any(f in SHARED_BUILDS for f in getattr(it, "fixturenames", ())) for it in items]
+    for it, u in zip(items, uses):
+        if u:
+            it.add_marker(pytest.mark.xdist_group("builds"))
+    if config.pluginmanager.hasplugin("xdist") and getattr(config.option, "numprocesses", None):
+        items[:] = [it for it, u in zip(items, uses) if u] + [it for it, u in zip(items, uses) if not u]
+
+
+def _once_per_run(tmp_path_factory, name: str, make) -> CliBuild:
+    """``make(root)`` -> CliBuild, once per run even across pytest-xdist workers.
+
+    Without xdist: in a fresh ``tmp_path_factory`` folder. Under xdist: in ``name`` of the
+    run's common temporary folder (the workers' basetemp's parent), under an exclusive
+    ``fcntl`` lock; the first worker builds and writes ``name.json`` (the CliBuild's fields),
+    the others wait on the lock and read it. The folder is made read-only once built."""
+    if os.environ.get("PYTEST_XDIST_WORKER") is None:
+        root = tmp_path_factory.mktemp(name)
+        b = make(root)
+        _set_writable(root, False)
+        return b
+    import fcntl
+
+    common = tmp_path_factory.getbasetemp().parent
+    root, record = common / name, common / f"{name}.json"
+    with open(common / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if record.exists():
+            d = json.loads(record.read_text())
+            return CliBuild(**{k: Path(v) if k in ("root", "job", "out") else tuple(v) if k == "args" else v
+                               for k, v in d.items()})
+        if root.exists():  # a worker that failed to build before: build again from scratch
+            _set_writable(root, True)
+            shutil.rmtree(root)
+        root.mkdir()
+        b = make(root)
+        _set_writable(root, False)
+        record.write_text(json.dumps({k: str(v) if isinstance(v, Path) else v for k, v in b.__dict__.items()}))
+        return b
+
+
 def _example_build(tmp_path_factory, example: str, *args: str):
     """``rotoprint build job/EXAMPLE.toml --out build ARGS`` in a fresh working folder, with
     SOURCE_DATE_EPOCH set; the folder is read-only while the tests read it."""
     from rotoprint.pipeline.examples import write_example
 
-    root = tmp_path_factory.mktemp(example)
-    with _in_folder(root, SOURCE_DATE_EPOCH=SOURCE_DATE_EPOCH):
-        job = write_example(example, Path("job"))
-        argv = ("build", str(job), "--out", "build", *args)
-        code, out, err = call_cli(*argv)
-    _set_writable(root, False)
+    def make(root: Path) -> CliBuild:
+        with _in_folder(root, SOURCE_DATE_EPOCH=SOURCE_DATE_EPOCH):
+            job = write_example(example, Path("job"))
+            argv = ("build", str(job), "--out", "build", *args)
+            code, out, err = call_cli(*argv)
+        return CliBuild(root=root, job=root / job, out=root / "build", code=code, stdout=out, stderr=err, args=argv)
+
+    b = _once_per_run(tmp_path_factory, example, make)
     try:
-        yield CliBuild(root=root, job=root / job, out=root / "build", code=code, stdout=out, stderr=err, args=argv)
+        yield b
     finally:
-        _set_writable(root, True)
+        _set_writable(b.root, True)
 
 
 @pytest.fixture(scope="session")
@@ -131,15 +189,17 @@ def gas_build(tmp_path_factory):
 def coil_demo(tmp_path_factory):
     """``rotoprint demo --out DIR`` (the coil sensor with its check): a CliBuild whose ``out``
     is DIR/build."""
-    root = tmp_path_factory.mktemp("demo")
-    argv = ("demo", "--out", str(root / "d"))
-    code, out, err = call_cli(*argv)
-    _set_writable(root, False)
+    def make(root: Path) -> CliBuild:
+        argv = ("demo", "--out", str(root / "d"))
+        code, out, err = call_cli(*argv)
+        return CliBuild(root=root, job=root / "d" / "job" / "coil-sensor.toml", out=root / "d" / "build", code=code,
+                        stdout=out, stderr=err, args=argv)
+
+    b = _once_per_run(tmp_path_factory, "demo", make)
     try:
-        yield CliBuild(root=root, job=root / "d" / "job" / "coil-sensor.toml", out=root / "d" / "build", code=code,
-                       stdout=out, stderr=err, args=argv)
+        yield b
     finally:
-        _set_writable(root, True)
+        _set_writable(b.root, True)
 
 
 __all__ = ["CliRunner", "ROOT", "SHARED_MESHES", "CliBuild", "call_cli"]
