@@ -6,9 +6,10 @@ made read-only so that a test that would change them fails instead (copy what yo
 
 Under pytest-xdist (``make test`` runs ``pytest -n 2 --dist loadgroup``) a shared build is
 still made once per run: the first worker that needs it builds it under a file lock in the
-run's common temporary folder, the others wait and read it (:func:`_once_per_run`). The tests
-that use a shared build are put in one xdist group, scheduled first, so that one worker makes
-and reads them while the other runs the rest (:func:`pytest_collection_modifyitems`).
+run's common temporary folder, the others wait and read it (:func:`_once_per_run`). With
+``--dist loadgroup`` the tests that use a shared build are one unit of work, scheduled first,
+so that one worker makes and reads them while the other runs the rest
+(:func:`pytest_xdist_make_scheduler`).
 """
 
 from __future__ import annotations
@@ -105,20 +106,65 @@ def _set_writable(top: Path, writable: bool) -> None:
         p.chmod((mode | stat.S_IWUSR) if writable else (mode & ~w))
 
 
-#: the session fixtures whose tests form one xdist group (one worker makes and reads them)
+#: the session fixtures whose tests form one unit of work under xdist (one worker makes and reads them)
 SHARED_BUILDS = ("coil_build", "gas_build", "coil_demo")
 
 
-@pytest.hookimpl(tryfirst=True)
+def _uses_shared_build(item) -> bool:
+    return any(f in SHARED_BUILDS for f in getattr(item, "fixturenames", ()))
+
+
+def _group_file(config) -> Path:
+    """(controller) where the workers list the tests that read a shared build."""
+    if not hasattr(config, "_rotoprint_group_dir"):
+        import tempfile
+
+        config._rotoprint_group_dir = Path(tempfile.mkdtemp(prefix="rotoprint-xdist-"))
+    return config._rotoprint_group_dir / "shared-build-tests.json"
+
+
+def pytest_unconfigure(config):
+    d = getattr(config, "_rotoprint_group_dir", None)
+    if d is not None:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_configure_node(node):
+    """(xdist controller) each worker is told where to list the tests of the group."""
+    node.workerinput["rotoprint_group_file"] = str(_group_file(node.config))
+
+
 def pytest_collection_modifyitems(config, items):
-    """Put the tests that read a shared build in the xdist group ``builds`` and first in the
-    run (the group is the longest chain: scheduled first, it overlaps everything else)."""
-    uses = [any(f in SHARED_BUILDS for f in getattr(it, "fixturenames", ())) for it in items]
-    for it, u in zip(items, uses):
-        if u:
-            it.add_marker(pytest.mark.xdist_group("builds"))
-    if config.pluginmanager.hasplugin("xdist") and getattr(config.option, "numprocesses", None):
-        items[:] = [it for it, u in zip(items, uses) if u] + [it for it, u in zip(items, uses) if not u]
+    """(xdist worker) list the node ids of the tests that use a shared build, for the
+    controller's scheduler (every worker collects the same tests and writes the same list)."""
+    where = getattr(config, "workerinput", {}).get("rotoprint_group_file")
+    if where:
+        tmp = Path(f"{where}.{os.getpid()}")
+        tmp.write_text(json.dumps([it.nodeid for it in items if _uses_shared_build(it)]))
+        os.replace(tmp, where)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup``: the tests that use a shared build are one unit of work, sent to
+    one worker first (the largest unit goes first), every other test its own unit. (xdist's
+    own ``xdist_group`` marks rename node ids, which pytest 9.2 no longer allows.)"""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    listed = _group_file(config)
+
+    class SharedBuildsTogether(LoadScopeScheduling):
+        _group: set[str] | None = None
+
+        def _split_scope(self, nodeid: str) -> str:
+            if self._group is None:
+                self._group = set(json.loads(listed.read_text())) if listed.exists() else set()
+            return "shared builds" if nodeid in self._group else nodeid
+
+    return SharedBuildsTogether(config, log)
 
 
 def _once_per_run(tmp_path_factory, name: str, make) -> CliBuild:
