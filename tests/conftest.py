@@ -131,8 +131,23 @@ def pytest_unconfigure(config):
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_configure_node(node):
-    """(xdist controller) each worker is told where to list the tests of the group."""
-    node.workerinput["rotoprint_group_file"] = str(_group_file(node.config))
+    """(xdist controller) each worker is told where to list the tests of the group, and where
+    the workers' jit compile locks are."""
+    listed = _group_file(node.config)
+    (listed.parent / "jit-locks").mkdir(exist_ok=True)
+    node.workerinput["rotoprint_group_file"] = str(listed)
+    node.workerinput["rotoprint_jit_locks"] = str(listed.parent / "jit-locks")
+
+
+def pytest_configure(config):
+    """(xdist worker) a jit kernel that is not in the disk cache yet (the tests' own reference
+    kernels in a fresh clone, a signature the warm-up did not touch) is compiled by one worker
+    while the other waits and then loads it from the cache (rotoprint._warmup.share_compiles)."""
+    locks = getattr(config, "workerinput", {}).get("rotoprint_jit_locks")
+    if locks:
+        from rotoprint._warmup import share_compiles
+
+        share_compiles(locks)
 
 
 def pytest_collection_modifyitems(config, items):
