@@ -25,14 +25,15 @@ from rotoprint.errors import RotoprintError
 from rotoprint.io.mesh import load_mesh
 from rotoprint.testing import box_mesh
 
-#: wall-clock bound of one load (the alarm), and the allocation bound
-TIME_LIMIT_S = 10
+#: wall-clock hang guard of one load (the alarm; generous: the suite runs on loaded machines,
+#: and speed targets live in bench/), and the allocation bound
+TIME_LIMIT_S = 60
 PEAK_LIMIT_BYTES = 256 * 2**20
 
 #: ROTOPRINT_FUZZ_EXAMPLES=5000 runs a longer, randomised campaign (the suite's default is small
 #: and derandomised so that it is fast and repeatable)
 _N = int(os.environ.get("ROTOPRINT_FUZZ_EXAMPLES", "40"))
-SETTINGS = settings(max_examples=_N, deadline=5000, derandomize="ROTOPRINT_FUZZ_EXAMPLES" not in os.environ,
+SETTINGS = settings(max_examples=_N, deadline=None, derandomize="ROTOPRINT_FUZZ_EXAMPLES" not in os.environ,
                     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 

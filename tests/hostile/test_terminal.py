@@ -41,7 +41,7 @@ def test_non_utf8_file_name_is_printed_escaped(tmp_path):
     raw = os.fsencode(tmp_path) + b"/caf\xe9.stl"
     with open(raw, "wb") as fh:  # noqa: PTH123 - a bytes path on purpose
         fh.write(b"garbage")
-    proc = subprocess.run([sys.executable, "-m", "rotoprint.cli.main", "info", raw], capture_output=True, timeout=20)
+    proc = subprocess.run([sys.executable, "-m", "rotoprint.cli.main", "info", raw], capture_output=True, timeout=120)  # a hang guard
     err = proc.stderr.decode("utf-8")  # valid UTF-8: the odd byte is shown as \udce9
     assert proc.returncode == 2 and len(err.strip().splitlines()) == 1 and "Traceback" not in err, err
     assert "caf\\udce9.stl" in err
