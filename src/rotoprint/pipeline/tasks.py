@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -149,6 +150,12 @@ def _coverage_window(job, index: int, options) -> Rendered | None:
     r0, c0, win, tail = coverage_window(s, e, shape)
     if tail is not None:  # the rows right of the window are not black: general path
         return None
+    key = (id(job), r0, c0, win.shape, tuple(shape), options.mirror_x, options.mirror_y)
+    last = getattr(_LAST_WINDOW, "entry", None)
+    if last is not None and last[0] == key and np.array_equal(last[1], win):
+        # the same pixels as this thread's last layer (a prism's walls): the same PNG bytes
+        png, sums, crop = last[2]
+        return Rendered(index, {mask_name(index): png}, {"plain_sums": list(sums)}, crop)
     rows = np.flatnonzero(win.any(axis=1))
     crop = None
     if rows.size:
@@ -156,7 +163,15 @@ def _coverage_window(job, index: int, options) -> Rendered | None:
         crop = (r0 + int(rows[0]), c0 + int(cols[0]),
                 np.ascontiguousarray(win[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]))
     png = png_bytes_window(win, shape, r0, c0, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
-    return Rendered(index, {mask_name(index): png}, {"plain_sums": [int(win.sum(dtype=np.uint64))]}, crop)
+    sums = (int(win.sum(dtype=np.uint64)),)
+    # kept for the next layer this thread makes (the window is compared whole, so equal bytes
+    # mean equal pixels); the job (per thread) is held so that its id is not reused meanwhile
+    _LAST_WINDOW.entry = (key, win, (png, sums, crop), job)
+    return Rendered(index, {mask_name(index): png}, {"plain_sums": list(sums)}, crop)
+
+
+#: per thread: the last coverage window made, its PNG, plain sum and footprint crop
+_LAST_WINDOW = threading.local()
 
 
 @dataclass(frozen=True)
