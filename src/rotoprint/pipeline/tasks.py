@@ -156,14 +156,12 @@ def _coverage_window(job, index: int, options) -> Rendered | None:
         # the same pixels as this thread's last layer (a prism's walls): the same PNG bytes
         png, sums, crop = last[2]
         return Rendered(index, {mask_name(index): png}, {"plain_sums": list(sums)}, crop)
-    rows = np.flatnonzero(win.any(axis=1))
+    total, (a, b, c, d) = _window_stats(win)
     crop = None
-    if rows.size:
-        cols = np.flatnonzero(win.any(axis=0))
-        crop = (r0 + int(rows[0]), c0 + int(cols[0]),
-                np.ascontiguousarray(win[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]))
+    if b > a:
+        crop = (r0 + a, c0 + c, np.ascontiguousarray(win[a:b, c:d]))
     png = png_bytes_window(win, shape, r0, c0, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
-    sums = (int(win.sum(dtype=np.uint64)),)
+    sums = (total,)
     # kept for the next layer this thread makes (the window is compared whole, so equal bytes
     # mean equal pixels); the job (per thread) is held so that its id is not reused meanwhile
     _LAST_WINDOW.entry = (key, win, (png, sums, crop), job)
@@ -172,6 +170,21 @@ def _coverage_window(job, index: int, options) -> Rendered | None:
 
 #: per thread: the last coverage window made, its PNG, plain sum and footprint crop
 _LAST_WINDOW = threading.local()
+
+
+def _window_stats(win: np.ndarray) -> tuple[int, tuple[int, int, int, int]]:
+    """The grey sum of ``win`` ``(hh, ww) uint8`` and the rows ``a:b`` and columns ``c:d``
+    holding its non-zero pixels (``b == a`` when there are none); one pass in C."""
+    from .._accel import native
+
+    if native is not None:
+        total, a, b, c, d = native.window_stats(np.ascontiguousarray(win), *win.shape)
+        return int(total), (a, b, c, d)
+    rows = np.flatnonzero(win.any(axis=1))
+    if not rows.size:
+        return 0, (0, 0, 0, 0)
+    cols = np.flatnonzero(win.any(axis=0))
+    return int(win.sum(dtype=np.uint64)), (int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1)
 
 
 @dataclass(frozen=True)
