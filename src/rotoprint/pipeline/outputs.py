@@ -15,7 +15,7 @@ import numpy as np
 from ..io.atomic import MANIFEST_NAME, OutputClaim, disk_full
 from .journal import LayerPlan, write_journalled
 from .producer import RunOptions
-from .tasks import MaskLayer, MeshJob, PlainLayer, RotaryLayer, layer_source
+from .tasks import MaskLayer, MeshJob, PlainLayer, RotaryLayer, forget_last_window, layer_source
 
 __all__ = ["write_layer_folder", "write_dlp_job", "write_rotary_slices"]
 
@@ -175,8 +175,11 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
             partial.discard()
             return summary
 
-        return write_journalled(out, plan, run, finish=finish, on_layer=on_layer, on_result=on_result,
-                                on_resumed=on_resumed)
+        try:
+            return write_journalled(out, plan, run, finish=finish, on_layer=on_layer, on_result=on_result,
+                                    on_resumed=on_resumed)
+        finally:
+            forget_last_window()
 
 
 def write_rotary_slices(job, out_dir: str | Path, *, device_name: str, options: dict, mesh_info: dict | None = None,

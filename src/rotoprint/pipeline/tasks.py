@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -150,10 +149,11 @@ def _coverage_window(job, index: int, options) -> Rendered | None:
     r0, c0, win, tail = coverage_window(s, e, shape)
     if tail is not None:  # the rows right of the window are not black: general path
         return None
-    key = (id(job), r0, c0, win.shape, tuple(shape), options.mirror_x, options.mirror_y)
-    last = getattr(_LAST_WINDOW, "entry", None)
+    key = (r0, c0, win.shape, tuple(shape), options.mirror_x, options.mirror_y)
+    last = _LAST_WINDOW[0]  # (one read: another thread may replace it meanwhile)
     if last is not None and last[0] == key and np.array_equal(last[1], win):
-        # the same pixels as this thread's last layer (a prism's walls): the same PNG bytes
+        # the same pixels as the last layer made (a prism's walls): the PNG depends on the
+        # pixels, the image size and the mirroring only, so it is the same bytes
         png, sums, crop = last[2]
         return Rendered(index, {mask_name(index): png}, {"plain_sums": list(sums)}, crop)
     total, (a, b, c, d) = _window_stats(win)
@@ -162,14 +162,19 @@ def _coverage_window(job, index: int, options) -> Rendered | None:
         crop = (r0 + a, c0 + c, np.ascontiguousarray(win[a:b, c:d]))
     png = png_bytes_window(win, shape, r0, c0, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
     sums = (total,)
-    # kept for the next layer this thread makes (the window is compared whole, so equal bytes
-    # mean equal pixels); the job (per thread) is held so that its id is not reused meanwhile
-    _LAST_WINDOW.entry = (key, win, (png, sums, crop), job)
+    # kept for the next layer (the window is compared whole: equal arrays, equal pixels)
+    _LAST_WINDOW[0] = (key, win, (png, sums, crop))
     return Rendered(index, {mask_name(index): png}, {"plain_sums": list(sums)}, crop)
 
 
-#: per thread: the last coverage window made, its PNG, plain sum and footprint crop
-_LAST_WINDOW = threading.local()
+#: the last coverage window made in this process (by any thread), with its PNG, plain sum and
+#: footprint crop; replaced whole (one slot), emptied when a DLP job is written
+_LAST_WINDOW: list = [None]
+
+
+def forget_last_window() -> None:
+    """Drop the kept window (:func:`rotoprint.pipeline.outputs.write_dlp_job` calls this when done)."""
+    _LAST_WINDOW[0] = None
 
 
 def _window_stats(win: np.ndarray) -> tuple[int, tuple[int, int, int, int]]:
