@@ -225,6 +225,26 @@ def test_window_stats_match_numpy():
             assert native.window_stats(a, *a.shape) == (int(a.sum(dtype=np.uint64)), *box)
 
 
+def test_thumbnails_the_same_in_c_and_numpy(monkeypatch):
+    """thumb_rgb against thumbnail_png's numpy path, byte for byte: shrinking and growing on
+    either axis, binary and grey footprints, one-pixel ones."""
+    from rotoprint.io.formats._common import THUMBNAIL_SIZES, thumbnail_png
+
+    rng = np.random.default_rng(3)
+    feet = [np.full((1, 1), 7, np.uint8), np.full((900, 1), 200, np.uint8), np.full((1, 900), 255, np.uint8)]
+    for _ in range(12):
+        h, w = (int(v) for v in rng.integers(1, 1500, 2))
+        a = rng.integers(0, 256, (h, w), dtype=np.uint8) if rng.random() < 0.5 else (255 * (rng.random((h, w)) < 0.6)).astype(np.uint8)
+        feet.append(a)
+    for a in feet:
+        for size in THUMBNAIL_SIZES:
+            fast = thumbnail_png(a, size)
+            monkeypatch.setattr(accel, "native", None)
+            ref = thumbnail_png(a, size)
+            monkeypatch.setattr(accel, "native", native)
+            assert fast == ref, (a.shape, size)
+
+
 def test_equal_window_reused_only_for_equal_pixels(tmp_path):
     """Layers of a box with a cavity in its upper half have the same window (rows, columns,
     size) but not the same pixels: the PNG kept from the layer before is not reused for

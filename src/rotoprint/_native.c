@@ -10,6 +10,8 @@
  *                rounded so that the window's grey sum is the exact area to 1/2 level; made
  *                row by row (one row's accumulator in cache, not the window's).
  * - window_stats(): a window's grey sum and the bounding box of its non-zero pixels.
+ * - thumb_rgb():  a thumbnail's resized, coloured pixels (io/formats/_common.thumbnail_png's
+ *                operations in the same order).
  * - png_grey():  an 8-bit greyscale PNG of a mostly empty image given as a window at (r0, c0)
  *                of an otherwise black (H, W) image, optionally mirrored. Rows equal to the
  *                row above are filtered "Up" (all zero) and rows outside the window are zero:
@@ -295,6 +297,87 @@ native_window_stats(PyObject *self, PyObject *args)
     PyBuffer_Release(&W);
     if (r0 < 0) return Py_BuildValue("(Kllll)", total, 0L, 0L, 0L, 0L);
     return Py_BuildValue("(Kllll)", total, r0, r1, c0, c1);
+}
+
+/* ------------------------------------------------------------------------ thumbnails */
+
+/* thumb_rgb(crop uint8 (ch * cw), ch, cw, nh, nw, out uint8 (nh * nw * 3), c0r, c1r, c0g, c1g,
+ * c0b, c1b): io/formats/_common._area_resize of ``crop`` to (nh, nw) -- rows first, then
+ * columns; a box average over each output pixel's span of whole input pixels when
+ * shrinking (sums of doubles in index order, as numpy's add.reduceat, then divided by the
+ * span), the nearest input pixel when growing -- then each channel k
+ * rint(c0k + (c1k - c0k) * (g / 255.0)): thumbnail_png's operations, in the same order. */
+static PyObject *
+native_thumb_rgb(PyObject *self, PyObject *args)
+{
+    Py_buffer C, OUT;
+    long ch, cw, nh, nw;
+    int c0[3], c1[3];
+    if (!PyArg_ParseTuple(args, "y*llllw*iiiiii", &C, &ch, &cw, &nh, &nw, &OUT, &c0[0], &c1[0], &c0[1], &c1[1],
+                          &c0[2], &c1[2]))
+        return NULL;
+    if (ch <= 0 || cw <= 0 || nh <= 0 || nw <= 0 || C.len < (Py_ssize_t)ch * cw || OUT.len < (Py_ssize_t)nh * nw * 3) {
+        PyBuffer_Release(&C); PyBuffer_Release(&OUT);
+        PyErr_SetString(PyExc_ValueError, "thumb_rgb: buffers smaller than the sizes");
+        return NULL;
+    }
+    double *t = (double *)malloc((size_t)nh * (size_t)cw * sizeof(double));
+    double *line = (double *)malloc((size_t)nw * sizeof(double));
+    if (t == NULL || line == NULL) {
+        free(t); free(line);
+        PyBuffer_Release(&C); PyBuffer_Release(&OUT);
+        return PyErr_NoMemory();
+    }
+    const uint8_t *a = (const uint8_t *)C.buf;
+    uint8_t *out = (uint8_t *)OUT.buf;
+    Py_BEGIN_ALLOW_THREADS
+    /* rows */
+    for (long i = 0; i < nh; i++) {
+        double *ti = t + i * cw;
+        if (nh >= ch) {
+            long r = (long)(((long long)i * ch) / nh);
+            if (r > ch - 1) r = ch - 1;
+            for (long c = 0; c < cw; c++) ti[c] = (double)a[r * cw + c];
+        } else {
+            long e0 = (long)(((long long)i * ch + nh / 2) / nh);
+            long e1 = (long)(((long long)(i + 1) * ch + nh / 2) / nh);
+            for (long c = 0; c < cw; c++) ti[c] = (double)a[e0 * cw + c];
+            for (long r = e0 + 1; r < e1; r++)
+                for (long c = 0; c < cw; c++) ti[c] += (double)a[r * cw + c];
+            double n = (double)(e1 - e0);
+            for (long c = 0; c < cw; c++) ti[c] = ti[c] / n;
+        }
+    }
+    /* columns, then the colours */
+    for (long i = 0; i < nh; i++) {
+        const double *ti = t + i * cw;
+        for (long j = 0; j < nw; j++) {
+            if (nw >= cw) {
+                long c = (long)(((long long)j * cw) / nw);
+                if (c > cw - 1) c = cw - 1;
+                line[j] = ti[c];
+            } else {
+                long e0 = (long)(((long long)j * cw + nw / 2) / nw);
+                long e1 = (long)(((long long)(j + 1) * cw + nw / 2) / nw);
+                double sum = ti[e0];
+                for (long c = e0 + 1; c < e1; c++) sum += ti[c];
+                line[j] = sum / (double)(e1 - e0);
+            }
+        }
+        uint8_t *o = out + i * nw * 3;
+        for (long j = 0; j < nw; j++) {
+            double g = line[j] / 255.0;
+            for (int k = 0; k < 3; k++) {
+                double x = (double)(c1[k] - c0[k]) * g;
+                x = (double)c0[k] + x;
+                o[3 * j + k] = (uint8_t)rint(x);
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    free(t); free(line);
+    PyBuffer_Release(&C); PyBuffer_Release(&OUT);
+    Py_RETURN_NONE;
 }
 
 /* ------------------------------------------------------------------------ PNG */
@@ -985,6 +1068,7 @@ static PyMethodDef methods[] = {
     {"shell_labels", native_shell_labels, METH_VARARGS, "shell_labels(face_edges, n_edges, labels) -> n_shells"},
     {"section", native_section, METH_VARARGS, "section(V, F, FE, faces, z, start, end, se, ee)"},
     {"coverage", native_coverage, METH_VARARGS, "coverage(x0, y0, x1, y1, height, width, out, tail)"},
+    {"thumb_rgb", native_thumb_rgb, METH_VARARGS, "thumb_rgb(crop, ch, cw, nh, nw, out, c0r, c1r, c0g, c1g, c0b, c1b)"},
     {"window_stats", native_window_stats, METH_VARARGS, "window_stats(window, hh, ww) -> (sum, r0, r1, c0, c1)"},
     {"png_grey", native_png_grey, METH_VARARGS,
      "png_grey(window, width, height, r0, c0, hh, ww, mirror_x, mirror_y, level) -> bytes"},
