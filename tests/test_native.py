@@ -231,7 +231,8 @@ def test_thumbnails_the_same_in_c_and_numpy(monkeypatch):
     from rotoprint.io.formats._common import THUMBNAIL_SIZES, thumbnail_png
 
     rng = np.random.default_rng(3)
-    feet = [np.full((1, 1), 7, np.uint8), np.full((900, 1), 200, np.uint8), np.full((1, 900), 255, np.uint8)]
+    feet = [np.full((1, 1), 7, np.uint8), np.full((900, 1), 200, np.uint8), np.full((1, 900), 255, np.uint8),
+            rng.integers(0, 256, (37, 53), dtype=np.uint8), (255 * (rng.random((300, 310)) < 0.5)).astype(np.uint8)]
     for _ in range(12):
         h, w = (int(v) for v in rng.integers(1, 1500, 2))
         a = rng.integers(0, 256, (h, w), dtype=np.uint8) if rng.random() < 0.5 else (255 * (rng.random((h, w)) < 0.6)).astype(np.uint8)
