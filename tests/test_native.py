@@ -275,6 +275,34 @@ def test_equal_window_reused_only_for_equal_pixels(tmp_path):
         np.testing.assert_array_equal(a.mask(i), w)
 
 
+def test_archive_the_same_made_in_threads_or_in_the_calling_thread(tmp_path, monkeypatch):
+    """The layers after the samples are made by two render threads, or in the calling thread
+    when they are few or cheap (pipeline.journal.SMALL_REST_S): the same bytes either way."""
+    import zipfile
+
+    from rotoprint import load_device, slice_mesh
+    from rotoprint.io.archives import JobInfo
+    from rotoprint.masks import MaskOptions
+    from rotoprint.pipeline import journal, write_dlp_job
+
+    dev = load_device("prusa-sl1s")
+    job = slice_mesh(uv_sphere_mesh(2.0, 16, 32), dev, layer_height_mm=0.25)
+    p = dev.projector
+    info = JobInfo(job_name="t", layer_height_mm=0.25, layer_count=len(job), copies=1, width_px=job.grid.width,
+                   height_px=job.grid.height, pixel_x_mm=job.grid.pitch_x_mm, pixel_y_mm=job.grid.pitch_y_mm,
+                   mirror_x=True, mirror_y=False, orientation=p.orientation, exposure_s=2, first_exposure_s=20,
+                   first_exposure_layers=1, printer_model="SL1S")
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    made = {}
+    for name, limit_s in (("threads", 0.0), ("here", 1e9)):
+        monkeypatch.setattr(journal, "SMALL_REST_S", limit_s)
+        (tmp_path / name).mkdir()
+        write_dlp_job(job, tmp_path / name / "job.sl1s", info, MaskOptions(mirror_x=True))
+        with zipfile.ZipFile(tmp_path / name / "job.sl1s") as z:
+            made[name] = {n: z.read(n) for n in z.namelist()}
+    assert len(job) == 16 and made["threads"] == made["here"]
+
+
 def Mesh_box():
     from rotoprint.mesh import Mesh
 

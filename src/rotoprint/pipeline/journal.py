@@ -22,8 +22,8 @@ from .producer import LayerSource, Rendered, RunOptions, produce_layers, render_
 
 __all__ = ["LayerPlan", "write_journalled"]
 
-#: In-process runs: when the sample layers' mean time times the layers left is less than this
-#: (seconds), they are made in this thread: two render threads would each build the job
+#: In-process runs: when the median sample layer's CPU time times the layers left is less than
+#: this (seconds), they are made in this thread: two render threads would each build the job
 #: first (a few ms) for little to share (a 10-layer plate whose layers are all alike).
 SMALL_REST_S = 0.02
 
@@ -115,10 +115,13 @@ def _run_layers(plan: LayerPlan, partial: PartialOutput, run: RunOptions) -> Ite
     todo = array("q", (i for i in range(plan.n_layers) if i not in partial.done))  # 8 bytes a layer
     sample_idx = sorted({todo[0], todo[len(todo) // 2], todo[-1]}) if todo else []
     samples = {}
-    t0 = time.perf_counter()
+    took_s = []
     for i in sample_idx:
+        t0 = time.thread_time()  # (this thread's CPU: not the waits of a loaded machine)
         samples[i] = render_one(plan.source, i)
-    mean_s = (time.perf_counter() - t0) / max(1, len(sample_idx))
+        took_s.append(time.thread_time() - t0)
+    # the median sample: the first layer made in a process also pays one-time costs
+    typical_s = sorted(took_s)[len(took_s) // 2] if took_s else 0.0
     sizes = [r.nbytes for r in samples.values()]
     procs = 1 if (run.scheduler is not None or run.workers == 1) else run.workers + 1
     check_resources(
@@ -132,7 +135,7 @@ def _run_layers(plan: LayerPlan, partial: PartialOutput, run: RunOptions) -> Ite
     )
     partial.open()
     rest = array("q", (i for i in todo if i not in samples))
-    if run.workers == 1 and run.scheduler is None and mean_s * len(rest) < SMALL_REST_S:
+    if run.workers == 1 and run.scheduler is None and typical_s * len(rest) < SMALL_REST_S:
         # what is left takes less than starting the render threads (and building their jobs)
         # saves: made here, one by one (the same bytes)
         it = (render_one(plan.source, i) for i in rest)
