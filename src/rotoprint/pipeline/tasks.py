@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -51,6 +52,12 @@ class MeshJob:
                    suspect_edges=mesh.topology.suspect_edges)
 
     def __call__(self):
+        if self.rotary_options is None:
+            built = _BUILT.get(id(self))
+            if built is not None and built[0]() is self:
+                # another thread of this process built it: share its arrays (the mesh, the
+                # sorted face bounds), not its sweep's position
+                return built[1].for_another_thread()
         from .._resources import release_free_memory
         from .._plain_device import device_from_dump
         from ..mesh import Mesh, PrebuiltTopology
@@ -66,6 +73,8 @@ class MeshJob:
             job = slice_rotary(mesh, device, **self.rotary_options)
         else:
             job = slice_mesh(mesh, device, **self.slice_options)
+            key = id(self)
+            _BUILT[key] = (weakref.ref(self, lambda _, key=key: _BUILT.pop(key, None)), job)
         release_free_memory()
         return job
 
@@ -76,6 +85,10 @@ class MeshJob:
 
     def fingerprint_meta(self) -> dict:
         return {"device": self.device, "options": self.slice_options, "rotary": self.rotary_options}
+
+
+#: id(MeshJob) -> (weak reference to it, the SliceJob a thread of this process built from it)
+_BUILT: dict[int, tuple] = {}
 
 
 @dataclass(frozen=True)
