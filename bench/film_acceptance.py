@@ -15,10 +15,18 @@ images (the exact transform at the planned clock and the pass's pivot offset) ov
 transform at the native clock (today's print of a layer), best of 3, and the same for direct
 slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
 
-    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only]
+    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
 
 ``--equalised-only``: only the equalised rows (equalised; with the 5 dead nozzles; with phases and
 overlap), then the cost table.
+
+Every film row also gives the **levelled** film (the wet film levelling under surface tension
+before it sets, ``LevelOptions.from_head``: set time 1 s (the preset has levelling off), the preset's nominal 10 mPa s, 30 mN/m, h0 the
+10th percentile of the as-landed wet interior film) beside the as-landed figures; a third table
+is the sensitivity at the first tilt given after 0 (default 20), default plan: set time 0.1 / 1 /
+10 s with h0 at the 10th percentile, and at 1 s h0 at the 1st and 50th. ``--quick``: only the
+default and the 5-dead-nozzle plans (no one-pass, phases or equalised rows);
+``--no-sensitivity`` / ``--sensitivity-only``: without / only the third table.
 """
 
 from __future__ import annotations
@@ -33,7 +41,7 @@ import numpy as np
 from rotoprint import load_device
 from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
-from rotoprint.rotary.deposit import deposit_print
+from rotoprint.rotary.deposit import DepositOptions, LevelOptions, deposit_print
 from rotoprint.rotary.files import read_print
 from rotoprint.rotary.interlace import PassOptions, pass_overlap_mm, phase_angles, plan_passes, read_passes
 from rotoprint.pipeline.prints import transform_passes
@@ -42,9 +50,30 @@ from rotoprint.rotary.testimage import test_design
 
 
 def film_row(label, tilt, passes, gap_um, dpi, f, secs, extra=""):
+    lv = f.levelled
+    lev = (f" {lv.thinnest_to_mean:.3f} | {100 * lv.radial_spread:.1f} | {lv.h0_um:.1f} | {lv.levelling_length_um:.0f} | "
+           f"{lv.volume_error_fraction:+.1e} |") if lv is not None else " - | - | - | - | - |"
     return (f"| {tilt:g} | {label} | {passes} | {gap_um:.1f} | {dpi:.0f} | {100 * f.uncovered_fraction:.3f} | "
             f"{100 * f.band_uncovered_fraction:.2f} | {f.thinnest_to_mean:.3f} | {f.mean_um:.2f} | {100 * f.radial_spread:.1f} | "
-            f"{100 * f.volume_error_fraction:+.1e} | {f.drops} | {secs:.0f} |{extra}")
+            f"{100 * f.volume_error_fraction:+.1e} | {f.drops} |{lev} {secs:.0f} |{extra}")
+
+
+def sensitivity_table(prs, d, head, tilt) -> None:
+    """Levelled thinnest / mean of one film against the set time and the h0 rule."""
+    print()
+    print(f"Sensitivity of the levelled film, tilt {tilt:g}, planned passes (10 mPa s, 30 mN/m):")
+    print()
+    print("| set time s | h0 rule | h0 um | levelling length um | levelled thinnest / mean | levelled 1 mm bins max dev % | "
+          "below half the as-landed mean % | volume error | s |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for st, pct in ((0.1, 10.0), (1.0, 1.0), (1.0, 10.0), (1.0, 50.0), (10.0, 10.0)):
+        if True:
+            t = time.perf_counter()
+            f = deposit_print(prs, d, options=DepositOptions(level=LevelOptions.from_head(head, set_time_s=st, h0_percentile=pct))).films[0]
+            lv = f.levelled
+            print(f"| {st:g} | p{pct:g} | {lv.h0_um:.2f} | {lv.levelling_length_um:.0f} | {lv.thinnest_to_mean:.3f} | "
+                  f"{100 * lv.radial_spread:.1f} | {100 * lv.below_half_landed_mean_fraction:.3f} | "
+                  f"{lv.volume_error_fraction:+.1e} | {time.perf_counter() - t:.0f} |", flush=True)
 
 
 def _best(fn, k: int = 3) -> float:
@@ -109,17 +138,31 @@ def main() -> None:
     if "--cost-only" in sys.argv:
         cost_table(d, pl, head0, tilts)
         return
+    quick, level_on = "--quick" in sys.argv, "--no-level" not in sys.argv
+    sens_only, sens = "--sensitivity-only" in sys.argv, "--no-sensitivity" not in sys.argv
+    if sens_only:
+        tilt = next((t for t in tilts if t != 0.0), tilts[0])
+        sp = plan_swathes(head0, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
+        with tempfile.TemporaryDirectory() as td:
+            transform_passes(d, head0, pl, Path(td) / "p.png", PassOptions(RotarySetup(tilt_deg=tilt), passes="auto"))
+            prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
+        sensitivity_table(prs, d, head0, tilt)
+        return
+    level = LevelOptions.from_head(head0, set_time_s=1.0) if level_on else None
+    sens_tilt = next((t for t in tilts if t != 0.0), tilts[0])
+    sens_prs = None
     print("| tilt deg | print | passes | largest track gap um | clock dpi | uncovered interior % | uncovered band % | "
-          "thinnest / mean | mean um | 1 mm bins max dev % | volume error | drops | s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "thinnest / mean | mean um | 1 mm bins max dev % | volume error | drops | levelled thinnest / mean | "
+          "levelled 1 mm bins max dev % | h0 um | levelling length um | levelled volume error | s |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for tilt in tilts:
         sp = plan_swathes(head0, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
         rng = np.random.default_rng(14)
         dead = tuple(sorted(int(k) for k in rng.choice(np.flatnonzero(sp.swathes[0].enabled), 5, replace=False)))
         t = time.perf_counter()
-        if "--equalised-only" not in sys.argv:  # else only the equalised rows (and their dead-nozzle row)
+        if not quick and "--equalised-only" not in sys.argv:  # else only the equalised rows (and their dead-nozzle row)
             pr = transform_exact(d, head0, pl, tilt_deg=tilt)
-            f = deposit_print(pr, d).films[0]
+            f = deposit_print(pr, d, options=DepositOptions(level=level)).films[0]
             base = simulate(pr, d).report.disc_uncovered_fraction
             g1 = plan_passes(head0, sp, footprint_um=49.6, passes=4).single_pass_largest_gap_mm
             print(film_row("one pass, native clock", tilt, 1, g1 * 1000, head0.dpi_y, f, time.perf_counter() - t,
@@ -134,6 +177,8 @@ def main() -> None:
                                        ("planned passes, equalised, phases + overlap", head0, True, True)):
             if "--equalised-only" in sys.argv and not eq:
                 continue
+            if quick and (inter or eq):
+                continue
             for passes in ("auto", "6"):
                 t = time.perf_counter()
                 try:
@@ -144,11 +189,16 @@ def main() -> None:
                 except GeometryError as exc:
                     print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)
                     continue
-                f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles).films[0]
+                f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles, options=DepositOptions(level=level)).films[0]
+                if tilt == sens_tilt and head is head0 and not eq and not inter:
+                    sens_prs = prs
                 pp = m["pass_plan"]
                 print(film_row(label, tilt, pp["passes"], pp["largest_gap_mm"] * 1000, m["dpi_y"], f, time.perf_counter() - t), flush=True)
                 break
-    cost_table(d, pl, head0, tilts)
+    if level_on and sens and sens_prs is not None:
+        sensitivity_table(sens_prs, d, head0, sens_tilt)
+    if not quick:
+        cost_table(d, pl, head0, tilts)
 
 
 if __name__ == "__main__":

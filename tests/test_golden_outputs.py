@@ -34,23 +34,27 @@ from rotoprint.testing import torus_mesh
 #: deposited film, 24 silver cycles in the examples), then the builds on main after the plan,
 #: plan2 and dlp merges (the pass planner's clock capped at 2 x native and its new offsets),
 #: then the SL1 on branch fastdlp (issue 16: thumbnails drawn and encoded with numpy and zlib);
+#: then the rotary slices and builds on branch level (issue 14's film levelling: sidecars and
+#: plan.json carry the head's viscosity_mpa_s, surface_tension_mn_m and set_time_s, the
+#: build's overlays and coverage the levelled film beside the as-landed one), then the same
+#: with the preset's set_time_s = 0 (levelling opt-in: the builds' films as landed);
 #: the first values were from main d2285d8. GOLDEN is what the
 #: numba / Pillow path writes (ROTOPRINT_NATIVE=0 or no C compiler), GOLDEN_NATIVE what the C
 #: extension writes (its zlib encodes other, equally valid, PNG bytes).
 GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
     "sl1": ("b311c72eeac6b5ed945ace7361c8769099a0cb81de94450dbccbe527e60ba2a6", 1),
-    "rotary-slices": ("68981c4252b5f2495f200f5876e9b1e8f8f8493ea88089088fce8ce8b8b20c69", 26),
-    "build-coil-no-check": ("80546e5423a9ba581a8a0d71cf9337feff695c813e4470915bf4ddc63c62162f", 737),
-    "build-gas": ("36e5a3307dd79258467f99623f559d4170273741a63dfbe59964824a8c48a0db", 407),
+    "rotary-slices": ("1902b99a90a449283844b567cf57a6450253d00433734dc1a45eb44b06b8d2cb", 26),
+    "build-coil-no-check": ("d190513eab5a2f72ce7483409683ee31dc8e4ecfdfbc1113395a70e8c6f7dbf0", 737),
+    "build-gas": ("a90733eda6c4bad25db45ffc3b569776f07b38ccead559f98f91556f131109b3", 407),
 }
 
 GOLDEN_NATIVE = {
     "layer-folder": ("a7387385431f11fad6a75c3f1655d0c5721d3b034f209090b5cf3ed906dc52ca", 10),
     "sl1": ("8ab11667833cbd09409bbe35e638ce26203024f3a353cea8f535959258d13370", 1),
-    "rotary-slices": ("585a4ab0b9ac22ca671763e163c949164b4e23ecfc8113af30d25476783ad1c8", 26),
-    "build-coil-no-check": ("b5345f8e03419dcd07077f847b38ce4f85216e5eefe926d4bc0dd6a97b2a5064", 737),
-    "build-gas": ("0e02f13df7935f9ceefe70403cd8389de8276f348e3b809bca5ee6209eb97537", 407),
+    "rotary-slices": ("0aa618518085d8e4291c8310b6732685a6caf6d293b119c0ed2fd417ef504115", 26),
+    "build-coil-no-check": ("8d6581301204778ecfcaf8afd0f6798631c37b749dee23c6d251f9e61756a722", 737),
+    "build-gas": ("de22f44b4f4cf63d3131dcd764b0afa171704eb93aff18a2a000e6f1cea1e9b7", 407),
 }
 
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")

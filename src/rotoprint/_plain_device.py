@@ -19,6 +19,8 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
+from ._projector import ProjectorGeometry
+
 __all__ = ["PlainProjector", "PlainProjectorDevice", "PROJECTOR_FIELDS", "load_projector", "device_from_dump"]
 
 #: field: (type, default, lower bound, lower bound open, upper bound); default ... = required;
@@ -60,7 +62,7 @@ class PlainProjector:
 
 
 @dataclass(frozen=True)
-class PlainProjectorDevice:
+class PlainProjectorDevice(ProjectorGeometry):
     """The fields and properties of :class:`rotoprint.devices.ProjectorDevice` (see there)."""
 
     kind: str
@@ -69,22 +71,6 @@ class PlainProjectorDevice:
     source: str
     nominal: tuple[str, ...]
     projector: PlainProjector
-
-    @property
-    def pitch_x_mm(self) -> float:
-        return self.projector.width_mm / self.projector.pixels_x
-
-    @property
-    def pitch_y_mm(self) -> float:
-        return self.projector.height_mm / self.projector.pixels_y
-
-    @property
-    def field_px(self) -> tuple[int, int] | None:
-        return (self.projector.pixels_x, self.projector.pixels_y)
-
-    @property
-    def fibre_axis(self) -> str:
-        return "x"
 
     def model_dump(self, mode: str = "json") -> dict[str, Any]:
         """The pydantic model's ``model_dump(mode="json")``: a dict of JSON values, fields in order."""

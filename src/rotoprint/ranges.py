@@ -7,34 +7,38 @@ narrow enough that no value inside them overflows an integer, a pixel count or a
 further on (sizes that depend on several values are checked again, before allocation, by
 :func:`rotoprint._resources.check_raster_fits` and :func:`check_count`).
 
-======================  =====================  =======================================
-quantity                range                  used for
-======================  =====================  =======================================
-``COORD_MM``            [-10000, 10000] mm     translations, offsets, mesh coordinates
-``ANGLE_DEG``           [-3600, 3600] deg      rotations, fibre and platform angles
-``TILT_DEG``            (-90, 90) deg          head tilt
-``LAYER_HEIGHT_MM``     [1e-4, 100] mm         layer height
-``RADIUS_MM``           [1e-3, 1e4] mm         pivot, design and reference radii
-``WIDTH_MM``            [1e-4, 100] mm         thinnest wall / narrowest gap
-``GAP_RADIUS_MM``       [0, 100] mm            open-mesh gap radius
-``RESOLUTION_MM``       [0, 10] mm             width-measurement resolution
-``SCALE``               [1e-6, 1e6] (abs)      uniform mesh scale
-``DPI``                 [1, 100000] dpi        print-direction and design densities
-``EXPOSURE_S``          [1e-3, 3600] s         exposure times
-``FRACTION``            [0, 1]                 cure threshold
-``OFFSET_UM``           [0, 2000] um           first-layer (elephant-foot) inset
-``DROP_UM``             [0.1, 1e4] um          drop diameter
-``JITTER_UM``           [0, 10000] um          drop misdirection
-``SPREAD``              (0, 20]                footprint / in-flight diameter
-``EVEN_RATIO``          [1, 100]               largest / mean track gap taken as even
-``WORKERS``             1 ... 1024             worker processes
-``COUNT``               0 ... 1000000          layer and overlay counts
-``SWATHES``             1 ... 10000            radial swathes
-``SEED``                0 ... 2**32 - 1        random seeds
-``OVERLAY_SCALE``       1 ... 16               overlay pixels per design pixel
-``MACHINE_BITS``        1 ... 4 (1, 2 or 4)    bits per nozzle of machine/ firing data
-``PASSES``              1 ... 64               interlaced passes per layer (or "auto")
-======================  =====================  =======================================
+========================  ===================  =============================================
+quantity                  range                used for
+========================  ===================  =============================================
+``COORD_MM``              [-10000, 10000] mm   translations, offsets, mesh coordinates
+``ANGLE_DEG``             [-3600, 3600] deg    rotations, fibre and platform angles
+``TILT_DEG``              (-90, 90) deg        head tilt
+``LAYER_HEIGHT_MM``       [1e-4, 100] mm       layer height
+``RADIUS_MM``             [1e-3, 1e4] mm       pivot, design and reference radii
+``WIDTH_MM``              [1e-4, 100] mm       thinnest wall / narrowest gap
+``GAP_RADIUS_MM``         [0, 100] mm          open-mesh gap radius
+``RESOLUTION_MM``         [0, 10] mm           width-measurement resolution
+``SCALE``                 [1e-6, 1e6] (abs)    uniform mesh scale
+``DPI``                   [1, 100000] dpi      print-direction and design densities
+``EXPOSURE_S``            [1e-3, 3600] s       exposure times
+``FRACTION``              [0, 1]               cure threshold
+``OFFSET_UM``             [0, 2000] um         first-layer (elephant-foot) inset
+``DROP_UM``               [0.1, 1e4] um        drop diameter
+``JITTER_UM``             [0, 10000] um        drop misdirection
+``SPREAD``                (0, 20]              footprint / in-flight diameter
+``VISCOSITY_MPA_S``       [0.1, 1e6] mPa s     ink viscosity (film levelling)
+``SURFACE_TENSION_MN_M``  [1, 200] mN/m        ink surface tension (film levelling)
+``SET_TIME_S``            [0, 3600] s          wet film's flow time before it sets (0: none)
+``PERCENT``               [0, 100] %           percentiles (film levelling h0)
+``EVEN_RATIO``            [1, 100]             largest / mean track gap taken as even
+``WORKERS``               1 ... 1024           worker processes
+``COUNT``                 0 ... 1000000        layer and overlay counts
+``SWATHES``               1 ... 10000          radial swathes
+``SEED``                  0 ... 2**32 - 1      random seeds
+``OVERLAY_SCALE``         1 ... 16             overlay pixels per design pixel
+``MACHINE_BITS``          1 ... 4 (1, 2 or 4)  bits per nozzle of machine/ firing data
+``PASSES``                1 ... 64             interlaced passes per layer (or "auto")
+========================  ===================  =============================================
 """
 
 from __future__ import annotations
@@ -97,6 +101,10 @@ OFFSET_UM = Range(0.0, 2000.0, "um")  # = masks.pipeline.FIRST_LAYER_OFFSET_MAX_
 DROP_UM = Range(0.1, 10_000.0, "um")
 JITTER_UM = Range(0.0, 10_000.0, "um")
 SPREAD = Range(0.0, 20.0, lo_open=True)  # footprint / in-flight diameter (devices.models spread_factor)
+VISCOSITY_MPA_S = Range(0.1, 1e6, "mPa s")  # ink viscosity (film levelling, rotary.deposit)
+SURFACE_TENSION_MN_M = Range(1.0, 200.0, "mN/m")  # ink surface tension (film levelling)
+PERCENT = Range(0.0, 100.0, "%")
+SET_TIME_S = Range(0.0, 3600.0, "s")  # time the wet film flows before it sets; 0 = no levelling
 EVEN_RATIO = Range(1.0, 100.0)
 WORKERS = Range(1, 1024, integer=True)
 COUNT = Range(0, 1_000_000, integer=True)

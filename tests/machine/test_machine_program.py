@@ -394,3 +394,59 @@ radial_stage_mm = [20.0, 150.0]
     job.write_text(job.read_text().replace("radial_stage_mm = [20.0, 150.0]", "radial_stage_mm = [20.0, 150.0]\nspeed = 3"))
     code, out, err = run_cli("build", job, "--out", tmp_path / "d")
     assert code == 2 and "machine.speed" in err and err.strip().count("\n") == 0
+
+
+@pytest.fixture(scope="module")
+def program_text(tmp_path_factory):
+    """A small program, written once for the record cases (each edits a copy)."""
+    folder = tmp_path_factory.mktemp("records") / "m"
+    write_machine_folder(plan_job(_small_job()), folder)
+    return folder, (folder / "program.json").read_text()
+
+
+RECORD_CASES = [
+    ("direction", "x", "field direction must be 1 or -1, got 'x'"),
+    ("direction", 10**400, "field direction must be 1 or -1, got 1.00e+400"),
+    ("direction", 2, "field direction must be 1 or -1, got 2"),
+    ("mount_angle_deg", "abc", "field mount_angle_deg must be a finite number, got 'abc'"),
+    ("mount_angle_deg", 1e6, "field mount_angle_deg must be in [-3600, 3600] deg"),
+    ("tilt_deg", None, "field tilt_deg must be a finite number, got None"),
+    ("pivot_radius_mm", None, "field pivot_radius_mm must be a finite number, got None"),
+    ("ref_radius_mm", -1, "field ref_radius_mm must be > 0, got -1"),
+    ("dpi_y", 0, "field dpi_y must be > 0, got 0"),
+    ("dphi_rad", "q", "field dphi_rad must be a finite number, got 'q'"),
+    ("band_mm", [1], "field band_mm must be [low, high], got [1]"),
+    ("band_mm", [70, 60], "field band_mm must be [low, high] with high >= low"),
+    ("enabled_nozzles", -5, "field enabled_nozzles must be an integer in 0 ... 764, got -5"),
+    ("enabled_nozzle_runs", [[5, 2]], "field enabled_nozzle_runs must be [start, end) nozzle runs"),
+    ("firings", -3, "field firings must be an integer in 1 ..."),
+    ("nozzles", "a", "field nozzles must be a finite number, got 'a'"),
+    ("swathe", 99, "field swathe must be one of head H1's swathes 0..0, got 99"),
+    ("swathe", True, "field swathe must be one of head H1's swathes"),
+    ("interlace", "a", "field interlace must be a pass number 0..63, got 'a'"),
+    ("row_offsets_firings", [1, 2], "field row_offsets_firings [1, 2] is not its swathe's None"),
+    ("head", "H9", "no head 'H9' in the program's heads"),
+    ("placement", None, "layer 0: program record is incomplete or invalid: TypeError"),
+]
+
+
+@pytest.mark.parametrize("key, value, said", RECORD_CASES, ids=[f"{k}={str(v)[:12]}" for k, v, _ in RECORD_CASES])
+def test_a_bad_image_record_is_one_line_naming_the_image_and_the_field(program_text, run_cli, tmp_path, key, value, said):
+    """The program's JSON is not hashed (its packed files are): an edited record is one line naming
+    the image and the field, exit 2, no output. These were tracebacks (a direction or angle that
+    is not a number, a missing radius, a band of one value, a bad swathe or pass index) or were
+    taken silently (a zero dpi, a negative nozzle count, row offsets that are not the swathe's)."""
+    src, text = program_text
+    folder = tmp_path / "m"
+    shutil.copytree(src, folder)
+    prog = json.loads(text)
+    rec = prog["layers"][0]["images"][0]
+    rec[key] = value
+    (folder / "program.json").write_text(json.dumps(prog))
+    code, out, err = run_cli("replay", folder / "program.json", "--out", tmp_path / "o.png")
+    assert code == 2, (code, err[-500:])
+    assert said in err, err
+    assert err.strip().count("\n") == 0 and "Traceback" not in err and len(err) < 400
+    assert "program.json" in err and not (tmp_path / "o.png").exists()
+    if key not in ("placement", "head"):
+        assert f"layer 0 image {rec['file']}: field {key}" in err

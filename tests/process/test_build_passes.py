@@ -18,17 +18,21 @@ from rotoprint.rotary.interlace import plan_passes
 from rotoprint.rotary.deposit import DepositOptions
 
 
-def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None, cap=None):
+def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None, cap=None, set_time_s=None):
     printer = {"device": "omnidot760", "tilt_deg": 20.0, "passes": passes,
                "heads": [{"name": "H1", "ink": "ammonium_sulphate"},
                          {"name": "H2", "ink": "calcium_chloride", "mount_angle_deg": 90.0}]}
-    if dead is not None:  # the preset with dead nozzles, as a device file beside the job
+    if dead is not None or set_time_s is not None:  # the preset edited, as a device file beside the job
         from importlib.resources import files
 
         text = (files("rotoprint.devices") / "presets" / "omnidot760.toml").read_text(encoding="utf-8")
-        assert "dead_nozzles = []" in text
-        (tmp_path / "dead.toml").write_text(text.replace("dead_nozzles = []", f"dead_nozzles = {list(dead)}"), encoding="utf-8")
-        printer["device"] = "dead.toml"
+        assert "dead_nozzles = []" in text and "set_time_s = 0.0" in text
+        if dead is not None:
+            text = text.replace("dead_nozzles = []", f"dead_nozzles = {list(dead)}")
+        if set_time_s is not None:
+            text = text.replace("set_time_s = 0.0", f"set_time_s = {set_time_s!r}")
+        (tmp_path / "dev.toml").write_text(text, encoding="utf-8")
+        printer["device"] = "dev.toml"
     d = {"job": {"name": "small", "layer_height_mm": 0.05}, "printer": printer, "placement": {"inner_radius_mm": 60.0},
          "parts": [{"name": "b", "material": "plaster", "priority": 1,
                     "shape": {"kind": "box", "size_mm": [3, 2, 0.05], "origin_mm": [0, 0, 0]}}]}
@@ -150,13 +154,25 @@ def test_dead_nozzles_are_covered_by_the_plan(tmp_path):
             assert not s.levels[:, list(dead)].any()
 
 
+def test_build_without_levelling_reports_the_film_as_landed(tmp_path):
+    # the preset's set_time_s is 0 (levelling is opt-in): the headline is the film as landed
+    run_build(_job(cycles=4), tmp_path / "out", check=False)
+    cov = json.loads((tmp_path / "out" / "plan.json").read_text())["coverage"]["plaster"]
+    assert cov["thinnest_to_mean_basis"] == "as landed" and cov["thinnest_to_mean"] == cov["thinnest_to_mean_as_landed"]
+    assert cov["thinnest_to_mean_levelled"] is None and cov["levelling"] == []
+
+
 def test_build_in_passes_headline_coverage_machine_and_sidecars(tmp_path):
-    job = _job(cycles=4)
+    job = _job(tmp_path, cycles=4, set_time_s=1.0)
     res = run_build(job, tmp_path / "out", check=False)
     plan = json.loads((tmp_path / "out" / "plan.json").read_text())
     cov = plan["coverage"]["plaster"]
     assert cov["model"] == "deposit" and cov["uncovered_fraction"] <= 0.01 and res.summary["coverage"] == plan["coverage"]
     assert all(o["deposit"]["uncovered_fraction"] <= 0.01 and o["reagent_pairs"] for o in plan["overlays"])
+    # the device's inks level (set time 1 s): the headline thinnest / mean is the levelled film's
+    assert cov["thinnest_to_mean_basis"] == "levelled" and cov["thinnest_to_mean"] == cov["thinnest_to_mean_levelled"]
+    assert cov["thinnest_to_mean_as_landed"] is not None and cov["levelling"][0]["set_time_s"] == 1.0
+    assert all(abs(f["levelled"]["volume_error_fraction"]) < 1e-9 for o in plan["overlays"] for f in o["inks"].values())
     n = plan["heads"][0]["passes"]
     im = plan["layers_detail"][0]["images"][0]
     assert [p["pass"] for p in im["passes"]] == list(range(n))
@@ -168,6 +184,7 @@ def test_build_in_passes_headline_coverage_machine_and_sidecars(tmp_path):
     table = table[: table.index("</table>")]
     assert "<td>plaster</td>" in table and f"<b>{100 * cov['uncovered_fraction']:.2f} %</b>" in table
     assert "true volume per area of the planned drops" in html
+    assert "Thinnest / mean is that of the <b>levelled</b> film for plaster" in html and "set time 1 s" in html
     prog = json.loads((tmp_path / "out" / "machine" / "program.json").read_text())
     rev = [s for L in prog["layers"] for s in L["steps"] if s["kind"] == "revolution"]
     assert [s["interlace"] for s in rev if s["head"] == "H1" and s["repeat"] == 0] == [c % n for c in range(4)]

@@ -37,6 +37,10 @@ def simulate_command(
     seed: Annotated[int, typer.Option("--seed", help="Seed of the jitter.", callback=in_range(R.SEED))] = 0,
     spread: Annotated[float | None, typer.Option("--spread", help="Deposit model: footprint / in-flight diameter (default: the head's spread_factor).", callback=in_range(R.SPREAD))] = None,
     footprint: Annotated[float | None, typer.Option("--footprint", help="Deposit model: footprint diameter of a full drop, um (instead of --spread).", callback=in_range(R.DROP_UM))] = None,
+    set_time: Annotated[float | None, typer.Option("--set-time", help="Film levelling: seconds the wet film flows before it sets (default: the head's set_time_s; 0: the film as landed).", callback=in_range(R.SET_TIME_S))] = None,
+    viscosity: Annotated[float | None, typer.Option("--viscosity", help="Film levelling: ink viscosity, mPa s (default: the head's).", callback=in_range(R.VISCOSITY_MPA_S))] = None,
+    surface_tension: Annotated[float | None, typer.Option("--surface-tension", help="Film levelling: ink surface tension, mN/m (default: the head's).", callback=in_range(R.SURFACE_TENSION_MN_M))] = None,
+    h0_percentile: Annotated[float, typer.Option("--h0-percentile", help="Film levelling: the linear model's film thickness h0 is this percentile of the as-landed wet interior film.", callback=in_range(R.PERCENT))] = 10.0,
     scale: Annotated[int, typer.Option("--scale", help="Overlay pixels per design pixel.", callback=in_range(R.OVERLAY_SCALE))] = 2,
     json_out: JsonOpt = False,
     force: ForceOpt = False,
@@ -86,7 +90,7 @@ def simulate_command(
         img = 255 - img
     check_overlay_fits(img.shape, scale)  # before the simulation, not after it
     sim = simulate(pr, img, drop_diameter_um=drop_diameter, jitter_um=jitter, dead_nozzles=parse_dead(dead), seed=seed)
-    from ..rotary.deposit import DepositOptions, deposit_film, ink_drops
+    from ..rotary.deposit import DepositOptions, LevelOptions, deposit_film, ink_drops
 
     if spread is not None and footprint is not None:
         raise ConfigError("give either --spread or --footprint, not both")
@@ -98,7 +102,9 @@ def simulate_command(
         for q, (o, _, _) in enumerate(prints[1:])
     ]
     film = deposit_film(sim.inked, pr.placement, pr.head, [InkDrops.concat(parts)],
-                        options=DepositOptions(spread_factor=spread, footprint_um=footprint)).films[0]
+                        options=DepositOptions(spread_factor=spread, footprint_um=footprint,
+                                               level=LevelOptions.from_head(pr.head, set_time_s=set_time, viscosity_mpa_s=viscosity,
+                                                                            surface_tension_mn_m=surface_tension, h0_percentile=h0_percentile))).films[0]
     overlay = render_overlay(sim, scale=scale)
     from PIL import Image
     import io
@@ -116,10 +122,20 @@ def simulate_command(
         print_json(r)
         return
     f = r["deposit"]
+    lv = f.get("levelled")
+    if lv is not None:
+        out_console.print(
+            f"levelled film (headline; set time {lv['set_time_s']:g} s, viscosity {lv['viscosity_mpa_s']:g} mPa s, surface tension "
+            f"{lv['surface_tension_mn_m']:g} mN/m, h0 {lv['h0_um']:.2f} um = {lv['h0_rule']}, levelling length {lv['levelling_length_um']:.0f} um): "
+            f"thinnest / mean {lv['thinnest_to_mean']:.3f} (mean {lv['mean_um']:.3f} um, thinnest {lv['thinnest_um']:.3f} um), 1 mm radial bins within "
+            f"+-{100 * lv['radial_spread']:.1f} %; uncovered as landed (a dry pinhole is not filled by the linear model)"
+        )
+    else:
+        out_console.print("film as landed (no levelling: set time 0 s)")
     out_console.print(
-        f"film of {len(prints)} pass(es) ({f['footprint_um']:.1f} um footprints): interior uncovered {100 * f['uncovered_fraction']:.2f} % "
+        f"{'as landed: ' if lv is not None else ''}film of {len(prints)} pass(es) ({f['footprint_um']:.1f} um footprints): interior uncovered {100 * f['uncovered_fraction']:.2f} % "
         f"({f['uncovered_area_mm2']:.3f} mm2), boundary band {100 * f['band_uncovered_fraction']:.2f} %; "
-        f"thickness mean {f['mean_um']:.3f} um, thinnest {f['thinnest_um']:.3f} um, 1 mm radial bins within "
+        f"thickness mean {f['mean_um']:.3f} um, thinnest {f['thinnest_um']:.3f} um (thinnest / mean {f['thinnest_to_mean']:.3f}), 1 mm radial bins within "
         f"+-{100 * f['radial_spread']:.1f} %; ink volume {f['deposited_volume_pl']:.0f} pl "
         f"(planned {f['planned_volume_pl']:.0f}), {100 * f['volume_outside_design_fraction']:.2f} % outside the design"
     )

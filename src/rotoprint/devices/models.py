@@ -16,6 +16,7 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 from .. import ranges as R
+from .._projector import ProjectorGeometry
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 __all__ = ["InkjetHead", "InkjetDevice", "Projector", "ProjectorDevice", "Device"]
@@ -38,6 +39,12 @@ class InkjetHead(_Strict):
     #: footprint diameter on the substrate over the in-flight diameter (6 V / pi)^(1/3): an
     #: ink/substrate figure used by the deposit model (rotary/deposit.py)
     spread_factor: float = Field(default=2.0, gt=0, le=20)
+    #: the wet film's levelling under surface tension (rotary/deposit.py, LevelOptions): ink
+    #: viscosity and surface tension at the substrate, and the time the film flows before it
+    #: sets (0: no levelling, the film as landed); nominal, measure per ink
+    viscosity_mpa_s: float = Field(default=10.0, ge=R.VISCOSITY_MPA_S.lo, le=R.VISCOSITY_MPA_S.hi)
+    surface_tension_mn_m: float = Field(default=30.0, ge=R.SURFACE_TENSION_MN_M.lo, le=R.SURFACE_TENSION_MN_M.hi)
+    set_time_s: float = Field(default=0.0, ge=R.SET_TIME_S.lo, le=R.SET_TIME_S.hi)
     max_frequency_hz: float = Field(default=8000.0, gt=0, le=1e7)
     grey_levels: int = Field(default=1, ge=1, le=255)
     dead_nozzles: tuple[int, ...] = Field(default=(), max_length=100_000)
@@ -101,29 +108,13 @@ class Projector(_Strict):
     printer_model: str = "rotoprint"
 
 
-class ProjectorDevice(_Strict):
+class ProjectorDevice(_Strict, ProjectorGeometry):
     kind: Literal["projector"]
     name: str
     description: str = ""
     source: str = ""
     nominal: tuple[str, ...] = ()
     projector: Projector
-
-    @property
-    def pitch_x_mm(self) -> float:
-        return self.projector.width_mm / self.projector.pixels_x
-
-    @property
-    def pitch_y_mm(self) -> float:
-        return self.projector.height_mm / self.projector.pixels_y
-
-    @property
-    def field_px(self) -> tuple[int, int] | None:
-        return (self.projector.pixels_x, self.projector.pixels_y)
-
-    @property
-    def fibre_axis(self) -> str:
-        return "x"
 
 
 Device = Annotated[InkjetDevice | ProjectorDevice, Field(discriminator="kind")]

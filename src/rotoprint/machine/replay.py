@@ -34,6 +34,7 @@ from ..devices.models import InkjetHead
 from ..errors import ConfigError, InputFileError, RotoprintError
 from ..io.inputs import parse_json, read_input_bytes
 from ..io.machine import nozzle_order, read_packed, unpack_levels
+from ..rotary.files import check_print_fields
 from ..rotary.placement import Placement
 from ..rotary.printdata import RotaryPrint, SwatheImage, runs_to_mask
 from ..rotary.simulate import FiringClock
@@ -224,6 +225,27 @@ def _check_image_counts(rec: dict, counts_per_rev: int, where: str, p: Path) -> 
                              f"got {str(first)[:40]!r}", path=p)
 
 
+def _check_image_record(rec: dict, head: dict, where: str, p: Path) -> None:
+    """An image record's setting and swathe numbers, checked as a sidecar's are
+    (:func:`rotoprint.rotary.files.check_print_fields`), its swathe one of its head's, its
+    interlaced pass a whole number and its row offsets those of its swathe; one line naming
+    the image and the field."""
+    model: InkjetHead = head["_model"]
+    sw = rec["swathe"]
+    if isinstance(sw, bool) or not isinstance(sw, int) or not 0 <= sw < len(head["swathes"]):
+        raise InputFileError(f"{where}: field swathe must be one of head {head['name']}'s swathes "
+                             f"0..{len(head['swathes']) - 1}, got {R.show_value(sw)}", path=p)
+    q = rec.get("interlace", 0)
+    if isinstance(q, bool) or not isinstance(q, int) or not 0 <= q < R.PASSES.hi:
+        raise InputFileError(f"{where}: field interlace must be a pass number 0..{R.PASSES.hi - 1:g}, got {R.show_value(q)}",
+                             path=p)
+    check_print_fields({**rec, "swathes": [{**rec, "index": sw}]}, model, p, what=f"{where}: field", flat=True)
+    offs = rec.get("row_offsets_firings")
+    if offs != head["swathes"][sw].get("row_offsets_firings"):
+        raise InputFileError(f"{where}: field row_offsets_firings {R.show_value(offs)} is not its swathe's "
+                             f"{R.show_value(head['swathes'][sw].get('row_offsets_firings'))}", path=p)
+
+
 class _Files:
     """Packed files read and checked once each."""
 
@@ -239,6 +261,104 @@ class _Files:
         if hashlib.sha256(data).hexdigest() != sha:
             raise InputFileError(f"{where}: file {rel} was altered (its SHA-256 differs from the program's)", path=self.program)
         return data
+
+
+def _layer_images(lay: dict, prog: dict, p: Path, files: _Files, want: set[int] | None) -> list[ReplayImage] | None:
+    """Check one layer's steps; decode its images if ``want`` has it (else None). KeyError,
+    TypeError, ValueError or IndexError on a malformed record (the caller names the layer)."""
+    spec: MachineSpec = prog["_spec"]
+    heads = {h["name"]: h for h in prog["heads"]}
+    pk = prog["packing"]
+    bits = pk["bits_per_nozzle"]
+    nn = pk["nozzle_order"]
+    i = lay["index"]
+    recs = {}
+    for r in lay["images"]:
+        recs[r["file"]] = r
+    printed_by: dict[str, list[int]] = {}
+    for st in lay["steps"]:
+        where = f"layer {i} step {st['n']} ({st['kind']}" + (f" of {st['head']} swathe {st['swathe']})" if st["kind"] == "revolution" else ")")
+        t = st.get("time_s")
+        if not (_finite(t) and t >= 0):
+            raise InputFileError(f"{where}: time_s {_shown(t)} is not a duration", path=p)
+        if st["kind"] != "revolution":
+            continue
+        h = heads.get(st["head"])
+        if h is None or not 0 <= st["swathe"] < len(h["swathes"]):
+            raise InputFileError(f"{where}: no such head or swathe in the program's heads", path=p)
+        _check_swathe(spec, h, h["swathes"][st["swathe"]], st, where, p)
+        if st["image"] is not None and st["image"] not in recs:
+            raise InputFileError(f"{where}: image {st['image']} is not listed in layer {i}'s images", path=p)
+        if st["image"] is not None:
+            c = h["swathes"][st["swathe"]]["clock"]
+            r = recs[st["image"]]
+            if (st["multiplier"], st["divider"], st["index_offset_counts"]) != (c["multiplier"], c["divider"],
+                                                                                  r["index_offset_counts"]):
+                raise InputFileError(f"{where}: clock x{st['multiplier']}/{st['divider']} index {st['index_offset_counts']} "
+                                     f"is not the one of its swathe and image (x{c['multiplier']}/{c['divider']} index "
+                                     f"{r['index_offset_counts']})", path=p)
+            printed_by.setdefault(st["image"], []).append(st["n"])
+    if want is not None and i not in want:
+        return None
+    for r in lay["images"]:
+        if r["head"] not in heads:
+            raise InputFileError(f"layer {i} image {r['file']}: no head {R.show_value(r['head'])} in the program's heads", path=p)
+        _check_image_counts(r, spec.encoder_counts_per_rev, f"layer {i} image {r['file']}", p)
+        _check_image_record(r, heads[r["head"]], f"layer {i} image {r['file']}", p)
+    designs = {}
+    for d in lay["designs"]:
+        where = f"layer {i} design of {d['material']}"
+        data = files.read(d["file"], d["sha256"], where)
+        try:
+            w = read_packed(data, d["height_px"], d["width_px"], 1)
+            designs[d["material"]] = unpack_levels(w, 1, np.arange(d["width_px"])) * np.uint8(255)
+        except RotoprintError as exc:
+            raise InputFileError(f"{where}: {exc.problem}", path=p) from None
+    groups: dict[tuple[str, str, int], list[dict]] = {}
+    for r in lay["images"]:  # one print per interlaced pass
+        groups.setdefault((r["material"], r["ink"], int(r.get("interlace", 0))), []).append(r)
+    out = []
+    for (mname, ink, q), rs in groups.items():
+        h = heads[rs[0]["head"]]
+        model: InkjetHead = h["_model"]
+        order = nozzle_order(model.nozzles, model.rows, odd_row=nn["odd_row"], descending=nn["direction"] == "descending")
+        rows_of = np.arange(model.nozzles) % model.rows
+        sws = []
+        clocks, files_of, steps = {}, {}, {}
+        for r in sorted(rs, key=lambda r: r["swathe"]):
+            where = f"layer {i} image {r['file']}"
+            c = h["swathes"][r["swathe"]]["clock"]
+            # a phased pass's mount turn is in its index offset and in its mount angle: once
+            turn = int(r["direction"]) * math.radians(float(r["mount_angle_deg"]) - float(h["mount_angle_deg"]))
+            clocks[r["swathe"]] = machine_clock(spec.encoder_counts_per_rev, c["multiplier"], c["divider"],
+                                                r["index_offset_counts"], r["first_firing_index"], turn)
+            steps[r["swathe"]] = printed_by.get(r["file"], [])
+            files_of[r["swathe"]] = r["file"]
+            data = files.read(r["file"], r["sha256"], where)
+            try:
+                lv = unpack_levels(read_packed(data, r["firings"], r["nozzles"], bits), bits, order)
+            except RotoprintError as exc:
+                raise InputFileError(f"{where}: {exc.problem}", path=p) from None
+            first = r["first_firing_index"]
+            if r.get("row_offsets_firings"):
+                lv, dfirst = unshift_rows(lv, rows_of, r["row_offsets_firings"])
+                first += dfirst
+            runs = r.get("enabled_nozzle_runs")
+            sws.append(SwatheImage(index=r["swathe"], levels=lv, pivot_radius_mm=float(r["pivot_radius_mm"]),
+                                   first_firing=int(first), dphi_rad=float(r["dphi_rad"]),
+                                   ref_radius_mm=float(r["ref_radius_mm"]),
+                                   band_mm=(float(r["band_mm"][0]), float(r["band_mm"][1])),
+                                   enabled_nozzles=int(r["enabled_nozzles"]),
+                                   enabled=None if runs is None else runs_to_mask(runs, model.nozzles)))
+        r0 = rs[0]
+        pr = RotaryPrint(method=r0["method"], head=model, tilt_deg=float(r0["tilt_deg"]),
+                         mount_angle_deg=float(r0["mount_angle_deg"]), direction=int(r0["direction"]),
+                         dpi_y=float(r0["dpi_y"]), placement=Placement.from_json(r0["placement"]), swathes=tuple(sws))
+        if mname not in designs:
+            raise InputFileError(f"layer {i}: no design region of {mname} for its images", path=p)
+        out.append(ReplayImage(layer=i, material=mname, ink=ink, head=h["name"], print=pr, design=designs[mname],
+                               clocks=clocks, files=files_of, steps=steps, interlace=q))
+    return out
 
 
 def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | None = None) -> Iterator[tuple[dict, list[ReplayImage]]]:
@@ -262,97 +382,18 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
     p = Path(program_path)
     root = p.parent
     files = _Files(root, p)
-    spec: MachineSpec = prog["_spec"]
-    heads = {h["name"]: h for h in prog["heads"]}
-    pk = prog["packing"]
-    bits = pk["bits_per_nozzle"]
-    nn = pk["nozzle_order"]
     want = None if layers is None else set(layers)
     for lay in prog["layers"]:
-        i = lay["index"]
-        recs = {}
-        for r in lay["images"]:
-            recs[r["file"]] = r
-        printed_by: dict[str, list[int]] = {}
-        for st in lay["steps"]:
-            where = f"layer {i} step {st['n']} ({st['kind']}" + (f" of {st['head']} swathe {st['swathe']})" if st["kind"] == "revolution" else ")")
-            t = st.get("time_s")
-            if not (_finite(t) and t >= 0):
-                raise InputFileError(f"{where}: time_s {_shown(t)} is not a duration", path=p)
-            if st["kind"] != "revolution":
-                continue
-            h = heads.get(st["head"])
-            if h is None or not 0 <= st["swathe"] < len(h["swathes"]):
-                raise InputFileError(f"{where}: no such head or swathe in the program's heads", path=p)
-            _check_swathe(spec, h, h["swathes"][st["swathe"]], st, where, p)
-            if st["image"] is not None and st["image"] not in recs:
-                raise InputFileError(f"{where}: image {st['image']} is not listed in layer {i}'s images", path=p)
-            if st["image"] is not None:
-                c = h["swathes"][st["swathe"]]["clock"]
-                r = recs[st["image"]]
-                if (st["multiplier"], st["divider"], st["index_offset_counts"]) != (c["multiplier"], c["divider"],
-                                                                                      r["index_offset_counts"]):
-                    raise InputFileError(f"{where}: clock x{st['multiplier']}/{st['divider']} index {st['index_offset_counts']} "
-                                         f"is not the one of its swathe and image (x{c['multiplier']}/{c['divider']} index "
-                                         f"{r['index_offset_counts']})", path=p)
-                printed_by.setdefault(st["image"], []).append(st["n"])
-        if want is not None and i not in want:
-            continue
-        designs = {}
-        for d in lay["designs"]:
-            where = f"layer {i} design of {d['material']}"
-            data = files.read(d["file"], d["sha256"], where)
-            try:
-                w = read_packed(data, d["height_px"], d["width_px"], 1)
-                designs[d["material"]] = unpack_levels(w, 1, np.arange(d["width_px"])) * np.uint8(255)
-            except RotoprintError as exc:
-                raise InputFileError(f"{where}: {exc.problem}", path=p) from None
-        groups: dict[tuple[str, str, int], list[dict]] = {}
-        for r in lay["images"]:  # one print per interlaced pass
-            groups.setdefault((r["material"], r["ink"], int(r.get("interlace", 0))), []).append(r)
-        out = []
-        for (mname, ink, q), rs in groups.items():
-            h = heads[rs[0]["head"]]
-            model: InkjetHead = h["_model"]
-            order = nozzle_order(model.nozzles, model.rows, odd_row=nn["odd_row"], descending=nn["direction"] == "descending")
-            rows_of = np.arange(model.nozzles) % model.rows
-            sws = []
-            clocks, files_of, steps = {}, {}, {}
-            for r in sorted(rs, key=lambda r: r["swathe"]):
-                where = f"layer {i} image {r['file']}"
-                c = h["swathes"][r["swathe"]]["clock"]
-                _check_image_counts(r, spec.encoder_counts_per_rev, where, p)
-                # a phased pass's mount turn is in its index offset and in its mount angle: once
-                turn = int(r["direction"]) * math.radians(float(r["mount_angle_deg"]) - float(h["mount_angle_deg"]))
-                clocks[r["swathe"]] = machine_clock(spec.encoder_counts_per_rev, c["multiplier"], c["divider"],
-                                                    r["index_offset_counts"], r["first_firing_index"], turn)
-                steps[r["swathe"]] = printed_by.get(r["file"], [])
-                files_of[r["swathe"]] = r["file"]
-                data = files.read(r["file"], r["sha256"], where)
-                try:
-                    lv = unpack_levels(read_packed(data, r["firings"], r["nozzles"], bits), bits, order)
-                except RotoprintError as exc:
-                    raise InputFileError(f"{where}: {exc.problem}", path=p) from None
-                first = r["first_firing_index"]
-                if r.get("row_offsets_firings"):
-                    lv, dfirst = unshift_rows(lv, rows_of, r["row_offsets_firings"])
-                    first += dfirst
-                runs = r.get("enabled_nozzle_runs")
-                sws.append(SwatheImage(index=r["swathe"], levels=lv, pivot_radius_mm=float(r["pivot_radius_mm"]),
-                                       first_firing=int(first), dphi_rad=float(r["dphi_rad"]),
-                                       ref_radius_mm=float(r["ref_radius_mm"]),
-                                       band_mm=(float(r["band_mm"][0]), float(r["band_mm"][1])),
-                                       enabled_nozzles=int(r["enabled_nozzles"]),
-                                       enabled=None if runs is None else runs_to_mask(runs, model.nozzles)))
-            r0 = rs[0]
-            pr = RotaryPrint(method=r0["method"], head=model, tilt_deg=float(r0["tilt_deg"]),
-                             mount_angle_deg=float(r0["mount_angle_deg"]), direction=int(r0["direction"]),
-                             dpi_y=float(r0["dpi_y"]), placement=Placement.from_json(r0["placement"]), swathes=tuple(sws))
-            if mname not in designs:
-                raise InputFileError(f"layer {i}: no design region of {mname} for its images", path=p)
-            out.append(ReplayImage(layer=i, material=mname, ink=ink, head=h["name"], print=pr, design=designs[mname],
-                                   clocks=clocks, files=files_of, steps=steps, interlace=q))
-        yield lay, out
+        try:
+            out = _layer_images(lay, prog, p, files, want)
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            if isinstance(exc, RotoprintError):
+                raise
+            where = f"layer {R.show_value(lay.get('index'))}" if isinstance(lay, dict) else "a layer"
+            raise InputFileError(f"{where}: program record is incomplete or invalid: {type(exc).__name__}: "
+                                 f"{str(exc)[:80]}", path=p) from None
+        if out is not None:
+            yield lay, out
 
 
 def replay_program(path: str | Path, *, layer: int | None = None, on_step: Callable[[str, int, int], None] | None = None,

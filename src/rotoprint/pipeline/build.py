@@ -243,7 +243,7 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
     secondary the simulator's cell model of the first ink's pass 0 (``iou``,
     ``uncovered_fraction``: pixels of the design whose nearest site of that pass's lattice
     fired; each pass's lattice tiles the design by itself)."""
-    from ..rotary.deposit import InkDrops, deposit_film, ink_drops
+    from ..rotary.deposit import DepositOptions, InkDrops, LevelOptions, deposit_film, ink_drops
     from ..rotary.simulate import place_drops, render_overlay, simulate
 
     pick = _simulate_layers(present, job.spec.process.simulate_layers)
@@ -252,6 +252,9 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
     head = plan.device.head
     for mname, idx in pick.items():
         inks = [ink.name for ink in job.materials[mname].inks]
+        # each ink's film levels with its own figures where it gives them, else the head's
+        levels = [LevelOptions.from_head(head, set_time_s=ink.set_time_s, viscosity_mpa_s=ink.viscosity_mpa_s,
+                                         surface_tension_mn_m=ink.surface_tension_mn_m) for ink in job.materials[mname].inks]
         for i in idx:
             step("simulate", len(overlays), total)
             sections = plan.sections(i)
@@ -272,7 +275,7 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
                     parts.append(InkDrops(d.col, d.row, d.volume_pl * float(w)))
                 sets.append(InkDrops.concat(parts))
             dep = deposit_film(ref, weighted[inks[0]][0][0].placement, head, sets,
-                               pairs=[(0, 1)] if len(sets) == 2 else [])
+                               pairs=[(0, 1)] if len(sets) == 2 else [], options=DepositOptions(level=tuple(levels)))
             films = {ink: {k: v for k, v in f.to_json().items() if k != "radial_bins"} for ink, f in zip(inks, dep.films)}
             name = f"overlays/layer_{i:05d}-{mname}.png"
             (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))
@@ -288,19 +291,43 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
 
 def coverage_summary(overlays: list[dict]) -> dict:
     """Per material, the headline coverage of ``plan.json`` and the report: the deposit
-    model's worst uncovered fraction of the interior over the simulated layers and inks, the
-    thinnest-to-mean ratio, and the cell model's lowest IoU (secondary)."""
+    model's worst uncovered fraction of the interior over the simulated layers and inks (as
+    landed: levelling does not fill a dry cell), the thinnest-to-mean ratio (of the levelled
+    film where every ink levels, ``set_time_s > 0``, else as landed; both are given, and
+    ``thinnest_to_mean_basis`` says which is the headline), and the cell model's lowest IoU
+    (secondary)."""
     out: dict[str, dict] = {}
     for o in overlays:
         m = out.setdefault(o["material"], {"model": "deposit", "layers": [], "uncovered_fraction": 0.0, "thinnest_to_mean": None,
-                                            "band_uncovered_fraction": 0.0, "mean_um": [], "cell_model_iou": None})
+                                            "band_uncovered_fraction": 0.0, "mean_um": [], "cell_model_iou": None,
+                                            "thinnest_to_mean_as_landed": None, "thinnest_to_mean_levelled": None,
+                                            "thinnest_to_mean_basis": "as landed", "levelling": []})
         m["layers"].append(o["layer"])
         m["uncovered_fraction"] = max(m["uncovered_fraction"], o["uncovered_fraction_worst_ink"])
         m["band_uncovered_fraction"] = max(m["band_uncovered_fraction"], max(f["band_uncovered_fraction"] for f in o["inks"].values()))
         ttm = min(f["thinnest_to_mean"] for f in o["inks"].values())
-        m["thinnest_to_mean"] = ttm if m["thinnest_to_mean"] is None else min(m["thinnest_to_mean"], ttm)
+        m["thinnest_to_mean_as_landed"] = ttm if m["thinnest_to_mean_as_landed"] is None else min(m["thinnest_to_mean_as_landed"], ttm)
+        levs = [f.get("levelled") for f in o["inks"].values()]
+        if all(lv is not None for lv in levs):
+            lt = min(lv["thinnest_to_mean"] for lv in levs)
+            m["thinnest_to_mean_levelled"] = lt if m["thinnest_to_mean_levelled"] is None else min(m["thinnest_to_mean_levelled"], lt)
+            for ink, lv in zip(o["inks"], levs):
+                par = {"ink": ink, "set_time_s": lv["set_time_s"], "viscosity_mpa_s": lv["viscosity_mpa_s"],
+                       "surface_tension_mn_m": lv["surface_tension_mn_m"], "h0_rule": lv["h0_rule"]}
+                if par not in m["levelling"]:
+                    m["levelling"].append(par)
+        else:
+            m["thinnest_to_mean_levelled"] = None
+            m["levelling"] = []
+        m["levelled_everywhere"] = m.get("levelled_everywhere", True) and all(lv is not None for lv in levs)
         m["mean_um"].append(o["deposit"]["mean_um"])
         m["cell_model_iou"] = o["iou"] if m["cell_model_iou"] is None else min(m["cell_model_iou"], o["iou"])
+    for m in out.values():
+        lev = m.pop("levelled_everywhere", False) and m["thinnest_to_mean_levelled"] is not None
+        if not lev:
+            m["thinnest_to_mean_levelled"], m["levelling"] = None, []
+        m["thinnest_to_mean_basis"] = "levelled" if lev else "as landed"
+        m["thinnest_to_mean"] = m["thinnest_to_mean_levelled"] if lev else m["thinnest_to_mean_as_landed"]
     return out
 
 

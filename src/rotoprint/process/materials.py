@@ -22,6 +22,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Literal
 
+from .. import ranges as R
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ..errors import ConfigError, InputFileError
@@ -63,6 +64,11 @@ class Ink(_Strict):
     wait_after_s: float = Field(default=0.0, ge=0, le=_DAY_S)
     ph: tuple[Annotated[float, Field(ge=-2, le=16)], Annotated[float, Field(ge=-2, le=16)]] | None = None
     warning: str = ""
+    #: film levelling (rotary/deposit.py LevelOptions): this ink's viscosity, surface tension
+    #: and the time its wet film flows before it sets; None: the head's (nominal) figures
+    viscosity_mpa_s: float | None = Field(default=None, ge=R.VISCOSITY_MPA_S.lo, le=R.VISCOSITY_MPA_S.hi)
+    surface_tension_mn_m: float | None = Field(default=None, ge=R.SURFACE_TENSION_MN_M.lo, le=R.SURFACE_TENSION_MN_M.hi)
+    set_time_s: float | None = Field(default=None, ge=R.SET_TIME_S.lo, le=R.SET_TIME_S.hi)
 
     @field_validator("name")
     @classmethod

@@ -170,12 +170,27 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
           f"({_e(h0.interlace.get('clock', 'job'))}). Each layer's drops of every pass and ink spread to footprints and merged; "
           "the interior is the design less a band half a footprint wide. The cell model's IoU is secondary.</p>"
           "<table id='coverage'><tr><th>material</th><th>layers</th><th>interior uncovered</th><th>band uncovered</th>"
-          "<th>thinnest / mean</th><th>cell model IoU</th></tr>")
+          "<th>thinnest / mean</th><th>thinnest / mean as landed</th><th>cell model IoU</th></tr>")
         for m, c in cov.items():
+            basis = c.get("thinnest_to_mean_basis", "as landed")
             w(f"<tr><td>{_e(m)}</td><td>{', '.join(str(x) for x in c['layers'])}</td><td><b>{100 * c['uncovered_fraction']:.2f} %</b></td>"
-              f"<td>{100 * c['band_uncovered_fraction']:.2f} %</td><td>{_fmt(c['thinnest_to_mean'])}</td>"
+              f"<td>{100 * c['band_uncovered_fraction']:.2f} %</td><td><b>{_fmt(c['thinnest_to_mean'])}</b> ({_e(basis)})</td>"
+              f"<td>{_fmt(c.get('thinnest_to_mean_as_landed', c['thinnest_to_mean']))}</td>"
               f"<td>{_fmt(c['cell_model_iou'])}</td></tr>")
         w("</table>")
+        words = []
+        for m, c in cov.items():
+            if c.get("thinnest_to_mean_basis") == "levelled":
+                pars = "; ".join(f"{_e(p['ink'])}: set time {p['set_time_s']:g} s, viscosity {p['viscosity_mpa_s']:g} mPa s, "
+                                 f"surface tension {p['surface_tension_mn_m']:g} mN/m" for p in c.get("levelling", []))
+                words.append(f"{_e(m)} ({pars})")
+        if words:
+            w("<p style='font-size:13px'>Thinnest / mean is that of the <b>levelled</b> film for " + ", ".join(words) +
+              ": the wet film flows under surface tension before it sets (linearised thin-film equation, Orchard 1962; "
+              "h0 the 10th percentile of the as-landed wet film; nominal ink figures unless the ink gives its own). "
+              "The uncovered fractions are as landed: levelling does not fill a dry pinhole.</p>")
+        else:
+            w("<p style='font-size:13px'>Thinnest / mean is that of the film as landed (no ink levels: set time 0 s).</p>")
     if plan_json.get("layer_parts"):
         w("<h3>CAD layers</h3><table id='cad-layers'><tr><th>part</th><th>material</th><th>file</th><th>z (mm)</th>"
           "<th>area (mm2)</th><th>regions / holes</th><th>narrowest track / gap (mm)</th><th>terminals</th></tr>")
@@ -287,5 +302,8 @@ def _film_caption(o: dict) -> str:
     f = o.get("deposit")
     if not f:
         return ""
+    lv = f.get("levelled")
+    ttm = (f"thinnest / mean {lv['thinnest_to_mean']:.2f} levelled ({lv['set_time_s']:g} s), {f['thinnest_to_mean']:.2f} as landed"
+           if lv else f"thinnest / mean {f['thinnest_to_mean']:.2f} as landed")
     return (f"<b>film: {100 * f['uncovered_fraction']:.2f} % of the interior uncovered</b> "
-            f"({f['footprint_um']:.0f} um footprints; thinnest / mean {f['thinnest_to_mean']:.2f}); ")
+            f"({f['footprint_um']:.0f} um footprints; {ttm}); ")

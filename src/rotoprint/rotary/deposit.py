@@ -48,6 +48,9 @@ from .placement import Placement
 
 __all__ = [
     "DepositOptions",
+    "LevelOptions",
+    "LevelledFilm",
+    "levelling_rate_um4_per_s",
     "InkDrops",
     "FilmReport",
     "Deposit",
@@ -126,12 +129,18 @@ class DepositOptions:
         design pixel), 2..50.
     strip_cells : int
         Cells per strip and film processed at once (memory: 8 bytes each, a few arrays).
+    level : LevelOptions or tuple of (LevelOptions or None), optional
+        Level each film under surface tension after all its drops landed (``set_time_s >
+        0``; one for all films, or one per drop set, e.g. per ink): such a film gets
+        :attr:`FilmReport.levelled` beside its as-landed figures, which are unchanged. The grid
+        is deposited a second time in windows with halos.
     """
 
     spread_factor: float | None = None
     footprint_um: float | None = None
     cells_per_footprint: float = 5.0
     strip_cells: int = 2_000_000
+    level: "LevelOptions | tuple[LevelOptions | None, ...] | None" = None
 
     def __post_init__(self) -> None:
         for name in ("spread_factor", "footprint_um"):
@@ -142,6 +151,8 @@ class DepositOptions:
             raise ConfigError(f"cells_per_footprint must be in 2..50, got {self.cells_per_footprint!r}")
         if not 10_000 <= int(self.strip_cells) <= 1_000_000_000:
             raise ConfigError(f"strip_cells must be in 10000..1e9, got {self.strip_cells!r}")
+        if isinstance(self.level, list):
+            object.__setattr__(self, "level", tuple(self.level))
 
     def full_footprint_um(self, head: InkjetHead) -> float:
         """Footprint diameter of the head's full drop, um."""
@@ -149,6 +160,116 @@ class DepositOptions:
             return float(self.footprint_um)
         sf = head.spread_factor if self.spread_factor is None else self.spread_factor
         return float(footprint_diameter_um(head.drop_volume_pl, sf))
+
+
+def levelling_rate_um4_per_s(surface_tension_mn_m: float, viscosity_mpa_s: float, h0_um: float) -> float:
+    """``D = sigma h0^3 / (3 eta)`` of the linearised thin-film equation, um^4/s.
+
+    A thickness ripple of wavelength ``lambda`` decays as ``exp(-D (2 pi / lambda)^4 t)``
+    (Orchard 1962).
+
+    Examples
+    --------
+    >>> f"{levelling_rate_um4_per_s(30.0, 10.0, 10.0):.6g}"  # 30 mN/m, 10 mPa s, 10 um: 1e-15 m^4/s
+    '1e+09'
+    """
+    # sigma [N/m] h0^3 [m^3] / (3 eta [Pa s]) [m^4/s] * 1e24 [um^4/m^4]
+    return float(surface_tension_mn_m * 1e-3 * (h0_um * 1e-6) ** 3 / (3.0 * viscosity_mpa_s * 1e-3) * 1e24)
+
+
+@dataclass(frozen=True)
+class LevelOptions:
+    """How the wet film levels under surface tension before it sets (see ``_levelling``).
+
+    Parameters
+    ----------
+    set_time_s : float
+        Time the wet film flows before it sets, s; 0: no levelling. 0..3600.
+    viscosity_mpa_s : float
+        Ink viscosity, mPa s, 0.1..1e6.
+    surface_tension_mn_m : float
+        Ink surface tension, mN/m, 1..200.
+    h0_percentile : float
+        The film thickness ``h0`` of the linear model is this percentile of the as-landed
+        wet interior film (the rate goes with ``h0^3``, so a thin region levels slower: a low
+        percentile is the conservative choice), 0..100.
+    h0_um : float, optional
+        A fixed ``h0`` instead of the percentile, um.
+    halo_lengths : float
+        The kernel is truncated at this many levelling lengths ``L = (D t)^(1/4)`` (its
+        weight beyond 10 L is 0.5 %), 4..40.
+    window_cells : int
+        Cells of one levelling window (a strip plus halos, whole grid width), bounding the
+        memory (about 40 bytes a cell); a window is at least ``4 halo`` rows.
+    """
+
+    set_time_s: float = 0.0
+    viscosity_mpa_s: float = 10.0
+    surface_tension_mn_m: float = 30.0
+    h0_percentile: float = 10.0
+    h0_um: float | None = None
+    halo_lengths: float = 10.0
+    window_cells: int = 24_000_000
+
+    def __post_init__(self) -> None:
+        from .. import ranges as R
+
+        for name, rg in (("set_time_s", R.SET_TIME_S), ("viscosity_mpa_s", R.VISCOSITY_MPA_S),
+                         ("surface_tension_mn_m", R.SURFACE_TENSION_MN_M)):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and v in rg):
+                raise ConfigError(f"{name} must be a number in {rg.text()}, got {v!r}")
+        if not (isinstance(self.h0_percentile, (int, float)) and 0.0 <= self.h0_percentile <= 100.0):
+            raise ConfigError(f"h0_percentile must be in 0..100, got {self.h0_percentile!r}")
+        if self.h0_um is not None and not (math.isfinite(self.h0_um) and 0 < self.h0_um <= 1e5):
+            raise ConfigError(f"h0_um must be a number in (0, 1e5], got {self.h0_um!r}")
+        if not (math.isfinite(self.halo_lengths) and 4.0 <= self.halo_lengths <= 40.0):
+            raise ConfigError(f"halo_lengths must be in 4..40, got {self.halo_lengths!r}")
+        if not 10_000 <= int(self.window_cells) <= 2_000_000_000:
+            raise ConfigError(f"window_cells must be in 10000..2e9, got {self.window_cells!r}")
+
+    @classmethod
+    def from_head(cls, head: InkjetHead, **overrides) -> LevelOptions:
+        """The head's (preset's) ``set_time_s``, ``viscosity_mpa_s`` and ``surface_tension_mn_m``,
+        with ``overrides`` (any field; ``None`` values are ignored)."""
+        base = dict(set_time_s=head.set_time_s, viscosity_mpa_s=head.viscosity_mpa_s,
+                    surface_tension_mn_m=head.surface_tension_mn_m)
+        base.update({k: v for k, v in overrides.items() if v is not None})
+        return cls(**base)
+
+    @property
+    def active(self) -> bool:
+        return self.set_time_s > 0.0
+
+
+@dataclass(frozen=True)
+class LevelledFilm:
+    """Figures of the film after levelling (interior, as :class:`FilmReport`). Thicknesses in um.
+
+    The uncovered fraction is the as-landed one: a dry cell stays dry (the linear model with a
+    pinned contact line does not fill a pinhole), so it is not repeated here.
+    """
+
+    set_time_s: float
+    viscosity_mpa_s: float
+    surface_tension_mn_m: float
+    h0_um: float
+    h0_rule: str
+    rate_um4_per_s: float
+    levelling_length_um: float
+    halo_cells: tuple[int, int]
+    volume_error_fraction: float
+    thinnest_um: float
+    mean_um: float
+    thinnest_to_mean: float
+    radial_spread: float
+    below_half_landed_mean_fraction: float
+    radial_bins: tuple[tuple[float, float, float], ...] = field(default=())
+
+    def to_json(self) -> dict:
+        d = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+        d["radial_bins"] = [{"r_mm": a, "mean_um": b, "area_mm2": c} for a, b, c in self.radial_bins]
+        return d
 
 
 @dataclass(frozen=True, eq=False)
@@ -216,10 +337,14 @@ class FilmReport:
     thinnest_to_mean: float
     radial_spread: float
     radial_bins: tuple[tuple[float, float, float], ...] = field(default=())
+    #: the film after levelling (:class:`LevelOptions` with ``set_time_s > 0``), else None
+    levelled: LevelledFilm | None = None
 
     def to_json(self) -> dict:
-        d = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items()}
+        d = {k: (list(v) if isinstance(v, tuple) else v) for k, v in self.__dict__.items() if k != "levelled"}
         d["radial_bins"] = [{"r_mm": a, "mean_um": b, "area_mm2": c} for a, b, c in self.radial_bins]
+        if self.levelled is not None:
+            d["levelled"] = self.levelled.to_json()
         return d
 
 
@@ -238,6 +363,8 @@ class Deposit:
         The first film's thickness map (um) when asked for (``keep_map=True``), grid cell
         ``(r, c)`` at design coordinates ``((c + 0.5 - origin[0]) / n[0], (r + 0.5 -
         origin[1]) / n[1])``.
+    levelled_thickness : (rows, cols) float64 or None
+        The first film's levelled map, likewise (``keep_map=True`` and levelling).
     """
 
     films: tuple[FilmReport, ...]
@@ -245,6 +372,7 @@ class Deposit:
     cells_per_pixel: tuple[int, int]
     origin_cells: tuple[int, int]
     thickness: np.ndarray | None = None
+    levelled_thickness: np.ndarray | None = None
 
     def to_json(self) -> dict:
         out = self.films[0].to_json() if len(self.films) == 1 else {"films": [f.to_json() for f in self.films]}
@@ -292,7 +420,8 @@ def deposit_film(
     pairs : sequence of (int, int)
         Index pairs of reactive reagents to compare.
     keep_map : bool
-        Return the first film's whole thickness map (memory: 8 bytes per cell).
+        Return the first film's whole thickness map (memory: 8 bytes per cell), and its
+        levelled map when levelling.
     use_jit : bool
         numba kernels (default) or the numpy reference (slow; for tests).
 
@@ -389,8 +518,20 @@ def deposit_film(
                 bins_sum=np.zeros(0), bins_n=np.zeros(0, np.int64), covered_design=0) for _ in range(nsets)]
     pair_acc = [[0, 0] for _ in pairs]
     full = np.zeros((rows, cols), np.float64) if keep_map else None
-    for r0 in range(0, rows, strip_rows):
-        r1 = min(rows, r0 + strip_rows)
+    def interior_cells(r0: int, r1: int, inter_bits: np.ndarray):
+        """The interior's (row, col) and radial bin of grid rows r0..r1 from the packed
+        interior mask of the first pass (the levelling pass does not recompute distances)."""
+        inter = np.unpackbits(inter_bits[r0:r1], axis=1, count=cols).astype(bool)
+        ii, jj = np.nonzero(inter)
+        bidx = None
+        if ii.size:
+            X, Y = placement.to_platform((jj + 0.5 - ox) / nx, (ii + r0 + 0.5 - oy) / ny)
+            bidx = np.floor(np.hypot(X, Y)).astype(np.int64)
+        return ii, jj, bidx
+
+    def geometry(r0: int, r1: int):
+        """Design, interior and band cells of grid rows r0..r1, the interior's (row, col)
+        and radial bin (independent of the strips: the distance reaches ``margin``)."""
         e0, e1 = max(0, r0 - margin), min(rows, r1 + margin)
         gr = np.arange(e0, e1)
         drow = np.floor((gr + 0.5 - oy) / ny).astype(np.int64)
@@ -405,19 +546,41 @@ def deposit_film(
             inter = des
         band = des & ~inter
         ii, jj = np.nonzero(inter)
+        bidx = None
         if ii.size:
             xd = (jj + 0.5 - ox) / nx
             yd = (ii + r0 + 0.5 - oy) / ny
             X, Y = placement.to_platform(xd, yd)
             rad = np.hypot(X, Y)
             bidx = np.floor(rad).astype(np.int64)
+        return des, inter, band, ii, jj, bidx
+
+    def deposit_rows(si: int, r0: int, r1: int) -> np.ndarray:
+        u, v, vol, a, rs, hh, norm, _ = prepared[si]
+        film = np.zeros((r1 - r0, cols), np.float64)
+        lo = np.searchsorted(v, r0 - a_max / gy - 2.0, side="left")
+        hi = np.searchsorted(v, r1 + a_max / gy + 2.0, side="right")
+        if hi > lo:
+            strip_fn(u[lo:hi], v[lo:hi], vol[lo:hi], a[lo:hi], rs[lo:hi], hh[lo:hi], norm[lo:hi], gx, gy, r0, film)
+        return film
+
+    level = opts.level
+    levels = list(level) if isinstance(level, (list, tuple)) else [level] * len(drop_sets)
+    if len(levels) != len(drop_sets):
+        raise ConfigError(f"level: {len(levels)} options for {len(drop_sets)} drop sets")
+    levels = [lv if lv is not None and lv.active else None for lv in levels]
+    n_design_cells = int(mask.sum()) * nx * ny
+    sample_stride = max(1, n_design_cells // 2_000_000)
+    samples: list[list[np.ndarray]] = [[] for _ in range(nsets)]
+    inter_bits = np.zeros((rows, (cols + 7) // 8), np.uint8) if any(lv is not None for lv in levels) else None
+    for r0 in range(0, rows, strip_rows):
+        r1 = min(rows, r0 + strip_rows)
+        des, inter, band, ii, jj, bidx = geometry(r0, r1)
+        if inter_bits is not None:
+            inter_bits[r0:r1] = np.packbits(inter, axis=1)
         covered = []
-        for si, (u, v, vol, a, rs, hh, norm, _) in enumerate(prepared):
-            film = np.zeros((r1 - r0, cols), np.float64)
-            lo = np.searchsorted(v, r0 - a_max / gy - 2.0, side="left")
-            hi = np.searchsorted(v, r1 + a_max / gy + 2.0, side="right")
-            if hi > lo:
-                strip_fn(u[lo:hi], v[lo:hi], vol[lo:hi], a[lo:hi], rs[lo:hi], hh[lo:hi], norm[lo:hi], gx, gy, r0, film)
+        for si in range(nsets):
+            film = deposit_rows(si, r0, r1)
             if full is not None and si == 0:
                 full[r0:r1] = film
             cov = film > 0
@@ -433,6 +596,8 @@ def deposit_film(
             ac["band_unc"] += int((band & ~cov).sum())
             if ii.size:
                 t = film[ii, jj]
+                if levels[si] is not None:
+                    samples[si].append(t[t > 0][::sample_stride])
                 ac["unc"] += int((t <= 0).sum())
                 ac["tmin"] = min(ac["tmin"], float(t.min()))
                 ac["tsum"] += float(t.sum())
@@ -446,6 +611,14 @@ def deposit_film(
             ci_, cj_ = covered[i] & des, covered[j] & des
             pair_acc[pi][0] += int((ci_ & ~cj_).sum())
             pair_acc[pi][1] += int((cj_ & ~ci_).sum())
+    levelled: list[LevelledFilm | None] = [None] * nsets
+    full_lev = None
+    for si in range(nsets):
+        if levels[si] is not None:
+            levelled[si], lmap = _level_film(si, levels[si], samples[si], acc[si], rows, cols, gx, gy, area_mm2,
+                                             lambda a, b: interior_cells(a, b, inter_bits), deposit_rows, keep_map and si == 0)
+            if lmap is not None:
+                full_lev = lmap
     films = []
     for si, (s, ac, prep) in enumerate(zip(drop_sets, acc, prepared)):
         planned = float(np.sum(s.volume_pl))
@@ -490,13 +663,96 @@ def deposit_film(
                 thinnest_to_mean=tmin / mean if n_int and mean > 0 else float("nan"),
                 radial_spread=spread,
                 radial_bins=tuple(bins),
+                levelled=levelled[si],
             )
         )
     pair_out = []
     for (i, j), (a_nb, b_na) in zip(pairs, pair_acc):
         ca, cb = acc[i]["covered_design"], acc[j]["covered_design"]
         pair_out.append({"a": i, "b": j, "a_not_b_fraction": a_nb / ca if ca else 0.0, "b_not_a_fraction": b_na / cb if cb else 0.0})
-    return Deposit(films=tuple(films), pairs=tuple(pair_out), cells_per_pixel=(nx, ny), origin_cells=(ox, oy), thickness=full)
+    return Deposit(films=tuple(films), pairs=tuple(pair_out), cells_per_pixel=(nx, ny), origin_cells=(ox, oy), thickness=full,
+                   levelled_thickness=full_lev)
+
+
+def _bins_spread(bins_sum: np.ndarray, bins_n: np.ndarray, area_mm2: float):
+    bins, spread = [], float("nan")
+    nz = np.flatnonzero(bins_n)
+    if nz.size:
+        med = float(np.median(bins_n[nz]))
+        means = bins_sum[nz] / bins_n[nz]
+        bins = [(float(b), float(m), float(n * area_mm2)) for b, m, n in zip(nz, means, bins_n[nz])]
+        keep = bins_n[nz] >= BIN_MIN_SHARE * med
+        if keep.any():
+            mk = means[keep]
+            spread = float(np.max(np.abs(mk / mk.mean() - 1.0)))
+    return tuple(bins), spread
+
+
+def _level_film(si, lev: LevelOptions, samples, ac, rows, cols, gx, gy, area_mm2, interior, deposit_rows, keep_map):
+    """Level film ``si`` window by window; its figures and (``keep_map``) its map."""
+    from . import _levelling as _lv
+
+    if lev.h0_um is not None:
+        h0, rule = float(lev.h0_um), "fixed"
+    else:
+        wet = np.concatenate(samples) if samples else np.zeros(0)
+        if not wet.size:
+            return None, None
+        h0, rule = float(np.percentile(wet, lev.h0_percentile)), f"p{lev.h0_percentile:g} of the as-landed wet interior film"
+    if not h0 > 0.0:
+        return None, None
+    rate = levelling_rate_um4_per_s(lev.surface_tension_mn_m, lev.viscosity_mpa_s, h0)
+    kernel = _lv.levelling_kernel(rate * lev.set_time_s, gx, gy, lev.halo_lengths)
+    hy, hx = (kernel.shape[0] - 1) // 2, (kernel.shape[1] - 1) // 2
+    core_rows = max(2 * hy, int(lev.window_cells) // (cols + 2 * hx) - 2 * hy, 1)
+    tot = tsum = 0.0
+    tmin = math.inf
+    n_int = below = 0
+    landed_mean = ac["tsum"] / ac["interior"] if ac["interior"] else float("nan")
+    bins_sum, bins_n = np.zeros(0), np.zeros(0, np.int64)
+    full = np.zeros((rows, cols), np.float64) if keep_map else None
+    for r0 in range(0, rows, core_rows):
+        r1 = min(rows, r0 + core_rows)
+        e0, e1 = max(0, r0 - hy), min(rows, r1 + hy)
+        film_w = deposit_rows(si, e0, e1)
+        lv = _lv.level_window(film_w, kernel, slice(r0 - e0, r1 - e0))
+        del film_w
+        if full is not None:
+            full[r0:r1] = lv
+        tot += float(lv.sum())
+        ii, jj, bidx = interior(r0, r1)
+        if ii.size:
+            t = lv[ii, jj]
+            n_int += int(ii.size)
+            tmin = min(tmin, float(t.min()))
+            tsum += float(t.sum())
+            below += int((t < 0.5 * landed_mean).sum())
+            nb = int(bidx.max()) + 1
+            if bins_sum.size < nb:
+                bins_sum = np.pad(bins_sum, (0, nb - bins_sum.size))
+                bins_n = np.pad(bins_n, (0, nb - bins_n.size))
+            bins_sum[:nb] += np.bincount(bidx, weights=t, minlength=nb)
+            bins_n[:nb] += np.bincount(bidx, minlength=nb)
+    mean = tsum / n_int if n_int else float("nan")
+    bins, spread = _bins_spread(bins_sum, bins_n, area_mm2)
+    out = LevelledFilm(
+        set_time_s=float(lev.set_time_s),
+        viscosity_mpa_s=float(lev.viscosity_mpa_s),
+        surface_tension_mn_m=float(lev.surface_tension_mn_m),
+        h0_um=h0,
+        h0_rule=rule,
+        rate_um4_per_s=rate,
+        levelling_length_um=(rate * lev.set_time_s) ** 0.25,
+        halo_cells=(hx, hy),
+        volume_error_fraction=tot / ac["dep"] - 1.0 if ac["dep"] else 0.0,
+        thinnest_um=tmin if n_int else float("nan"),
+        mean_um=mean,
+        thinnest_to_mean=tmin / mean if n_int and mean > 0 else float("nan"),
+        radial_spread=spread,
+        below_half_landed_mean_fraction=below / n_int if n_int else 0.0,
+        radial_bins=bins,
+    )
+    return out, full
 
 
 def deposit_print(prints, design: np.ndarray, *, options: DepositOptions | None = None, dead_nozzles: tuple[int, ...] = (),
@@ -510,7 +766,7 @@ def deposit_print(prints, design: np.ndarray, *, options: DepositOptions | None 
     design : (H, W) uint8
         The design (binary or grey; see :func:`~rotoprint.rotary.simulate.design_mask`).
     options, keep_map
-        As in :func:`deposit_film`.
+        As in :func:`deposit_film` (``options.level`` levels the film).
     dead_nozzles, jitter_um, seed
         As in :func:`~rotoprint.rotary.simulate.place_drops`.
 

@@ -33,7 +33,7 @@ from .head import check_tilt
 from .placement import Placement
 from .printdata import SIDECAR_FORMAT, RotaryPrint, SwatheImage, levels_to_png, png_to_levels, runs_to_mask
 
-__all__ = ["print_files", "print_paths", "read_print", "swathe_filenames", "sidecar_path"]
+__all__ = ["check_print_fields", "print_files", "print_paths", "read_print", "swathe_filenames", "sidecar_path"]
 
 
 def swathe_filenames(out_png: Path, n: int) -> list[Path]:
@@ -115,16 +115,20 @@ def sidecar_path(path: str | Path) -> Path:
     return cand
 
 
-def _number(d: dict, key: str, where: str, sp: Path, *, positive: bool = False, rng: R.Range | None = None) -> float:
+_FINITE = R.Range(-math.inf, math.inf)
+
+
+def _number(d: dict, key: str, where: str, sp: Path, *, positive: bool = False, rng: R.Range | None = None,
+            what: str = "sidecar field") -> float:
     """``d[key]`` as a finite float (``> 0`` if ``positive``; in ``rng`` if given; an int if
-    ``rng.integer``), or an InputFileError naming the field."""
+    ``rng.integer``), or an InputFileError naming the field (``what`` before its name)."""
     v = d[key]
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise InputFileError(f"sidecar field {where}{key} must be a finite number, got {v!r}", path=sp)
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or v not in _FINITE:  # an int past floats too
+        raise InputFileError(f"{what} {where}{key} must be a finite number, got {R.show_value(v)}", path=sp)
     if positive and not v > 0:
-        raise InputFileError(f"sidecar field {where}{key} must be > 0, got {v!r}", path=sp)
+        raise InputFileError(f"{what} {where}{key} must be > 0, got {v!r}", path=sp)
     if rng is not None:
-        return check_range(v, rng, f"sidecar field {where}{key}", error=InputFileError, path=sp)
+        return check_range(v, rng, f"{what} {where}{key}", error=InputFileError, path=sp)
     return float(v)
 
 
@@ -132,50 +136,55 @@ _FIRING_INDEX = R.Range(-R.MAX_COUNT, R.MAX_COUNT, integer=True)
 _DPHI_RAD = R.Range(0.0, 2 * math.pi, "rad", lo_open=True)
 
 
-def _check_sidecar(side: dict, head: InkjetHead, sp: Path) -> None:
+def check_print_fields(side: dict, head: InkjetHead, sp: Path, *, what: str = "sidecar field", flat: bool = False) -> None:
     """Range checks on the numbers of a sidecar (:mod:`rotoprint.ranges`): tilt within the
     head's limit, angles, densities and radii in range, integer counts and nozzle runs within
-    the head, and every swathe image sized before it is read."""
-    tilt = _number(side, "tilt_deg", "", sp)
+    the head, and every swathe image sized before it is read.
+
+    Also for the image records of a machine program (:mod:`rotoprint.machine.replay`), which
+    carry the same fields: ``what`` starts each message (``"sidecar field"``, or the record's
+    place and ``"field"``), and ``flat`` names a swathe's fields without their ``swathes[j].``
+    (a record of one swathe). Raises InputFileError naming ``sp``; KeyError if a field is missing."""
+    tilt = _number(side, "tilt_deg", "", sp, what=what)
     try:
         check_tilt(head, tilt)
     except RotoprintError as exc:
-        raise InputFileError(f"sidecar field tilt_deg: {exc.problem}", path=sp) from None
-    _number(side, "mount_angle_deg", "", sp, rng=R.ANGLE_DEG)
-    _number(side, "dpi_y", "", sp, positive=True, rng=R.DPI)
+        raise InputFileError(f"{what} tilt_deg: {exc.problem}", path=sp) from None
+    _number(side, "mount_angle_deg", "", sp, rng=R.ANGLE_DEG, what=what)
+    _number(side, "dpi_y", "", sp, positive=True, rng=R.DPI, what=what)
     if side["direction"] not in (1, -1) or isinstance(side["direction"], bool):
-        raise InputFileError(f"sidecar field direction must be 1 or -1, got {side['direction']!r}", path=sp)
+        raise InputFileError(f"{what} direction must be 1 or -1, got {R.show_value(side['direction'])}", path=sp)
     if not isinstance(side["swathes"], list) or not 1 <= len(side["swathes"]) <= R.SWATHES.hi:
-        raise InputFileError(f"sidecar field swathes must be a list of 1 to {R.SWATHES.hi:g} swathes", path=sp)
+        raise InputFileError(f"{what} swathes must be a list of 1 to {R.SWATHES.hi:g} swathes", path=sp)
     pixels = 0
     for j, d in enumerate(side["swathes"]):
-        where = f"swathes[{j}]."
-        dphi = _number(d, "dphi_rad", where, sp, positive=True, rng=_DPHI_RAD)
+        where = "" if flat else f"swathes[{j}]."
+        dphi = _number(d, "dphi_rad", where, sp, positive=True, rng=_DPHI_RAD, what=what)
         if "angle_per_firing_deg" in d:
-            deg = _number(d, "angle_per_firing_deg", where, sp, positive=True)
+            deg = _number(d, "angle_per_firing_deg", where, sp, positive=True, what=what)
             if not math.isclose(deg, math.degrees(dphi), rel_tol=1e-9):
-                raise InputFileError(f"sidecar field {where}angle_per_firing_deg is {deg!r}, but dphi_rad "
+                raise InputFileError(f"{what} {where}angle_per_firing_deg is {deg!r}, but dphi_rad "
                                      f"{dphi!r} is {math.degrees(dphi)!r} deg", path=sp)
-        _number(d, "pivot_radius_mm", where, sp, positive=True, rng=R.RADIUS_MM)
-        _number(d, "ref_radius_mm", where, sp, positive=True, rng=R.RADIUS_MM)
-        _number(d, "index", where, sp, rng=R.COUNT)
-        _number(d, "first_firing_index", where, sp, rng=_FIRING_INDEX)
-        firings = _number(d, "firings", where, sp, rng=R.Range(1, R.MAX_COUNT, integer=True))
-        nozzles = _number(d, "nozzles", where, sp, rng=R.Range(1, head.nozzles, integer=True))
-        _number(d, "enabled_nozzles", where, sp, rng=R.Range(0, head.nozzles, integer=True))
+        _number(d, "pivot_radius_mm", where, sp, positive=True, rng=R.RADIUS_MM, what=what)
+        _number(d, "ref_radius_mm", where, sp, positive=True, rng=R.RADIUS_MM, what=what)
+        _number(d, "index", where, sp, rng=R.COUNT, what=what)
+        _number(d, "first_firing_index", where, sp, rng=_FIRING_INDEX, what=what)
+        firings = _number(d, "firings", where, sp, rng=R.Range(1, R.MAX_COUNT, integer=True), what=what)
+        nozzles = _number(d, "nozzles", where, sp, rng=R.Range(1, head.nozzles, integer=True), what=what)
+        _number(d, "enabled_nozzles", where, sp, rng=R.Range(0, head.nozzles, integer=True), what=what)
         runs = d.get("enabled_nozzle_runs")
         if runs is not None:
             ok = isinstance(runs, list) and len(runs) <= head.nozzles and all(
                 isinstance(r, list) and len(r) == 2 and all(isinstance(k, int) and not isinstance(k, bool) for k in r)
                 and 0 <= r[0] < r[1] <= head.nozzles for r in runs)
             if not ok:
-                raise InputFileError(f"sidecar field {where}enabled_nozzle_runs must be [start, end) nozzle runs "
+                raise InputFileError(f"{what} {where}enabled_nozzle_runs must be [start, end) nozzle runs "
                                      f"within the head's {head.nozzles} nozzles", path=sp)
         if not isinstance(d["band_mm"], list) or len(d["band_mm"]) != 2:
-            raise InputFileError(f"sidecar field {where}band_mm must be [low, high], got {d['band_mm']!r}", path=sp)
-        lo, hi = (_number({"band_mm": v}, "band_mm", where, sp, rng=R.COORD_MM) for v in d["band_mm"])
+            raise InputFileError(f"{what} {where}band_mm must be [low, high], got {R.show_value(d['band_mm'])}", path=sp)
+        lo, hi = (_number({"band_mm": v}, "band_mm", where, sp, rng=R.COORD_MM, what=what) for v in d["band_mm"])
         if not hi >= lo:
-            raise InputFileError(f"sidecar field {where}band_mm must be [low, high] with high >= low, got {d['band_mm']!r}", path=sp)
+            raise InputFileError(f"{what} {where}band_mm must be [low, high] with high >= low, got {R.show_value(d['band_mm'])}", path=sp)
         pixels += firings * nozzles
     check_raster_fits(1, pixels, 2, what=f"{sp.name}: the swathe images")
 
@@ -224,7 +233,7 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
             err = exc.errors()[0]
             where = ".".join(str(p) for p in err["loc"])
             raise InputFileError(f"sidecar field head.{where}: {err['msg']}", path=sp) from None
-        _check_sidecar(side, head, sp)
+        check_print_fields(side, head, sp)
         placement = Placement.from_json(side["placement"])
         swathes = []
         for d in side["swathes"]:
