@@ -196,6 +196,113 @@ def test_sl1_member_bytes_the_same_with_and_without_the_window_path(tmp_path):
             assert za.read(n) == zb.read(n)
 
 
+def test_coverage_rows_match_the_jit_kernels_on_random_segments(monkeypatch):
+    """The row-by-row kernel against the whole-window jit kernels, exactly: closed loops,
+    open segments (tails right of the window), segments beyond the image on every side."""
+    from rotoprint.masks.coverage import coverage_window
+
+    rng = np.random.default_rng(11)
+    for it in range(60):
+        k = int(rng.integers(1, 40))
+        s = rng.random((k, 2)) * rng.integers(2, 70) - 6.0
+        e = np.roll(s, -1, axis=0) if it % 3 else rng.random((k, 2)) * 50 - 6.0
+        shape = (int(rng.integers(1, 50)), int(rng.integers(1, 50)))
+        fast = coverage_window(s, e, shape)
+        monkeypatch.setattr(accel, "native", None)
+        jit = coverage_window(s, e, shape)
+        monkeypatch.setattr(accel, "native", native)
+        assert fast[:2] == jit[:2] and np.array_equal(fast[2], jit[2]), it
+        assert (fast[3] is None) == (jit[3] is None) and (fast[3] is None or np.array_equal(fast[3], jit[3])), it
+
+
+def test_window_stats_match_numpy():
+    rng = np.random.default_rng(5)
+    for shape in [(0, 0), (0, 4), (3, 0), (1, 1), (7, 9), (40, 33), (5, 300)]:
+        for density in (0.0, 0.05, 1.0):
+            a = (rng.random(shape) < density).astype(np.uint8) * rng.integers(1, 256, shape, dtype=np.uint8)
+            rows, cols = np.flatnonzero(a.any(axis=1)), np.flatnonzero(a.any(axis=0))
+            box = (int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1) if rows.size else (0, 0, 0, 0)
+            assert native.window_stats(a, *a.shape) == (int(a.sum(dtype=np.uint64)), *box)
+
+
+def test_thumbnails_the_same_in_c_and_numpy(monkeypatch):
+    """thumb_rgb against thumbnail_png's numpy path, byte for byte: shrinking and growing on
+    either axis, binary and grey footprints, one-pixel ones."""
+    from rotoprint.io.formats._common import THUMBNAIL_SIZES, thumbnail_png
+
+    rng = np.random.default_rng(3)
+    feet = [np.full((1, 1), 7, np.uint8), np.full((900, 1), 200, np.uint8), np.full((1, 900), 255, np.uint8),
+            rng.integers(0, 256, (37, 53), dtype=np.uint8), (255 * (rng.random((300, 310)) < 0.5)).astype(np.uint8)]
+    for _ in range(12):
+        h, w = (int(v) for v in rng.integers(1, 1500, 2))
+        a = rng.integers(0, 256, (h, w), dtype=np.uint8) if rng.random() < 0.5 else (255 * (rng.random((h, w)) < 0.6)).astype(np.uint8)
+        feet.append(a)
+    for a in feet:
+        for size in THUMBNAIL_SIZES:
+            fast = thumbnail_png(a, size)
+            monkeypatch.setattr(accel, "native", None)
+            ref = thumbnail_png(a, size)
+            monkeypatch.setattr(accel, "native", native)
+            assert fast == ref, (a.shape, size)
+
+
+def test_equal_window_reused_only_for_equal_pixels(tmp_path):
+    """Layers of a box with a cavity in its upper half have the same window (rows, columns,
+    size) but not the same pixels: the PNG kept from the layer before is not reused for
+    them, and every mask is the general path's."""
+    from rotoprint import load_device, slice_mesh
+    from rotoprint.io.archives import JobInfo, read_job
+    from rotoprint.masks import MaskOptions, iter_masks
+    from rotoprint.mesh import Mesh
+    from rotoprint.pipeline import write_dlp_job
+
+    outer = box_triangles((3.0, 3.0, 2.0), (-1.5, -1.5, 0.0))
+    cavity = box_triangles((1.0, 1.0, 1.0), (-0.5, -0.5, 1.0))[:, ::-1]  # inward: a hole above z = 1
+    dev = load_device("prusa-sl1s")
+    job = slice_mesh(Mesh.from_triangles(np.concatenate([outer, cavity])), dev, layer_height_mm=0.25)
+    p = dev.projector
+    info = JobInfo(job_name="t", layer_height_mm=0.25, layer_count=len(job), copies=1, width_px=job.grid.width,
+                   height_px=job.grid.height, pixel_x_mm=job.grid.pitch_x_mm, pixel_y_mm=job.grid.pitch_y_mm,
+                   mirror_x=True, mirror_y=False, orientation=p.orientation, exposure_s=2, first_exposure_s=20,
+                   first_exposure_layers=1, printer_model="SL1S")
+    opts = MaskOptions(mirror_x=True)
+    write_dlp_job(job, tmp_path / "job.sl1s", info, opts)
+    a = read_job(tmp_path / "job.sl1s")
+    want = [m.image for m in iter_masks(job, opts)]
+    assert len(a) == len(want) == 8
+    assert not np.array_equal(want[0], want[-1])  # (the cavity shows)
+    for i, w in enumerate(want):
+        np.testing.assert_array_equal(a.mask(i), w)
+
+
+def test_archive_the_same_made_in_threads_or_in_the_calling_thread(tmp_path, monkeypatch):
+    """The layers after the samples are made by two render threads, or in the calling thread
+    when they are few or cheap (pipeline.journal.SMALL_REST_S): the same bytes either way."""
+    import zipfile
+
+    from rotoprint import load_device, slice_mesh
+    from rotoprint.io.archives import JobInfo
+    from rotoprint.masks import MaskOptions
+    from rotoprint.pipeline import journal, write_dlp_job
+
+    dev = load_device("prusa-sl1s")
+    job = slice_mesh(uv_sphere_mesh(2.0, 16, 32), dev, layer_height_mm=0.25)
+    p = dev.projector
+    info = JobInfo(job_name="t", layer_height_mm=0.25, layer_count=len(job), copies=1, width_px=job.grid.width,
+                   height_px=job.grid.height, pixel_x_mm=job.grid.pitch_x_mm, pixel_y_mm=job.grid.pitch_y_mm,
+                   mirror_x=True, mirror_y=False, orientation=p.orientation, exposure_s=2, first_exposure_s=20,
+                   first_exposure_layers=1, printer_model="SL1S")
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1700000000")
+    made = {}
+    for name, limit_s in (("threads", 0.0), ("here", 1e9)):
+        monkeypatch.setattr(journal, "SMALL_REST_S", limit_s)
+        (tmp_path / name).mkdir()
+        write_dlp_job(job, tmp_path / name / "job.sl1s", info, MaskOptions(mirror_x=True))
+        with zipfile.ZipFile(tmp_path / name / "job.sl1s") as z:
+            made[name] = {n: z.read(n) for n in z.namelist()}
+    assert len(job) == 16 and made["threads"] == made["here"]
+
+
 def Mesh_box():
     from rotoprint.mesh import Mesh
 

@@ -7,7 +7,11 @@
  *                slicing/_kernels.section_kernel and _sections.section_numpy).
  * - coverage():  exact area coverage into uint8 grey levels (masks/_coverage_kernels:
  *                accumulate_jit then resolve_grey_jit, the same floating-point operations),
- *                rounded so that the window's grey sum is the exact area to 1/2 level.
+ *                rounded so that the window's grey sum is the exact area to 1/2 level; made
+ *                row by row (one row's accumulator in cache, not the window's).
+ * - window_stats(): a window's grey sum and the bounding box of its non-zero pixels.
+ * - thumb_rgb():  a thumbnail's resized, coloured pixels (io/formats/_common.thumbnail_png's
+ *                operations in the same order).
  * - png_grey():  an 8-bit greyscale PNG of a mostly empty image given as a window at (r0, c0)
  *                of an otherwise black (H, W) image, optionally mirrored. Rows equal to the
  *                row above are filtered "Up" (all zero) and rows outside the window are zero:
@@ -101,56 +105,139 @@ piece_cover(double a, double b, long k)
     return (left + mid) / (b - a);
 }
 
-static void
-accumulate(const double *x0s, const double *y0s, const double *x1s, const double *y1s, Py_ssize_t n,
-           long height, long width, double *acc)
+/* One segment as the accumulation sees it: oriented downwards (ya < yb), ``sign`` its
+ * winding, rows r0 <= r < r1 of the window that it crosses. */
+typedef struct {
+    double xa, ya, xb, yb, sign, slope;
+    long r0, r1;
+} cseg;
+
+/* Add segment ``g``'s coverage of row ``r`` (which it crosses) into ``row`` (width + 1). */
+static inline void
+add_row(const cseg *g, long r, long width, double *row)
 {
-    const long stride = width + 1;
-    for (Py_ssize_t s = 0; s < n; s++) {
-        double ya = y0s[s] + 0.5, yb = y1s[s] + 0.5;
-        if (ya == yb) continue;
-        double xa = x0s[s] + 0.5, xb = x1s[s] + 0.5, sign = 1.0;
-        if (ya > yb) {
-            double t;
-            sign = -1.0;
-            t = xa; xa = xb; xb = t;
-            t = ya; ya = yb; yb = t;
-        }
-        if (yb <= 0.0 || ya >= height) continue;
-        double slope = (xb - xa) / (yb - ya);
-        long r0 = ya > 0.0 ? (long)floor(ya) : 0;
-        long r1 = yb < height ? (long)ceil(yb) : height;
-        for (long r = r0; r < r1; r++) {
-            double top = ya > r ? ya : (double)r;
-            double bot = yb < r + 1.0 ? yb : r + 1.0;
-            if (bot <= top) continue;
-            double xt, xbm;
-            if (top == ya) xt = xa;
-            else if (top == yb) xt = xb;
-            else xt = xa + (top - ya) * slope;
-            if (bot == yb) xbm = xb;
-            else xbm = xa + (bot - ya) * slope;
-            double d = sign * (bot - top);
-            double a = xt <= xbm ? xt : xbm;
-            double b = xt <= xbm ? xbm : xt;
-            double fa = floor(a), fb = floor(b);
-            double *row = acc + r * stride;
-            if (fb < 0.0) { row[0] += d; continue; }
-            if (fa >= width) continue;
-            long k0 = fa > 0.0 ? (long)fa : 0;
-            long k1 = fb < width - 1 ? (long)fb : width - 1;
-            for (long k = k0; k <= k1; k++) {
-                double c = d * piece_cover(a, b, k);
-                row[k] += c;
-                row[k + 1] -= c;
-            }
-            row[k1 + 1] += d;
-        }
+    double ya = g->ya, yb = g->yb, xa = g->xa, xb = g->xb;
+    double top = ya > r ? ya : (double)r;
+    double bot = yb < r + 1.0 ? yb : r + 1.0;
+    if (bot <= top) return;
+    double xt, xbm;
+    if (top == ya) xt = xa;
+    else if (top == yb) xt = xb;
+    else xt = xa + (top - ya) * g->slope;
+    if (bot == yb) xbm = xb;
+    else xbm = xa + (bot - ya) * g->slope;
+    double d = g->sign * (bot - top);
+    double a = xt <= xbm ? xt : xbm;
+    double b = xt <= xbm ? xbm : xt;
+    double fa = floor(a), fb = floor(b);
+    if (fb < 0.0) { row[0] += d; return; }
+    if (fa >= width) return;
+    long k0 = fa > 0.0 ? (long)fa : 0;
+    long k1 = fb < width - 1 ? (long)fb : width - 1;
+    for (long k = k0; k <= k1; k++) {
+        double c = d * piece_cover(a, b, k);
+        row[k] += c;
+        row[k + 1] -= c;
     }
+    row[k1 + 1] += d;
 }
 
 /* masks/coverage.COVERAGE_SNAP: coverage this close to 0 or 1 is 0 or 1 */
 #define COVERAGE_SNAP 1e-12
+
+/* The coverage of a window, row by row: each row's accumulator (width + 1 doubles, kept in
+ * cache) gets the contributions of the segments crossing it, in segment order -- the same
+ * additions into each cell, in the same order, as accumulating segment by segment into a
+ * whole (height, width + 1) array (masks/_coverage_kernels.accumulate_jit) -- and is then
+ * resolved into grey levels (sum-preserving rounding: the rounding error carried in
+ * row-major order, |carry| <= 1/2 level; resolve_grey_jit's operations). Returns -1 when
+ * out of memory. */
+static int
+coverage_rows(const double *x0s, const double *y0s, const double *x1s, const double *y1s, Py_ssize_t n,
+              long height, long width, uint8_t *out, uint8_t *tail)
+{
+    cseg *segs = (cseg *)malloc((size_t)(n > 0 ? n : 1) * sizeof(cseg));
+    Py_ssize_t *first = (Py_ssize_t *)calloc((size_t)height + 1, sizeof(Py_ssize_t));
+    Py_ssize_t *order = (Py_ssize_t *)malloc((size_t)(n > 0 ? n : 1) * sizeof(Py_ssize_t));
+    Py_ssize_t *act = (Py_ssize_t *)malloc((size_t)(n > 0 ? n : 1) * sizeof(Py_ssize_t));
+    Py_ssize_t *act2 = (Py_ssize_t *)malloc((size_t)(n > 0 ? n : 1) * sizeof(Py_ssize_t));
+    double *row = (double *)calloc((size_t)width + 1, sizeof(double));
+    int rc = (segs && first && order && act && act2 && row) ? 0 : -1;
+    Py_ssize_t m = 0;
+    if (rc == 0) {
+        for (Py_ssize_t s = 0; s < n; s++) {
+            double ya = y0s[s] + 0.5, yb = y1s[s] + 0.5;
+            if (ya == yb) continue;
+            double xa = x0s[s] + 0.5, xb = x1s[s] + 0.5, sign = 1.0;
+            if (ya > yb) {
+                double t;
+                sign = -1.0;
+                t = xa; xa = xb; xb = t;
+                t = ya; ya = yb; yb = t;
+            }
+            if (yb <= 0.0 || ya >= height) continue;
+            cseg *g = &segs[m];
+            g->xa = xa; g->ya = ya; g->xb = xb; g->yb = yb; g->sign = sign;
+            g->slope = (xb - xa) / (yb - ya);
+            g->r0 = ya > 0.0 ? (long)floor(ya) : 0;
+            g->r1 = yb < height ? (long)ceil(yb) : height;
+            if (g->r1 <= g->r0) continue;
+            first[g->r0 + 1]++;
+            m++;
+        }
+        /* segments by first row, in segment order within a row (a stable counting sort) */
+        for (long r = 0; r < height; r++) first[r + 1] += first[r];
+        Py_ssize_t *pos = (Py_ssize_t *)malloc((size_t)height * sizeof(Py_ssize_t));
+        if (pos == NULL) {
+            rc = -1;
+        } else {
+            for (long r = 0; r < height; r++) pos[r] = first[r];
+            for (Py_ssize_t i = 0; i < m; i++) order[pos[segs[i].r0]++] = i;
+            free(pos);
+        }
+    }
+    double carry = 0.0;
+    Py_ssize_t na = 0;
+    for (long r = 0; rc == 0 && r < height; r++) {
+        /* the segments crossing row r, in segment order: those still active merged with
+         * those starting here */
+        Py_ssize_t i = 0, j = first[r], je = first[r + 1], nb = 0;
+        while (i < na || j < je) {
+            Py_ssize_t k;
+            if (j >= je || (i < na && act[i] < order[j])) k = act[i++];
+            else k = order[j++];
+            if (segs[k].r1 > r) act2[nb++] = k;
+        }
+        Py_ssize_t *t = act; act = act2; act2 = t;
+        na = nb;
+        for (Py_ssize_t q = 0; q < na; q++) add_row(&segs[act[q]], r, width, row);
+        uint8_t *o = out + r * width;
+        double run = 0.0;
+        for (long k = 0; k < width; k++) {
+            run += row[k];
+            row[k] = 0.0;
+            double v = fabs(run);
+            if (v > 1.0 - COVERAGE_SNAP) {
+                o[k] = 255;
+            } else if (v < COVERAGE_SNAP) { /* outside, or a residue of the running sum */
+                o[k] = 0;
+            } else {
+                double x = v * 255.0;
+                double qv = floor(x + carry + 0.5);
+                if (qv < 0.0) qv = 0.0;
+                else if (qv > 255.0) qv = 255.0;
+                carry += x - qv;
+                o[k] = (uint8_t)qv;
+            }
+        }
+        run += row[width];
+        row[width] = 0.0;
+        double v = fabs(run);
+        tail[r] = v >= 1.0 ? 255 : (uint8_t)floor(v * 255.0 + 0.5);
+    }
+    free(segs); free(first); free(order); free(act); free(act2); free(row);
+    return rc;
+}
 
 static PyObject *
 native_coverage(PyObject *self, PyObject *args)
@@ -161,48 +248,161 @@ native_coverage(PyObject *self, PyObject *args)
     if (!PyArg_ParseTuple(args, "y*y*y*y*llw*w*", &X0, &Y0, &X1, &Y1, &h, &w, &OUT, &TAIL))
         return NULL;
     Py_ssize_t n = X0.len / (Py_ssize_t)sizeof(double);
-    double *acc = NULL;
-    if (h > 0 && w > 0) acc = (double *)calloc((size_t)h * (size_t)(w + 1), sizeof(double));
-    if (acc == NULL) {
-        PyBuffer_Release(&X0); PyBuffer_Release(&Y0); PyBuffer_Release(&X1); PyBuffer_Release(&Y1);
-        PyBuffer_Release(&OUT); PyBuffer_Release(&TAIL);
-        return PyErr_NoMemory();
+    int rc = -1;
+    if (h > 0 && w > 0) {
+        Py_BEGIN_ALLOW_THREADS
+        rc = coverage_rows((const double *)X0.buf, (const double *)Y0.buf, (const double *)X1.buf,
+                           (const double *)Y1.buf, n, h, w, (uint8_t *)OUT.buf, (uint8_t *)TAIL.buf);
+        Py_END_ALLOW_THREADS
     }
-    uint8_t *out = (uint8_t *)OUT.buf, *tail = (uint8_t *)TAIL.buf;
-    Py_BEGIN_ALLOW_THREADS
-    accumulate((const double *)X0.buf, (const double *)Y0.buf, (const double *)X1.buf, (const double *)Y1.buf,
-               n, h, w, acc);
-    /* sum-preserving rounding (masks/_coverage_kernels.resolve_grey_jit, same operations):
-     * the rounding error carried in row-major order, |carry| <= 1/2 level */
-    double carry = 0.0;
-    for (long r = 0; r < h; r++) {
-        const double *row = acc + r * (w + 1);
-        uint8_t *o = out + r * w;
-        double run = 0.0;
-        for (long k = 0; k < w; k++) {
-            run += row[k];
-            double v = fabs(run);
-            if (v > 1.0 - COVERAGE_SNAP) {
-                o[k] = 255;
-            } else if (v < COVERAGE_SNAP) { /* outside, or a residue of the running sum */
-                o[k] = 0;
-            } else {
-                double x = v * 255.0;
-                double q = floor(x + carry + 0.5);
-                if (q < 0.0) q = 0.0;
-                else if (q > 255.0) q = 255.0;
-                carry += x - q;
-                o[k] = (uint8_t)q;
-            }
-        }
-        run += row[w];
-        double v = fabs(run);
-        tail[r] = v >= 1.0 ? 255 : (uint8_t)floor(v * 255.0 + 0.5);
-    }
-    Py_END_ALLOW_THREADS
-    free(acc);
     PyBuffer_Release(&X0); PyBuffer_Release(&Y0); PyBuffer_Release(&X1); PyBuffer_Release(&Y1);
     PyBuffer_Release(&OUT); PyBuffer_Release(&TAIL);
+    if (rc) return PyErr_NoMemory();
+    Py_RETURN_NONE;
+}
+
+/* window_stats(window uint8 (hh * ww), hh, ww) -> (sum, first row, last row + 1, first column,
+ * last column + 1) of the non-zero pixels ((sum, 0, 0, 0, 0) when all are zero): one pass. */
+static PyObject *
+native_window_stats(PyObject *self, PyObject *args)
+{
+    Py_buffer W;
+    long hh, ww;
+    if (!PyArg_ParseTuple(args, "y*ll", &W, &hh, &ww)) return NULL;
+    if (hh < 0 || ww < 0 || W.len < (Py_ssize_t)hh * ww) {
+        PyBuffer_Release(&W);
+        PyErr_SetString(PyExc_ValueError, "window_stats: buffer smaller than the window");
+        return NULL;
+    }
+    unsigned long long total = 0;
+    long r0 = -1, r1 = 0, c0 = ww, c1 = 0;
+    Py_BEGIN_ALLOW_THREADS
+    const uint8_t *p = (const uint8_t *)W.buf;
+    for (long r = 0; r < hh; r++) {
+        const uint8_t *q = p + r * ww;
+        long a = 0;
+        while (a < ww && q[a] == 0) a++;
+        if (a == ww) continue;
+        long b = ww - 1;
+        while (q[b] == 0) b--;
+        unsigned long long rs = 0;
+        for (long k = a; k <= b; k++) rs += q[k];
+        total += rs;
+        if (r0 < 0) r0 = r;
+        r1 = r + 1;
+        if (a < c0) c0 = a;
+        if (b + 1 > c1) c1 = b + 1;
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&W);
+    if (r0 < 0) return Py_BuildValue("(Kllll)", total, 0L, 0L, 0L, 0L);
+    return Py_BuildValue("(Kllll)", total, r0, r1, c0, c1);
+}
+
+/* ------------------------------------------------------------------------ thumbnails */
+
+/* thumb_rgb(crop uint8 (ch * cw), ch, cw, nh, nw, out uint8 (nh * nw * 3), c0r, c1r, c0g, c1g,
+ * c0b, c1b): io/formats/_common._area_resize of ``crop`` to (nh, nw) -- rows first, then
+ * columns; a box average over each output pixel's span of whole input pixels when
+ * shrinking (sums of doubles in index order, as numpy's add.reduceat, then divided by the
+ * span), the nearest input pixel when growing -- then each channel k
+ * rint(c0k + (c1k - c0k) * (g / 255.0)): thumbnail_png's operations, in the same order. */
+static PyObject *
+native_thumb_rgb(PyObject *self, PyObject *args)
+{
+    Py_buffer C, OUT;
+    long ch, cw, nh, nw;
+    int c0[3], c1[3];
+    if (!PyArg_ParseTuple(args, "y*llllw*iiiiii", &C, &ch, &cw, &nh, &nw, &OUT, &c0[0], &c1[0], &c0[1], &c1[1],
+                          &c0[2], &c1[2]))
+        return NULL;
+    if (ch <= 0 || cw <= 0 || nh <= 0 || nw <= 0 || C.len < (Py_ssize_t)ch * cw || OUT.len < (Py_ssize_t)nh * nw * 3) {
+        PyBuffer_Release(&C); PyBuffer_Release(&OUT);
+        PyErr_SetString(PyExc_ValueError, "thumb_rgb: buffers smaller than the sizes");
+        return NULL;
+    }
+    double *t = (double *)malloc((size_t)nh * (size_t)cw * sizeof(double));
+    double *line = (double *)malloc((size_t)nw * sizeof(double));
+    if (t == NULL || line == NULL) {
+        free(t); free(line);
+        PyBuffer_Release(&C); PyBuffer_Release(&OUT);
+        return PyErr_NoMemory();
+    }
+    const uint8_t *a = (const uint8_t *)C.buf;
+    uint8_t *out = (uint8_t *)OUT.buf;
+    Py_BEGIN_ALLOW_THREADS
+    if (nh >= ch && nw >= cw) {
+        /* growing both ways: every output pixel is an input level v, whose colour is the
+         * same operations on (double)v: a table of the 256 */
+        uint8_t lut[256][3];
+        for (int v = 0; v < 256; v++) {
+            double g = (double)v / 255.0;
+            for (int k = 0; k < 3; k++) {
+                double x = (double)(c1[k] - c0[k]) * g;
+                x = (double)c0[k] + x;
+                lut[v][k] = (uint8_t)rint(x);
+            }
+        }
+        for (long i = 0; i < nh; i++) {
+            long r = (long)(((long long)i * ch) / nh);
+            if (r > ch - 1) r = ch - 1;
+            const uint8_t *src = a + r * cw;
+            uint8_t *o = out + i * nw * 3;
+            for (long j = 0; j < nw; j++) {
+                long c = (long)(((long long)j * cw) / nw);
+                if (c > cw - 1) c = cw - 1;
+                const uint8_t *l = lut[src[c]];
+                o[3 * j] = l[0]; o[3 * j + 1] = l[1]; o[3 * j + 2] = l[2];
+            }
+        }
+        nh = 0; /* done */
+    }
+    /* rows */
+    for (long i = 0; i < nh; i++) {
+        double *ti = t + i * cw;
+        if (nh >= ch) {
+            long r = (long)(((long long)i * ch) / nh);
+            if (r > ch - 1) r = ch - 1;
+            for (long c = 0; c < cw; c++) ti[c] = (double)a[r * cw + c];
+        } else {
+            long e0 = (long)(((long long)i * ch + nh / 2) / nh);
+            long e1 = (long)(((long long)(i + 1) * ch + nh / 2) / nh);
+            for (long c = 0; c < cw; c++) ti[c] = (double)a[e0 * cw + c];
+            for (long r = e0 + 1; r < e1; r++)
+                for (long c = 0; c < cw; c++) ti[c] += (double)a[r * cw + c];
+            double n = (double)(e1 - e0);
+            for (long c = 0; c < cw; c++) ti[c] = ti[c] / n;
+        }
+    }
+    /* columns, then the colours */
+    for (long i = 0; i < nh; i++) {
+        const double *ti = t + i * cw;
+        for (long j = 0; j < nw; j++) {
+            if (nw >= cw) {
+                long c = (long)(((long long)j * cw) / nw);
+                if (c > cw - 1) c = cw - 1;
+                line[j] = ti[c];
+            } else {
+                long e0 = (long)(((long long)j * cw + nw / 2) / nw);
+                long e1 = (long)(((long long)(j + 1) * cw + nw / 2) / nw);
+                double sum = ti[e0];
+                for (long c = e0 + 1; c < e1; c++) sum += ti[c];
+                line[j] = sum / (double)(e1 - e0);
+            }
+        }
+        uint8_t *o = out + i * nw * 3;
+        for (long j = 0; j < nw; j++) {
+            double g = line[j] / 255.0;
+            for (int k = 0; k < 3; k++) {
+                double x = (double)(c1[k] - c0[k]) * g;
+                x = (double)c0[k] + x;
+                o[3 * j + k] = (uint8_t)rint(x);
+            }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    free(t); free(line);
+    PyBuffer_Release(&C); PyBuffer_Release(&OUT);
     Py_RETURN_NONE;
 }
 
@@ -399,13 +599,42 @@ is_zero(const unsigned char *p, size_t n)
     return 1;
 }
 
+/* Adler-32 of ``n`` bytes continued from ``ad`` (the same value as zlib's adler32()): eight
+ * bytes at a time, and a word of eight equal bytes v (the runs of 0 and 255 that most mask
+ * rows are) in closed form -- b += 8 a + 36 v, a += 8 v -- instead of byte by byte. The sums
+ * stay below 2^64 between the reductions (every 4096 bytes: a < 2^21, b < 2^33). */
+static void
+adler_update(adler_t *ad, const unsigned char *p, size_t n)
+{
+    uint64_t a = ad->a, b = ad->b;
+    while (n) {
+        size_t block = n < 4096 ? n : 4096;
+        n -= block;
+        while (block >= 8) {
+            uint64_t w;
+            memcpy(&w, p, 8);
+            uint64_t v = w & 0xff;
+            if (w == v * 0x0101010101010101ULL) {
+                b += 8 * a + 36 * v;
+                a += 8 * v;
+            } else {
+                for (int i = 0; i < 8; i++) { a += p[i]; b += a; }
+            }
+            p += 8;
+            block -= 8;
+        }
+        while (block--) { a += *p++; b += a; }
+        a %= ADLER_MOD;
+        b %= ADLER_MOD;
+    }
+    ad->a = (uint32_t)a;
+    ad->b = (uint32_t)b;
+}
+
 static int
 flush_content(z_stream *zs, adler_t *ad, outbuf *fb, outbuf *z)
 {
-    uLong a = ((uLong)ad->b << 16) | ad->a;
-    a = adler32(a, fb->buf, (uInt)fb->len);
-    ad->a = (uint32_t)(a & 0xffff);
-    ad->b = (uint32_t)(a >> 16);
+    adler_update(ad, fb->buf, fb->len);
     int rc = deflate_sync(zs, fb->buf, fb->len, z);
     fb->len = 0;
     return rc ? -1 : 0;
@@ -894,6 +1123,8 @@ static PyMethodDef methods[] = {
     {"shell_labels", native_shell_labels, METH_VARARGS, "shell_labels(face_edges, n_edges, labels) -> n_shells"},
     {"section", native_section, METH_VARARGS, "section(V, F, FE, faces, z, start, end, se, ee)"},
     {"coverage", native_coverage, METH_VARARGS, "coverage(x0, y0, x1, y1, height, width, out, tail)"},
+    {"thumb_rgb", native_thumb_rgb, METH_VARARGS, "thumb_rgb(crop, ch, cw, nh, nw, out, c0r, c1r, c0g, c1g, c0b, c1b)"},
+    {"window_stats", native_window_stats, METH_VARARGS, "window_stats(window, hh, ww) -> (sum, r0, r1, c0, c1)"},
     {"png_grey", native_png_grey, METH_VARARGS,
      "png_grey(window, width, height, r0, c0, hh, ww, mirror_x, mirror_y, level) -> bytes"},
     {NULL, NULL, 0, NULL},

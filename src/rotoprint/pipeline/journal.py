@@ -10,6 +10,7 @@ into place, or an archive assembled from it).
 
 from __future__ import annotations
 
+import time
 from array import array
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
@@ -20,6 +21,11 @@ from ..io.resumable import PartialOutput, check_resources
 from .producer import LayerSource, Rendered, RunOptions, produce_layers, render_one
 
 __all__ = ["LayerPlan", "write_journalled"]
+
+#: In-process runs: when the median sample layer's CPU time times the layers left is less than
+#: this (seconds), they are made in this thread: two render threads would each build the job
+#: first (a few ms) for little to share (a 10-layer plate whose layers are all alike).
+SMALL_REST_S = 0.02
 
 T = TypeVar("T")
 
@@ -108,7 +114,14 @@ def _run_layers(plan: LayerPlan, partial: PartialOutput, run: RunOptions) -> Ite
     done, in order. Nothing is written before the size check passes."""
     todo = array("q", (i for i in range(plan.n_layers) if i not in partial.done))  # 8 bytes a layer
     sample_idx = sorted({todo[0], todo[len(todo) // 2], todo[-1]}) if todo else []
-    samples = {i: render_one(plan.source, i) for i in sample_idx}
+    samples = {}
+    took_s = []
+    for i in sample_idx:
+        t0 = time.thread_time()  # (this thread's CPU: not the waits of a loaded machine)
+        samples[i] = render_one(plan.source, i)
+        took_s.append(time.thread_time() - t0)
+    # the median sample: the first layer made in a process also pays one-time costs
+    typical_s = sorted(took_s)[len(took_s) // 2] if took_s else 0.0
     sizes = [r.nbytes for r in samples.values()]
     procs = 1 if (run.scheduler is not None or run.workers == 1) else run.workers + 1
     check_resources(
@@ -122,6 +135,11 @@ def _run_layers(plan: LayerPlan, partial: PartialOutput, run: RunOptions) -> Ite
     )
     partial.open()
     rest = array("q", (i for i in todo if i not in samples))
-    it = iter(produce_layers(plan.source, rest, run))
+    if run.workers == 1 and run.scheduler is None and typical_s * len(rest) < SMALL_REST_S:
+        # what is left takes less than starting the render threads (and building their jobs)
+        # saves: made here, one by one (the same bytes)
+        it = (render_one(plan.source, i) for i in rest)
+    else:
+        it = iter(produce_layers(plan.source, rest, run))
     for i in todo:
         yield samples[i] if i in samples else next(it)

@@ -15,7 +15,7 @@ import numpy as np
 from ..io.atomic import MANIFEST_NAME, OutputClaim, disk_full
 from .journal import LayerPlan, write_journalled
 from .producer import RunOptions
-from .tasks import MaskLayer, MeshJob, PlainLayer, RotaryLayer, layer_source
+from .tasks import MaskLayer, MeshJob, PlainLayer, RotaryLayer, forget_last_window, layer_source
 
 __all__ = ["write_layer_folder", "write_dlp_job", "write_rotary_slices"]
 
@@ -131,6 +131,10 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
         plan = LayerPlan(layer_source(mj, MaskLayer(options.to_json())), len(job), px, mj.nbytes, copies_on_disk=2)
         copies = options.copies
         footprint = np.zeros((job.grid.height, job.grid.width), np.uint8)
+        box = [job.grid.height, job.grid.width, 0, 0]  # rows box[0]:box[2], columns box[1]:box[3] merged
+
+        def merged(r0: int, c0: int, r1: int, c1: int) -> None:
+            box[0], box[1], box[2], box[3] = min(box[0], r0), min(box[1], c0), max(box[2], r1), max(box[3], c1)
 
         def on_resumed(i: int, rec: dict, folder: Path) -> None:  # resumed layers: footprints from their files
             from PIL import Image
@@ -138,12 +142,14 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
             for name in rec["files"]:
                 with Image.open(folder / name) as im:
                     np.maximum(footprint, plain_from_image(np.asarray(im.convert("L")), options), out=footprint)
+            merged(0, 0, *footprint.shape)
 
         def on_result(res) -> None:
             if res.extra is not None:
                 r0, c0, a = res.extra
                 view = footprint[r0 : r0 + a.shape[0], c0 : c0 + a.shape[1]]
                 np.maximum(view, a, out=view)
+                merged(r0, c0, r0 + view.shape[0], c0 + view.shape[1])
 
         def on_layer(i: int) -> None:
             if on_mask is not None:
@@ -156,7 +162,8 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
                     rec = partial.done[i]
                     z = float(job.plan.z_slice_mm[i])
                     for c, (name, s) in enumerate(zip(rec["files"], rec["plain_sums"], strict=True)):
-                        fp = (0, 0, footprint) if (i == 0 and c == 0) else None
+                        # the merged part of the footprint only (not a pass over the whole field)
+                        fp = (box[0], box[1], footprint[box[0] : box[2], box[1] : box[3]]) if (i == 0 and c == 0 and box[2] > box[0]) else None
                         yield Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp)
 
             try:
@@ -168,8 +175,11 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
             partial.discard()
             return summary
 
-        return write_journalled(out, plan, run, finish=finish, on_layer=on_layer, on_result=on_result,
-                                on_resumed=on_resumed)
+        try:
+            return write_journalled(out, plan, run, finish=finish, on_layer=on_layer, on_result=on_result,
+                                    on_resumed=on_resumed)
+        finally:
+            forget_last_window()
 
 
 def write_rotary_slices(job, out_dir: str | Path, *, device_name: str, options: dict, mesh_info: dict | None = None,

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -51,6 +52,12 @@ class MeshJob:
                    suspect_edges=mesh.topology.suspect_edges)
 
     def __call__(self):
+        if self.rotary_options is None:
+            built = _BUILT.get(id(self))
+            if built is not None and built[0]() is self:
+                # another thread of this process built it: share its arrays (the mesh, the
+                # sorted face bounds), not its sweep's position
+                return built[1].for_another_thread()
         from .._resources import release_free_memory
         from .._plain_device import device_from_dump
         from ..mesh import Mesh, PrebuiltTopology
@@ -66,6 +73,8 @@ class MeshJob:
             job = slice_rotary(mesh, device, **self.rotary_options)
         else:
             job = slice_mesh(mesh, device, **self.slice_options)
+            key = id(self)
+            _BUILT[key] = (weakref.ref(self, lambda _, key=key: _BUILT.pop(key, None)), job)
         release_free_memory()
         return job
 
@@ -76,6 +85,10 @@ class MeshJob:
 
     def fingerprint_meta(self) -> dict:
         return {"device": self.device, "options": self.slice_options, "rotary": self.rotary_options}
+
+
+#: id(MeshJob) -> (weak reference to it, the SliceJob a thread of this process built from it)
+_BUILT: dict[int, tuple] = {}
 
 
 @dataclass(frozen=True)
@@ -149,14 +162,47 @@ def _coverage_window(job, index: int, options) -> Rendered | None:
     r0, c0, win, tail = coverage_window(s, e, shape)
     if tail is not None:  # the rows right of the window are not black: general path
         return None
-    rows = np.flatnonzero(win.any(axis=1))
+    key = (r0, c0, win.shape, tuple(shape), options.mirror_x, options.mirror_y)
+    last = _LAST_WINDOW[0]  # (one read: another thread may replace it meanwhile)
+    if last is not None and last[0] == key and np.array_equal(last[1], win):
+        # the same pixels as the last layer made (a prism's walls): the PNG depends on the
+        # pixels, the image size and the mirroring only, so it is the same bytes
+        png, sums, crop = last[2]
+        return Rendered(index, {mask_name(index): png}, {"plain_sums": list(sums)}, crop)
+    total, (a, b, c, d) = _window_stats(win)
     crop = None
-    if rows.size:
-        cols = np.flatnonzero(win.any(axis=0))
-        crop = (r0 + int(rows[0]), c0 + int(cols[0]),
-                np.ascontiguousarray(win[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1]))
+    if b > a:
+        crop = (r0 + a, c0 + c, np.ascontiguousarray(win[a:b, c:d]))
     png = png_bytes_window(win, shape, r0, c0, mirror_x=options.mirror_x, mirror_y=options.mirror_y)
-    return Rendered(index, {mask_name(index): png}, {"plain_sums": [int(win.sum(dtype=np.uint64))]}, crop)
+    sums = (total,)
+    # kept for the next layer (the window is compared whole: equal arrays, equal pixels)
+    _LAST_WINDOW[0] = (key, win, (png, sums, crop))
+    return Rendered(index, {mask_name(index): png}, {"plain_sums": list(sums)}, crop)
+
+
+#: the last coverage window made in this process (by any thread), with its PNG, plain sum and
+#: footprint crop; replaced whole (one slot), emptied when a DLP job is written
+_LAST_WINDOW: list = [None]
+
+
+def forget_last_window() -> None:
+    """Drop the kept window (:func:`rotoprint.pipeline.outputs.write_dlp_job` calls this when done)."""
+    _LAST_WINDOW[0] = None
+
+
+def _window_stats(win: np.ndarray) -> tuple[int, tuple[int, int, int, int]]:
+    """The grey sum of ``win`` ``(hh, ww) uint8`` and the rows ``a:b`` and columns ``c:d``
+    holding its non-zero pixels (``b == a`` when there are none); one pass in C."""
+    from .._accel import native
+
+    if native is not None:
+        total, a, b, c, d = native.window_stats(np.ascontiguousarray(win), *win.shape)
+        return int(total), (a, b, c, d)
+    rows = np.flatnonzero(win.any(axis=1))
+    if not rows.size:
+        return 0, (0, 0, 0, 0)
+    cols = np.flatnonzero(win.any(axis=0))
+    return int(win.sum(dtype=np.uint64)), (int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1)
 
 
 @dataclass(frozen=True)

@@ -49,6 +49,15 @@ class FaceSweep:
         self._active = np.empty(0, np.int64)
         self._last_z = -np.inf
 
+    def fork(self) -> FaceSweep:
+        """A sweep over the same faces from the start, sharing the (read-only) face bounds."""
+        other = object.__new__(FaceSweep)
+        other.zmin, other.zmax, other.order, other.zmin_sorted = self.zmin, self.zmax, self.order, self.zmin_sorted
+        other._ptr = 0
+        other._active = np.empty(0, np.int64)
+        other._last_z = -np.inf
+        return other
+
     def faces_at(self, z: float) -> np.ndarray:
         """Indices of faces with ``zmin < z <= zmax`` (the faces the plane crosses)."""
         if z < self._last_z:

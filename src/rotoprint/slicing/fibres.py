@@ -6,6 +6,8 @@ Every image is made at its final size on the device grid, never scaled. See
 
 from __future__ import annotations
 
+import copy
+
 import logging
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -82,6 +84,13 @@ class SliceJob:
 
     def __len__(self) -> int:
         return len(self.plan)
+
+    def for_another_thread(self) -> SliceJob:
+        """The same job for another thread: everything shared (read only) but the face
+        sweep's position, which each thread keeps for its own increasing heights."""
+        other = copy.copy(self)
+        other._sweep = self._sweep.fork()
+        return other
 
     @property
     def slice_options(self) -> dict:

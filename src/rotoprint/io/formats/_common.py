@@ -100,7 +100,8 @@ class _Stats:
         self.px_area = info.pixel_x_mm * info.pixel_y_mm
         self.thickness = thickness_mm
         self.volume_mm3 = 0.0
-        self.footprint = np.zeros((info.height_px, info.width_px), np.uint8)
+        self.footprint = np.zeros((info.height_px, info.width_px), np.uint8)  # (pages untouched stay unmapped)
+        self._box: tuple[int, int, int, int] | None = None  # rows r0:r1, columns c0:c1 merged so far
 
     def add_sum(self, plain_sum: int) -> float:
         """Count one mask whose plain grey levels add up to ``plain_sum``; returns its area."""
@@ -113,6 +114,16 @@ class _Stats:
             r0, c0, a = crop
             view = self.footprint[r0 : r0 + a.shape[0], c0 : c0 + a.shape[1]]
             np.maximum(view, a, out=view)
+            r1, c1 = r0 + view.shape[0], c0 + view.shape[1]
+            b = self._box
+            self._box = (r0, c0, r1, c1) if b is None else (min(b[0], r0), min(b[1], c0), max(b[2], r1), max(b[3], c1))
+
+    @property
+    def footprint_crop(self) -> np.ndarray | None:
+        """The footprint within the rows and columns merged so far (a view; None before any):
+        all of its non-zero pixels, without a pass over the whole field."""
+        b = self._box
+        return None if b is None else self.footprint[b[0] : b[2], b[1] : b[3]]
 
 
 def _area_resize(a: np.ndarray, nh: int, nw: int) -> np.ndarray:
@@ -138,7 +149,7 @@ def _png_chunk(kind: bytes, data: bytes) -> bytes:
     return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
 
 
-def _deflate_rle(data: bytes) -> bytes:
+def _deflate_rle(data) -> bytes:
     z = zlib.compressobj(9, zlib.DEFLATED, 15, 9, zlib.Z_RLE)
     return z.compress(data) + z.flush()
 
@@ -154,8 +165,12 @@ def rgb_png(rgb: np.ndarray) -> bytes:
     up[0, 1:] = rows[0]
     np.subtract(rows[1:], rows[:-1], out=up[1:, 1:])  # modulo 256, as the filter is defined
     ihdr = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
-    return b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", ihdr) + _png_chunk(b"IDAT", _deflate_rle(up.tobytes())) + \
+    return b"\x89PNG\r\n\x1a\n" + _png_chunk(b"IHDR", ihdr) + _png_chunk(b"IDAT", _deflate_rle(up)) + \
         _png_chunk(b"IEND", b"")
+
+
+#: (background, part) level of each of R, G, B in the thumbnails: orange on dark grey
+_THUMB_COLOURS = ((24, 250), (24, 140), (24, 30))
 
 
 def thumbnail_png(footprint: np.ndarray | None, size: tuple[int, int]) -> bytes:
@@ -171,10 +186,21 @@ def thumbnail_png(footprint: np.ndarray | None, size: tuple[int, int]) -> bytes:
         ch, cw = crop.shape
         scale = min((w - 8) / cw, (h - 8) / ch)
         nw, nh = max(1, round(cw * scale)), max(1, round(ch * scale))
-        g = _area_resize(crop, nh, nw) / 255.0
         y0, x0 = (h - nh) // 2, (w - nw) // 2
-        for k, (c0, c1) in enumerate(((24, 250), (24, 140), (24, 30))):
-            canvas[y0 : y0 + nh, x0 : x0 + nw, k] = np.round(c0 + (c1 - c0) * g).astype(np.uint8)
+        from ..._accel import native
+
+        if native is not None:  # the same operations in C, in one pass (no float temporaries)
+            rgb = np.empty((nh, nw, 3), np.uint8)
+            native.thumb_rgb(np.ascontiguousarray(crop), ch, cw, nh, nw, rgb, *(c for pair in _THUMB_COLOURS for c in pair))
+            canvas[y0 : y0 + nh, x0 : x0 + nw] = rgb
+        else:
+            g = _area_resize(crop, nh, nw) / 255.0
+            level = np.empty_like(g)
+            for k, (c0, c1) in enumerate(_THUMB_COLOURS):
+                np.multiply(g, float(c1 - c0), out=level)  # round(c0 + (c1 - c0) * g), in place
+                level += float(c0)
+                np.rint(level, out=level)  # (what round() does with no decimals: half to even)
+                canvas[y0 : y0 + nh, x0 : x0 + nw, k] = level  # whole values in 24..250: exact
     return rgb_png(canvas)
 
 

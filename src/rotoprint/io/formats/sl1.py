@@ -67,7 +67,7 @@ def _write_sl1(path, items, info: JobInfo, on_mask, claim: OutputClaim, *, fmt: 
         for size in THUMBNAIL_SIZES:
             # deflated too: a thumbnail of flat colour (a prism's footprint) shrinks 8x (1417 to
             # 175 bytes); the fixed part of the archive is most of a small job's bytes
-            zf.writestr(_zinfo(f"thumbnail/thumbnail{size[0]}x{size[1]}.png"), thumbnail_png(stats.footprint, size),
+            zf.writestr(_zinfo(f"thumbnail/thumbnail{size[0]}x{size[1]}.png"), thumbnail_png(stats.footprint_crop, size),
                         compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
         model = info.printer_model if info.printer_model != "rotoprint" else ("SL1S" if fmt == "sl1s" else "SL1")
         nfade = min(info.first_exposure_layers, n_out)
