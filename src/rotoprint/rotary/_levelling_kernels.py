@@ -27,6 +27,22 @@ def axis_weights(n: int, f: int) -> tuple[np.ndarray, np.ndarray]:
     return i0.astype(np.int64) + 1, u - i0
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _node_weight(cell, f):
+    """Cell ``cell``'s lower coarse node (ghost-shifted) and the upper node's weight, as
+    :func:`axis_weights` gives for a whole axis."""
+    u = (cell + 0.5) / f - 0.5
+    fy = math.floor(u)
+    return int(fy) + 1, u - fy
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _corner_weights(ty, tx):
+    """The bilinear weights of the four nodes around a cell: (lower, lower), (lower, upper),
+    (upper, lower), (upper, upper) in (row, column)."""
+    return (1.0 - ty) * (1.0 - tx), (1.0 - ty) * tx, ty * (1.0 - tx), ty * tx
+
+
 @njit(cache=True, nogil=True)
 def restrict_wet_jit(film, row0, f, cx0, ctx, h_c, w_c):
     """Add ``Q^T`` of the wet film (``film > 0``) to ``h_c`` and of the wet indicator to
@@ -34,19 +50,13 @@ def restrict_wet_jit(film, row0, f, cx0, ctx, h_c, w_c):
     rows ``row0..``; ``cx0, ctx`` from :func:`axis_weights` for the columns."""
     rows, cols = film.shape
     for i in range(rows):
-        u = (row0 + i + 0.5) / f - 0.5
-        fy = math.floor(u)
-        ty = u - fy
-        iy = int(fy) + 1
+        iy, ty = _node_weight(row0 + i, f)
         for j in range(cols):
             h = film[i, j]
             if h > 0.0:
                 a = cx0[j]
                 tx = ctx[j]
-                w00 = (1.0 - ty) * (1.0 - tx)
-                w01 = (1.0 - ty) * tx
-                w10 = ty * (1.0 - tx)
-                w11 = ty * tx
+                w00, w01, w10, w11 = _corner_weights(ty, tx)
                 h_c[iy, a] += w00 * h
                 h_c[iy, a + 1] += w01 * h
                 h_c[iy + 1, a] += w10 * h
@@ -64,19 +74,13 @@ def prolong_combine_jit(film, row0, f, cx0, ctx, n_c, g_c, out):
     ``n_c`` and ``g_c``."""
     rows, cols = film.shape
     for i in range(rows):
-        u = (row0 + i + 0.5) / f - 0.5
-        fy = math.floor(u)
-        ty = u - fy
-        iy = int(fy) + 1
+        iy, ty = _node_weight(row0 + i, f)
         for j in range(cols):
             h = film[i, j]
             if h > 0.0:
                 a = cx0[j]
                 tx = ctx[j]
-                w00 = (1.0 - ty) * (1.0 - tx)
-                w01 = (1.0 - ty) * tx
-                w10 = ty * (1.0 - tx)
-                w11 = ty * tx
+                w00, w01, w10, w11 = _corner_weights(ty, tx)
                 n = w00 * n_c[iy, a] + w01 * n_c[iy, a + 1] + w10 * n_c[iy + 1, a] + w11 * n_c[iy + 1, a + 1]
                 g = w00 * g_c[iy, a] + w01 * g_c[iy, a + 1] + w10 * g_c[iy + 1, a] + w11 * g_c[iy + 1, a + 1]
                 out[i, j] = h * (1.0 - n) + g
