@@ -19,25 +19,75 @@ import time
 from pathlib import Path
 
 
-def _commands(tmp: Path) -> list[list[list[str]]]:
-    """Two groups of rotoprint commands (one per process), together touching every kernel."""
+def _grey_device(tmp: Path) -> Path:
+    """A copy of the omnidot760 preset with 4 drop sizes: an equalised grey-level head reaches
+    the halftone kernel."""
+    from importlib import resources
+
+    text = (resources.files("rotoprint.devices") / "presets" / "omnidot760.toml").read_text(encoding="utf-8")
+    text = text.replace('name = "omnidot760"', 'name = "warmup-grey"').replace("grey_levels = 1", "grey_levels = 4")
+    path = tmp / "grey-head.toml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _inputs(tmp: Path) -> dict[str, Path]:
+    """The small inputs the warm-up's commands read (written into ``tmp``)."""
+    import numpy as np
+    from PIL import Image
+
     from .examples import write_binary_stl
+    from .pieces import feature_test_piece
     from .testing import box_triangles, torus_mesh
 
-    part = tmp / "part.stl"
-    write_binary_stl(part, torus_mesh(4.0, 1.5, 48, 24).triangles)
-    box = tmp / "box.stl"
-    write_binary_stl(box, box_triangles((3.0, 2.0, 0.4)))
-    a = [["demo", "--out", str(tmp / "demo")]]
+    paths = {k: tmp / v for k, v in (("part", "part.stl"), ("box", "box.stl"), ("piece", "piece.stl"),
+                                      ("open", "open.stl"), ("design", "design.png"), ("grey", "grey.png"))}
+    torus = torus_mesh(4.0, 1.5, 48, 24).triangles
+    write_binary_stl(paths["part"], torus)
+    write_binary_stl(paths["box"], box_triangles((3.0, 2.0, 0.4)))
+    # walls and channels of 10-200 um: a check finds some (the grouping and overlay kernels)
+    write_binary_stl(paths["piece"], feature_test_piece(height_mm=0.9, base_mm=0.3, ring_segments=90)[0])
+    write_binary_stl(paths["open"], torus[: len(torus) - 48])  # a ring of faces missing: open sections
+    design = np.zeros((60, 90), np.uint8)
+    design[10:50, 15:75] = 255
+    Image.fromarray(design).save(paths["design"])
+    Image.fromarray(np.tile(np.linspace(0, 255, 90).astype(np.uint8), (60, 1))).save(paths["grey"])
+    paths["grey_head"] = _grey_device(tmp)
+    return paths
+
+
+def _commands(tmp: Path) -> list[list[list[str]]]:
+    """Two groups of rotoprint commands (one per process), together touching every kernel a
+    user's first command can reach with the C extension built (the jit fallbacks of the C
+    kernels compile here too when it is not: the commands are the same)."""
+    p = _inputs(tmp)
+    rot = ["--tilt", "20", "--radius", "60"]
+    for name in ("tr", "tr-grey", "tr-passes"):
+        (tmp / name).mkdir()
+    a = [
+        # the exact transform, binary and grey designs; the halftone of a grey-level head
+        ["transform", str(p["design"]), "--device", "omnidot760", *rot, "--out", str(tmp / "tr" / "PRINT.png"), "-q"],
+        ["transform", str(p["grey"]), "--device", str(p["grey_head"]), *rot, "--passes", "auto", "--equalise",
+         "--out", str(tmp / "tr-grey" / "PRINT.png"), "-q"],
+        ["transform", str(p["design"]), "--device", "omnidot760", *rot, "--passes", "auto", "--equalise",
+         "--out", str(tmp / "tr-passes" / "PRINT.png"), "-q"],
+        # the deposit model and the coarse-grid film levelling
+        ["simulate", str(tmp / "tr-passes" / "PRINT-passes.json"), "--out", str(tmp / "sim.png"), "--json"],
+        ["demo", "--out", str(tmp / "demo")],
+    ]
     b = [
-        ["check", str(part), "--device", "perfactory-sxga", "--layer-height", "0.5", "--json"],
-        ["check", str(part), "--device", "omnidot760", "--layer-height", "0.5", "--json"],
-        ["slice", str(part), "--device", "omnidot760", "--rotary", "--tilt", "20", "--radius", "60", "--angle", "0",
+        # findings grouped, overlays painted, the exposure model's extremes
+        ["check", str(p["piece"]), "--device", "perfactory-sxga", "--layer-height", "0.3", "--mask", "binary",
+         "--out", str(tmp / "chk"), "--json"],
+        ["check", str(p["part"]), "--device", "omnidot760", "--layer-height", "0.5", "--json"],
+        # open sections joined across their gaps
+        ["check", str(p["open"]), "--device", "omnidot760", "--layer-height", "0.5", "--no-fill-holes", "--json"],
+        ["slice", str(p["part"]), "--device", "omnidot760", "--rotary", *rot, "--angle", "0",
          "--layer-height", "0.5", "--out", str(tmp / "rot"), "--reference-images", "-q"],
-        ["slice", str(part), "--device", "perfactory-sxga", "--layer-height", "0.5", "--out", str(tmp / "cart"), "-q"],
+        ["slice", str(p["part"]), "--device", "perfactory-sxga", "--layer-height", "0.5", "--out", str(tmp / "cart"), "-q"],
     ]
     for mode in ("binary", "smooth", "coverage"):
-        b.append(["dlp", str(box), "--device", "perfactory-sxga", "--layer-height", "0.2", "--mode", mode,
+        b.append(["dlp", str(p["box"]), "--device", "perfactory-sxga", "--layer-height", "0.2", "--mode", mode,
                   "--first-layers", "1", "--first-layer-offset", "20", "--out", str(tmp / f"dlp-{mode}"), "-q"])
     return [a, b]
 
@@ -80,11 +130,24 @@ def share_compiles(lock_dir: str) -> None:
     Dispatcher.compile = compile_once
 
 
+def run_commands(cmds: list[list[str]]) -> int:
+    """Run the rotoprint commands ``cmds`` in this process; 0, or the first failure's exit code
+    (named on stderr). ``check`` may exit 3: the part has features below the device's minimum
+    (the feature piece has, on purpose)."""
+    from .cli.main import main
+
+    for c in cmds:
+        rc = main(c)
+        if rc not in ((0, 3) if c[0] == "check" else (0,)):
+            print(f"warm-up: 'rotoprint {' '.join(c)}' exited {rc}", file=sys.stderr, flush=True)
+            return int(rc or 1)
+    return 0
+
+
 def _run_group(cmds: list[list[str]], env: dict, lock_dir: str) -> tuple[subprocess.Popen, threading.Thread]:
     """Run ``cmds`` in one process; pass on only its compile lines (and, on failure, the rest)."""
-    script = ";".join(f"rc = main({c!r}); rc and sys.exit(rc)" for c in cmds)
-    code = (f"import sys; from rotoprint._warmup import share_compiles; share_compiles({lock_dir!r}); "
-            f"from rotoprint.cli.main import main; {script}")
+    code = (f"import sys; from rotoprint._warmup import share_compiles, run_commands; share_compiles({lock_dir!r}); "
+            f"sys.exit(run_commands({cmds!r}))")
     proc = subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, errors="replace")
     other: list[str] = []
