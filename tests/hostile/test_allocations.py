@@ -1,48 +1,123 @@
 """Hostile sizes: every raster, swathe and firing count is sized before it is allocated (one
 check, :func:`rotoprint._resources.check_raster_fits`), so a request that would not fit is one
-line and exit 2 within seconds, in a child process whose address space is limited to 1 GiB
-beyond what it has mapped at start (``ulimit -v``, which the check honours) and whose peak
-resident memory is measured.
+line naming its size, and exit 2, in a child process whose address space is limited to 1 GiB
+beyond what it has mapped at start (``ulimit -v``, which the check honours).
+
+What is checked is the order, not the speed: the child traces its allocations (tracemalloc,
+which numpy reports its buffers to) from the start of the command, and a refusal must come
+before anything near the refused size was allocated (:func:`assert_sized_first`); where a
+stage must not run at all before the refusal (the simulation, the image decoder), the child
+replaces it with a trap that exits 99 (``forbid``). The timeouts are hang guards only.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import resource
+import re
 import subprocess
 import sys
-import time
+import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 GIB = 1 << 30
+MIB = 1 << 20
+#: a refusal's own work: imports are done before tracing starts, so this is the inputs read
+#: (a 2500 x 2500 px design is 6 MiB) and the plan; the refused rasters are 1 GiB and more
+SIZED_FIRST_MAX_BYTES = 64 * MIB
+FORBIDDEN_EXIT = 99
 CHILD = r"""
-import os, resource, sys
+import importlib, json, os, resource, sys, tracemalloc
 with open("/proc/self/statm") as fh:
     mapped = int(fh.read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
 lim = mapped + (1 << 30)
 resource.setrlimit(resource.RLIMIT_AS, (lim, lim))
+for spec in filter(None, os.environ.get("ROTOPRINT_TEST_FORBID", "").split(",")):
+    mod, _, name = spec.rpartition(".")
+    m = importlib.import_module(mod)
+    assert callable(getattr(m, name)), spec
+    def trap(*a, _spec=spec, **k):
+        sys.stderr.write(f"forbidden stage reached: {_spec}\n")
+        sys.stderr.flush()
+        os._exit(%d)
+    setattr(m, name, trap)
 from rotoprint.cli.main import main
-sys.exit(main(sys.argv[1:]))
-"""
+# the modules the commands import lazily, before tracing (their objects are not the command's work)
+import numba, PIL.Image, rotoprint.cli.simulate, rotoprint.cli.transform, rotoprint.rotary.exact
+import rotoprint.rotary.files, rotoprint.rotary.paper, rotoprint.rotary.simulate
+peak_file = os.environ.get("ROTOPRINT_TEST_PEAK")
+if peak_file:
+    tracemalloc.start()
+try:
+    rc = main(sys.argv[1:])
+finally:
+    if peak_file:
+        with open(peak_file, "w") as fh:
+            json.dump({"traced_peak": tracemalloc.get_traced_memory()[1]}, fh)
+sys.exit(rc)
+""" % FORBIDDEN_EXIT
 
 
-def run_limited(argv: list[str], cwd: Path, timeout_s: float = 60.0) -> tuple[subprocess.CompletedProcess, float, int]:
-    """Run the CLI in a child with 1 GiB of extra address space; (result, seconds, peak RSS bytes)."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    t0 = time.monotonic()
-    r = subprocess.run([sys.executable, "-c", CHILD, *argv], capture_output=True, text=True, timeout=timeout_s, cwd=cwd)
-    dt = time.monotonic() - t0
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    # ru_maxrss of the children is the largest of any child so far: only a bound when it grew
-    return r, dt, max(peak, before) * 1024
+class Run:
+    """A finished child: ``returncode``, ``stdout``, ``stderr``, its own peak resident memory
+    ``peak_rss`` (bytes, from wait4) and its traced allocation peak ``traced_peak`` (bytes)."""
+
+    def __init__(self, returncode: int, stdout: str, stderr: str, peak_rss: int, traced_peak: int | None) -> None:
+        self.returncode, self.stdout, self.stderr = returncode, stdout, stderr
+        self.peak_rss, self.traced_peak = peak_rss, traced_peak
+
+
+def run_limited(argv: list[str], cwd: Path, timeout_s: float = 120.0, forbid: tuple[str, ...] = (),
+                trace: bool = True) -> Run:
+    """Run the CLI in a child with 1 GiB of extra address space; ``forbid``: dotted names of
+    functions replaced by a trap (exit 99) before the command runs; ``trace``: trace its
+    allocations (slows a long command several times). ``timeout_s`` is a hang guard (the
+    child is killed), not a time limit on the work."""
+    with tempfile.TemporaryDirectory() as tmp:
+        peak_file = Path(tmp) / "peak.json"
+        env = {**os.environ, "ROTOPRINT_TEST_FORBID": ",".join(forbid), "ROTOPRINT_TEST_PEAK": str(peak_file) if trace else ""}
+        with open(Path(tmp) / "out", "w+") as out, open(Path(tmp) / "err", "w+") as err:
+            proc = subprocess.Popen([sys.executable, "-c", CHILD, *argv], stdout=out, stderr=err, text=True, cwd=cwd, env=env)
+            guard = threading.Timer(timeout_s, proc.kill)
+            guard.start()
+            try:
+                _, status, usage = os.wait4(proc.pid, 0)
+            finally:
+                guard.cancel()
+            proc.returncode = os.waitstatus_to_exitcode(status)  # reaped here: Popen must not wait again
+            out.seek(0)
+            err.seek(0)
+            stdout, stderr = out.read(), err.read()
+        traced = json.loads(peak_file.read_text())["traced_peak"] if peak_file.exists() else None
+    assert proc.returncode != -9, f"hang guard: killed after {timeout_s} s: {stderr[-2000:]}"
+    return Run(proc.returncode, stdout, stderr, usage.ru_maxrss * 1024, traced)
+
+
+_UNITS = {"B": 1, "KiB": 1 << 10, "MiB": 1 << 20, "GiB": 1 << 30, "TiB": 1 << 40}
+
+
+def refused_bytes(line: str) -> int:
+    """The size a refusal names ("would need 1.3 GiB"), in bytes."""
+    m = re.search(r"would need ([0-9.]+) (B|KiB|MiB|GiB|TiB)", line)
+    assert m, line
+    return int(float(m.group(1)) * _UNITS[m.group(2)])
+
+
+def assert_sized_first(r: Run, line: str) -> None:
+    """The refusal came before any large allocation: the child's traced peak is small, both in
+    itself and against the size the refusal names."""
+    need = refused_bytes(line)
+    assert r.traced_peak is not None, r.stderr[-2000:]
+    assert r.traced_peak < min(SIZED_FIRST_MAX_BYTES, need // 10), (r.traced_peak, need, line)
 
 
 def assert_refused(r, *names: str) -> str:
     lines = [ln for ln in r.stderr.splitlines() if ln.strip()]
+    assert r.returncode != FORBIDDEN_EXIT, r.stderr[-2000:]
     assert r.returncode == 2, (r.returncode, r.stderr[-2000:])
     assert len(lines) == 1 and "Traceback" not in r.stderr, r.stderr[-2000:]
     for n in names:
@@ -72,44 +147,47 @@ def _snapshot(folder: Path) -> dict[str, int]:
 
 
 def test_overlay_scale_16_on_a_2500_px_design_is_sized_first(big_print):
-    """Issue 12: 11.6 GB. Now refused before the simulation starts, saying how big."""
+    """Issue 12: 11.6 GB. Now refused before the simulation starts, saying how big: the
+    simulation and the overlay renderer are traps in the child, and nothing large was allocated."""
     before = _snapshot(big_print)
-    r, dt, _ = run_limited(["simulate", "p.png", "-o", "ov.png", "--scale", "16"], big_print)
+    r = run_limited(["simulate", "p.png", "-o", "ov.png", "--scale", "16"], big_print,
+                    forbid=("rotoprint.rotary.simulate.simulate", "rotoprint.rotary.simulate.render_overlay"))
     line = assert_refused(r, "overlay at --scale 16", "40000 x 40000 px", "GiB")
-    assert dt < 30, dt
+    assert_sized_first(r, line)
     assert _snapshot(big_print) == before, line
 
 
 def test_transform_at_the_top_of_the_dpi_range_is_sized(big_print):
     """dpi_y = 100000 (the top of its range) on a 17.6 mm design: 764 nozzles x ~2.4 M firings a
-    swathe; refused up front in a 1 GiB child, or made within it."""
+    swathe; refused up front in a 1 GiB child (before anything near its size is allocated), or
+    made within it."""
     before = _snapshot(big_print)
-    r, dt, peak = run_limited(["transform", "big.png", "-d", "omnidot760", "--tilt", "30", "--radius", "50",
-                               "--design-dpi", "3600", "--dpi-y", "100000", "-o", "hi.png", "-q"], big_print, timeout_s=120)
+    r = run_limited(["transform", "big.png", "-d", "omnidot760", "--tilt", "30", "--radius", "50",
+                     "--design-dpi", "3600", "--dpi-y", "100000", "-o", "hi.png", "-q"], big_print)
     if r.returncode == 2:
-        assert_refused(r, "would need")
+        assert_sized_first(r, assert_refused(r, "would need"))
         assert _snapshot(big_print) == before
     else:
         assert r.returncode == 0, r.stderr[-2000:]
-        assert peak < 1.5 * GIB
-    assert dt < 60, dt
+        assert r.peak_rss < 1.5 * GIB
 
 
 def test_paper_transform_sizes_its_polar_image(big_print):
     before = _snapshot(big_print)
-    r, dt, _ = run_limited(["transform", "big.png", "-d", "omnidot760", "--tilt", "30", "--radius", "50", "--method", "paper",
-                            "--design-dpi", "3600", "--dpi-y", "100000", "-o", "pp.png", "-q"], big_print, timeout_s=120)
+    r = run_limited(["transform", "big.png", "-d", "omnidot760", "--tilt", "30", "--radius", "50", "--method", "paper",
+                     "--design-dpi", "3600", "--dpi-y", "100000", "-o", "pp.png", "-q"], big_print)
     if r.returncode == 2:
-        assert_refused(r, "would need")
+        assert_sized_first(r, assert_refused(r, "would need"))
         assert _snapshot(big_print) == before
     else:
         assert r.returncode == 0, r.stderr[-2000:]
-    assert dt < 60, dt
+        assert r.peak_rss < 1.5 * GIB
 
 
-def test_largest_drop_diameter_is_fast(tmp_path):
+def test_largest_drop_diameter_takes_the_nearest_drop_query(tmp_path, monkeypatch):
     """--drop-diameter at the top of its range (10 mm discs): a nearest-drop query per pixel, not a
-    window loop of (disc area x drops); beyond the range it is refused."""
+    window loop of (disc area x drops), and within the 1 GiB child; beyond the range it is refused."""
+    import scipy.spatial
     from PIL import Image
 
     from rotoprint.cli.main import main
@@ -118,12 +196,23 @@ def test_largest_drop_diameter_is_fast(tmp_path):
     d[5:35, 10:50] = 255
     Image.fromarray(d).save(tmp_path / "d.png")
     assert main(["transform", str(tmp_path / "d.png"), "-d", "omnidot760", "--tilt", "30", "--radius", "50", "-o", str(tmp_path / "p.png"), "-q"]) == 0
-    r, dt, _ = run_limited(["simulate", "p.png", "-o", "ov.png", "--drop-diameter", "10000", "--json"], tmp_path)
+    r = run_limited(["simulate", "p.png", "-o", "ov.png", "--drop-diameter", "10000", "--json"], tmp_path, trace=False)
     assert r.returncode == 0, r.stderr[-2000:]
     rep = json.loads(r.stdout)
     assert rep["drop_diameter_um"] == 10000 and rep["disc_uncovered_fraction"] == 0.0
-    assert dt < 30, dt
-    r, _, _ = run_limited(["simulate", "p.png", "-o", "ov2.png", "--drop-diameter", "1e7"], tmp_path)
+    assert r.peak_rss < 1.5 * GIB
+    # which path marked the discs: the query builds a k-d tree of the drops, the loop does not
+    trees = []
+    real = scipy.spatial.cKDTree
+
+    def counted(*a, **k):
+        trees.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(scipy.spatial, "cKDTree", counted)
+    assert main(["simulate", str(tmp_path / "p.png"), "-o", str(tmp_path / "ov-q.png"), "--drop-diameter", "10000", "--json"]) == 0
+    assert trees, "10 mm discs were stamped drop by drop"
+    r = run_limited(["simulate", "p.png", "-o", "ov2.png", "--drop-diameter", "1e7"], tmp_path)
     assert_refused(r, "--drop-diameter")
     assert not (tmp_path / "ov2.png").exists()
 
@@ -163,7 +252,8 @@ def test_the_check_honours_the_address_space_limit():
 
 def test_sidecar_sizes_its_images_before_reading(tmp_path):
     """A sidecar that claims a swathe of 10^6 firings x 764 nozzles (a small file) is sized before
-    the image is opened: it must match the PNG, and the sum must fit."""
+    the image is opened (the image decoder is a trap in the child): it must match the PNG, and
+    the sum must fit."""
     from PIL import Image
 
     from rotoprint.cli.main import main
@@ -175,8 +265,8 @@ def test_sidecar_sizes_its_images_before_reading(tmp_path):
     side = json.loads((tmp_path / "p.json").read_text())
     side["swathes"][0]["firings"] = 2**39
     (tmp_path / "p.json").write_text(json.dumps(side))
-    r, dt, _ = run_limited(["simulate", "p.png", "-o", "ov.png"], tmp_path)
-    assert_refused(r, "p.json", "would need")
-    assert dt < 30
+    r = run_limited(["simulate", "p.png", "-o", "ov.png"], tmp_path, forbid=("rotoprint.rotary.files.open_image",))
+    line = assert_refused(r, "p.json", "would need")
+    assert_sized_first(r, line)
     assert not (tmp_path / "ov.png").exists()
     assert os.path.getsize(tmp_path / "p.png") > 0
