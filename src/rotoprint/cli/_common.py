@@ -130,10 +130,10 @@ def print_table(table, con: Console | None = None) -> None:
     con = out_console if con is None else con
     need = Measurement.get(con, con.options.update_width(1_000_000), table).maximum
     if need <= con.width:
-        con.print(table)
+        con.print(table, soft_wrap=False)  # laid out in its columns (it fits)
         return
     if table.title:
-        con.print(table.title)  # wrapped at words, never cut
+        con.print(table.title, soft_wrap=False)  # wrapped at words, never cut
     heads = [" ".join(str(c.header).split()) or f"column {i + 1}" for i, c in enumerate(table.columns)]
     cols = [[str(v) for v in c.cells] for c in table.columns]
     show = table.show_header
