@@ -446,6 +446,7 @@ RECORD_CASES = [
     ("row_offsets_firings", [1, 2], "field row_offsets_firings [1, 2] is not its swathe's None"),
     ("head", "H9", "no head 'H9' in the program's heads"),
     ("placement", None, "layer 0: program record is incomplete or invalid: TypeError"),
+    ("words_per_row", 0, "field words_per_row must be 24 (764 nozzles of 1 bit(s) in 32-bit words), got 0"),
 ]
 
 
@@ -469,3 +470,43 @@ def test_a_bad_image_record_is_one_line_naming_the_image_and_the_field(program_t
     assert "program.json" in err and not (tmp_path / "o.png").exists()
     if key not in ("placement", "head"):
         assert f"layer 0 image {rec['file']}: field {key}" in err
+
+
+def _set_placement(key, value):
+    def edit(prog):
+        prog["layers"][0]["images"][0]["placement"][key] = value
+    return edit
+
+
+def _set_grid(key, value):
+    def edit(prog):
+        prog["design_grid"][key] = value
+    return edit
+
+
+GRID_CASES = [
+    (_set_placement("width_px", 0), "field placement: design size must be positive, got 0 x"),
+    (_set_placement("pitch_x_mm", float("nan")), "field placement: design pixel pitch must be positive, got nan x"),
+    (_set_placement("width_px", 10**9), "field placement is 1000000000 x"),
+    (_set_grid("height_px", -3), "design_grid.height_px must be a whole number 1..1.09951e+12, got -3"),
+    (_set_grid("width_px", "43"), "design_grid.width_px must be a whole number 1..1.09951e+12, got '43'"),
+    (_set_grid("pitch_y_mm", 0), "design_grid.pitch_y_mm must be a finite length > 0 mm, got 0"),
+]
+
+
+@pytest.mark.parametrize("edit, said", GRID_CASES, ids=["w0", "pitch-nan", "w-huge", "grid-h", "grid-w-str", "grid-pitch"])
+def test_a_bad_placement_or_design_grid_is_one_line_naming_the_program_and_field(program_text, run_cli, tmp_path, edit, said):
+    """Were: a placement of no pixels or a NaN pitch refused without naming the program, one of
+    another size refused only by the simulation ("the print was made for ..."), a design grid
+    of -3 rows or a zero pitch taken silently."""
+    src, text = program_text
+    folder = tmp_path / "m"
+    shutil.copytree(src, folder)
+    prog = json.loads(text)
+    edit(prog)
+    (folder / "program.json").write_text(json.dumps(prog))
+    code, out, err = run_cli("replay", folder / "program.json", "--out", tmp_path / "o.png")
+    assert code == 2, (code, err[-500:])
+    assert said in err, err
+    assert err.strip().count("\n") == 0 and "Traceback" not in err and len(err) < 400
+    assert "program.json" in err and not (tmp_path / "o.png").exists()

@@ -33,7 +33,7 @@ from .. import ranges as R
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, InputFileError, RotoprintError
 from ..io.inputs import parse_json, read_input_bytes
-from ..io.machine import nozzle_order, read_packed, unpack_levels
+from ..io.machine import nozzle_order, read_packed, unpack_levels, words_per_row
 from ..rotary.files import check_print_fields
 from ..rotary.placement import Placement
 from ..rotary.printdata import RotaryPrint, SwatheImage, runs_to_mask
@@ -98,6 +98,7 @@ def load_program(path: str | Path) -> dict:
     except (KeyError, TypeError):
         raise InputFileError("program has no valid machine section", path=p) from None
     prog["_spec"] = spec
+    _check_design_grid(prog.get("design_grid"), p)
     try:
         for h in prog["heads"]:
             h["_model"] = InkjetHead(**h["model"])
@@ -107,6 +108,21 @@ def load_program(path: str | Path) -> dict:
     except (KeyError, TypeError, ValidationError) as exc:
         raise InputFileError(f"program is incomplete or invalid: {type(exc).__name__}: {exc}", path=p) from None
     return prog
+
+
+def _check_design_grid(g: object, p: Path) -> None:
+    """The program's ``design_grid`` (the placement every design region is drawn on): whole
+    pixel counts and finite positive pitches (a machine places the regions by it)."""
+    if not isinstance(g, dict):
+        raise InputFileError("program has no valid design_grid", path=p)
+    for k in ("width_px", "height_px"):
+        v = g.get(k)
+        if not (isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= R.MAX_COUNT):
+            raise InputFileError(f"design_grid.{k} must be a whole number 1..{R.MAX_COUNT:g}, got {R.show_value(v)}", path=p)
+    for k in ("pitch_x_mm", "pitch_y_mm"):
+        v = g.get(k)
+        if not (_finite(v) and v > 0):
+            raise InputFileError(f"design_grid.{k} must be a finite length > 0 mm, got {R.show_value(v)}", path=p)
 
 
 def _finite(v: object) -> bool:
@@ -334,6 +350,10 @@ def _layer_images(lay: dict, prog: dict, p: Path, files: _Files, want: set[int] 
                                                 r["index_offset_counts"], r["first_firing_index"], turn)
             steps[r["swathe"]] = printed_by.get(r["file"], [])
             files_of[r["swathe"]] = r["file"]
+            words = words_per_row(r["nozzles"], bits)
+            if r.get("words_per_row") != words:  # what a machine reading the program takes as the row length
+                raise InputFileError(f"{where}: field words_per_row must be {words} ({r['nozzles']} nozzles of {bits} "
+                                     f"bit(s) in 32-bit words), got {R.show_value(r.get('words_per_row'))}", path=p)
             data = files.read(r["file"], r["sha256"], where)
             try:
                 lv = unpack_levels(read_packed(data, r["firings"], r["nozzles"], bits), bits, order)
@@ -351,11 +371,20 @@ def _layer_images(lay: dict, prog: dict, p: Path, files: _Files, want: set[int] 
                                    enabled_nozzles=int(r["enabled_nozzles"]),
                                    enabled=None if runs is None else runs_to_mask(runs, model.nozzles)))
         r0 = rs[0]
+        where = f"layer {i} image {r0['file']}"
+        try:
+            placement = Placement.from_json(r0["placement"])
+        except RotoprintError as exc:
+            raise InputFileError(f"{where}: field placement: {exc.problem}", path=p) from None
         pr = RotaryPrint(method=r0["method"], head=model, tilt_deg=float(r0["tilt_deg"]),
                          mount_angle_deg=float(r0["mount_angle_deg"]), direction=int(r0["direction"]),
-                         dpi_y=float(r0["dpi_y"]), placement=Placement.from_json(r0["placement"]), swathes=tuple(sws))
+                         dpi_y=float(r0["dpi_y"]), placement=placement, swathes=tuple(sws))
         if mname not in designs:
             raise InputFileError(f"layer {i}: no design region of {mname} for its images", path=p)
+        if designs[mname].shape != (placement.height_px, placement.width_px):
+            dh, dw = designs[mname].shape
+            raise InputFileError(f"{where}: field placement is {placement.width_px} x {placement.height_px} px, "
+                                 f"the layer's design of {mname} {dw} x {dh} px", path=p)
         out.append(ReplayImage(layer=i, material=mname, ink=ink, head=h["name"], print=pr, design=designs[mname],
                                clocks=clocks, files=files_of, steps=steps, interlace=q))
     return out
