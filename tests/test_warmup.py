@@ -62,3 +62,41 @@ def test_second_process_waits_and_loads_the_kernel_the_first_compiled(tmp_path):
     out, err = probe.communicate(timeout=120)
     assert probe.returncode == 0, err[-2000:]
     assert out.split() == ["0"], (out, err[-2000:])
+
+
+def _cached_kernels() -> set[str]:
+    """``module.name`` of every ``@njit(cache=True, ...)`` function in the sources that is not
+    inlined (an inlined kernel has no cache file of its own)."""
+    import ast
+    from pathlib import Path
+
+    import rotoprint
+
+    root = Path(rotoprint.__file__).parent
+    found = set()
+    for path in root.rglob("*.py"):
+        mod = ".".join(path.relative_to(root.parent).with_suffix("").parts)
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.FunctionDef):
+                continue
+            for d in node.decorator_list:
+                if isinstance(d, ast.Call) and getattr(d.func, "id", getattr(d.func, "attr", "")) == "njit":
+                    kw = {k.arg: getattr(k.value, "value", None) for k in d.keywords}
+                    if kw.get("cache") is True and kw.get("inline", "never") != "always":
+                        found.add(f"{mod}.{node.name}")
+    return found
+
+
+def test_every_cached_kernel_is_warmed_or_says_why_not():
+    """A new jit kernel must be reached by a warm-up command (then listed in WARMED, checked by
+    bench/warmup_cover.py against a cold warm-up) or listed in NOT_WARMED with the reason no
+    user's first command reaches it: otherwise that first command compiles it."""
+    from rotoprint._warmup import NOT_WARMED, WARMED
+
+    warmed = {f"{m}.{n}" for m, names in WARMED.items() for n in names}
+    found = _cached_kernels()
+    assert len(found) > 60  # the scan sees the kernels (71 when this was written)
+    assert not warmed & set(NOT_WARMED), warmed & set(NOT_WARMED)
+    assert found - warmed - set(NOT_WARMED) == set(), "kernels in neither rotoprint._warmup.WARMED nor NOT_WARMED"
+    assert (warmed | set(NOT_WARMED)) - found == set(), "listed in rotoprint._warmup but not a cached kernel"
+    assert all(len(why) > 20 for why in NOT_WARMED.values())

@@ -19,6 +19,51 @@ import time
 from pathlib import Path
 
 
+#: The cached jit kernels (``@njit(cache=True)``, not inlined) that the commands of
+#: :func:`_commands` compile, by module; a kernel called by another is compiled with it. Measured:
+#: the cache index files a cold warm-up writes (``python bench/warmup_cover.py``, which also
+#: fails when this list and a cold warm-up disagree); ``tests/test_warmup.py`` fails when a
+#: kernel in the sources is in neither this list nor :data:`NOT_WARMED`.
+WARMED: dict[str, tuple[str, ...]] = {
+    "rotoprint.check._cavities": ("empty_runs", "cavity_step"),
+    "rotoprint.check._kernels.chains": ("chain_components", "chain_successors", "_chain_runs"),
+    "rotoprint.check._kernels.classify": ("_bands", "_winding", "classify_segments"),
+    "rotoprint.check._kernels.crossings": ("_split_cell_size", "_pt_seg_d2", "_isolate", "_near", "split_at_crossings", "_rects_apart", "_run_pairs", "_split_cells", "_grid_pairs", "_split"),
+    "rotoprint.check._kernels.grid": ("_cell_size",),
+    "rotoprint.check._kernels.groups": ("_sort_pixels", "group_chords_in", "group_stats", "emit_groups"),
+    "rotoprint.check._kernels.layer": ("_below", "_argmin_finite", "_check_layer"),
+    "rotoprint.check._kernels.pointhash": ("_keys", "_key_table"),
+    "rotoprint.check._kernels.raster": ("paint_chords", "_runs_at", "chord_presence_runs", "chord_extreme", "_absent_runs"),
+    "rotoprint.check._kernels.runs": ("fill_runs", "island_runs", "section_runs", "_island_stats"),
+    "rotoprint.check._kernels.simplify": ("_greedy_emit", "simplify_section"),
+    "rotoprint.check._kernels.unionfind": ("_find", "_union", "_relabel"),
+    "rotoprint.check._kernels.widths": ("_run_clear", "sample_widths", "_seg_cells", "sample_widths_chained", "measure_widths"),
+    "rotoprint.rotary._deposit_kernels": ("_weight", "drop_norms_jit", "deposit_strip_jit"),
+    "rotoprint.rotary._direct_kernels": ("_direct_fill",),
+    "rotoprint.rotary._exact_kernels": ("_coords_nb", "_bilinear_nb", "_track_windows_nb", "_window_bounds_nb", "_windows_fill_nb", "_windows_fill_gather_nb", "_binary_levels_nb"),
+    "rotoprint.rotary._halftone_kernels": ("diffuse_jit",),
+    "rotoprint.rotary._levelling_kernels": ("restrict_wet_jit", "prolong_combine_jit"),
+    "rotoprint.slicing._kernels": ("bucket_crossings", "union_labels"),
+}
+
+_C_FALLBACK = ("the C extension's kernel runs instead (rotoprint._native); where it is not built, the warm-up's "
+               "dlp, slice and check commands take this fallback (that path's warm-up is not measured)")
+#: The cached kernels no command reaches on a first run with the C extension built, and why.
+NOT_WARMED: dict[str, str] = {
+    "rotoprint.masks._coverage_kernels.accumulate_jit": _C_FALLBACK,
+    "rotoprint.masks._coverage_kernels.resolve_jit": (
+        "library API only (rotoprint.masks.coverage_fraction, backend='jit'); no command calls it"),
+    "rotoprint.masks._coverage_kernels.resolve_grey_jit": _C_FALLBACK,
+    "rotoprint.masks._coverage_kernels.resolve_nearest_jit": _C_FALLBACK,
+    "rotoprint.slicing._kernels._fill_spans": _C_FALLBACK,
+    "rotoprint.slicing._kernels._crossing": _C_FALLBACK,
+    "rotoprint.slicing._kernels.section_kernel": _C_FALLBACK,
+    "rotoprint.rotary._exact_kernels._windows_gather_nb": (
+        "the second gather through exact maps already filled (the library's ExactMaps reused for another "
+        "design on the same lattice); no command reuses maps, the first gather is _windows_fill_gather_nb"),
+}
+
+
 def _grey_device(tmp: Path) -> Path:
     """A copy of the omnidot760 preset with 4 drop sizes: an equalised grey-level head reaches
     the halftone kernel."""
