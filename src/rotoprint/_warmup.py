@@ -2,10 +2,12 @@
 
 numba keeps its cache in ``__pycache__`` next to the sources, so an editable install in a
 fresh clone starts cold, and the first ``rotoprint demo`` / ``check`` / ``slice --rotary``
-would spend a minute compiling. ``make`` runs this once after installing: the demo, a check
-and a rotary slice of a small part and the DLP modes run in two processes at once (the
+would spend a minute compiling. ``make`` runs this once after installing: the demo, checks
+(a feature piece with overlays and the exposure model, an open mesh), slices of a small part,
+exact transforms and a simulation, and the DLP modes run in two processes at once (the
 machine's cores), each compile shown as a line, and each kernel compiled by one of the two
-only (:func:`share_compiles`). Later runs load the kernels from the cache.
+only (:func:`share_compiles`). Later runs load the kernels from the cache. :data:`WARMED`
+lists the kernels this compiles, :data:`NOT_WARMED` the others and why.
 """
 
 from __future__ import annotations
