@@ -232,7 +232,7 @@ class LevelOptions:
     coats: float = 1.0
     halo_lengths: float = 10.0
     window_cells: int = 24_000_000
-    coarse_per_length: float = 6.0
+    coarse_per_length: float = 3.5
     exact: bool = False
 
     def __post_init__(self) -> None:
