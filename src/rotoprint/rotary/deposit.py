@@ -39,7 +39,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, ImageError, RasterTooLargeError
@@ -577,9 +576,9 @@ def deposit_film(
         dmask = mask[np.clip(drow, 0, h_px - 1)][:, dcol] & drow_ok[:, None] & dcol_ok[None, :]
         core = slice(r0 - e0, r1 - e0)
         des = dmask[core]
-        if des.any():
-            dist = ndimage.distance_transform_edt(dmask, sampling=(gy, gx))[core]
-            inter = des & (dist >= a_nom + 0.5 * g_min)
+        if des.any():  # distance_transform_edt(dmask, sampling=(gy, gx))[core] >= thr, without its temporaries
+            inter = np.empty_like(des)
+            _k.interior_rows_jit(dmask, r0 - e0, r1 - e0, a_nom + 0.5 * g_min, gx, gy, inter)
         else:
             inter = des
         band = des & ~inter
