@@ -833,7 +833,7 @@ def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
         landed_mean = acc[si]["tsum"] / acc[si]["interior"] if acc[si]["interior"] else float("nan")
         if f == 1:
             stats, lmap = _level_film_exact(si, lev, dt, gx, gy, rows, cols, landed_mean, interior, landed_rows,
-                                            keep_map and si == 0)
+                                            keep_map and si == 0, strip_rows)
             out[si] = stats.film(lev, h0, rule, rate, stats.halo, 1, acc[si]["dep"], area_mm2)
             if lmap is not None:
                 full_lev = lmap
@@ -877,14 +877,19 @@ def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
     return out, full_lev
 
 
-def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean, interior, landed_rows, keep_map):
+def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean, interior, landed_rows, keep_map,
+                      strip_rows):
     """Level film ``si`` on the deposit grid, window by window: its :class:`_LevelledStats`
-    (with ``halo``, deposit cells) and (``keep_map``) its map."""
+    (with ``halo``, deposit cells) and (``keep_map``) its map. A window's core is whole
+    deposit strips (``strip_rows``) where it holds one, so the first pass's interior cells of
+    each strip serve its figures."""
     from . import _levelling as _lv
 
     kernel = _lv.levelling_kernel(dt, gx, gy, lev.halo_lengths)
     hy, hx = (kernel.shape[0] - 1) // 2, (kernel.shape[1] - 1) // 2
     core_rows = max(2 * hy, int(lev.window_cells) // (cols + 2 * hx) - 2 * hy, 1)
+    if core_rows >= strip_rows:
+        core_rows -= core_rows % strip_rows
     stats = _LevelledStats(landed_mean)
     stats.halo = (hx, hy)
     full = np.zeros((rows, cols), np.float64) if keep_map else None
@@ -896,7 +901,9 @@ def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean
         del film_w
         if full is not None:
             full[r0:r1] = lv
-        stats.add(lv, *interior(r0, r1))
+        for s0 in range(r0, r1, strip_rows if core_rows % strip_rows == 0 else core_rows):
+            s1 = min(r1, s0 + strip_rows) if core_rows % strip_rows == 0 else r1
+            stats.add(lv[s0 - r0: s1 - r0], *interior(s0, s1))
     return stats, full
 
 
