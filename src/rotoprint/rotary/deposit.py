@@ -555,17 +555,6 @@ def deposit_film(
                 bins_sum=np.zeros(0), bins_n=np.zeros(0, np.int64), covered_design=0) for _ in range(nsets)]
     pair_acc = [[0, 0] for _ in pairs]
     full = np.zeros((rows, cols), np.float64) if keep_map else None
-    def interior_cells(r0: int, r1: int, inter_bits: np.ndarray):
-        """The interior's (row, col) and radial bin of grid rows r0..r1 from the packed
-        interior mask of the first pass (the levelling pass does not recompute distances)."""
-        inter = np.unpackbits(inter_bits[r0:r1], axis=1, count=cols).astype(bool)
-        ii, jj = np.nonzero(inter)
-        bidx = None
-        if ii.size:
-            X, Y = placement.to_platform((jj + 0.5 - ox) / nx, (ii + r0 + 0.5 - oy) / ny)
-            bidx = np.floor(np.hypot(X, Y)).astype(np.int64)
-        return ii, jj, bidx
-
     def geometry(r0: int, r1: int):
         """Design, interior and band cells of grid rows r0..r1, the interior's (row, col)
         and radial bin (independent of the strips: the distance reaches ``margin``)."""
@@ -619,14 +608,11 @@ def deposit_film(
         for si in range(nsets):
             if levels[si] is not None:
                 landed[si] = full if (full is not None and si == 0) else np.zeros((rows, cols), np.float64)
-    strip_interior: dict[int, tuple] = {}
     for r0 in range(0, rows, strip_rows):
         r1 = min(rows, r0 + strip_rows)
         des, inter, band, ii, jj, bidx = geometry(r0, r1)
         if inter_bits is not None:
             inter_bits[r0:r1] = np.packbits(inter, axis=1)
-        if keep_landed:  # int32: 12 bytes an interior cell
-            strip_interior[r0] = (ii.astype(np.int32), jj.astype(np.int32), None if bidx is None else bidx.astype(np.int32))
         covered = []
         for si in range(nsets):
             film = deposit_rows(si, r0, r1)
@@ -665,14 +651,14 @@ def deposit_film(
     def landed_rows(si: int, r0: int, r1: int) -> np.ndarray:
         return landed[si][r0:r1] if si in landed else deposit_rows(si, r0, r1)
 
-    def interior_of(r0: int, r1: int):
-        hit = strip_interior.get(r0)
-        if hit is not None and r1 == min(rows, r0 + strip_rows):
-            return hit
-        return interior_cells(r0, r1, inter_bits)
+    # the levelled figures' geometry: the interior (packed above) and each cell's radius
+    ang = math.radians(placement.angle_deg)
+    geo = np.array([ox, oy, nx, ny, placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm,
+                    placement.height_px, math.cos(ang), math.sin(ang)], np.float64)
+    n_bins = int(placement.radial_range_mm()[1]) + 2
 
-    levelled, full_lev = _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows, interior_of,
-                                      landed_rows, keep_map)
+    levelled, full_lev = _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
+                                      (inter_bits, geo, n_bins), landed_rows, keep_map)
     films = []
     for si, (s, ac, prep) in enumerate(zip(drop_sets, acc, prepared)):
         planned = float(np.sum(s.volume_pl))
@@ -743,29 +729,40 @@ def _bins_spread(bins_sum: np.ndarray, bins_n: np.ndarray, area_mm2: float):
 
 
 class _LevelledStats:
-    """The levelled film's interior figures, strip by strip."""
+    """The levelled film's interior figures, strip by strip (``_levelling_kernels.film_stats_jit``:
+    the interior from the first pass's packed mask, the radial bins computed per cell)."""
 
-    def __init__(self, landed_mean: float):
+    def __init__(self, landed_mean: float, inter_bits: np.ndarray, geo: np.ndarray, n_bins: int):
         self.landed_mean = landed_mean
-        self.tot = self.tsum = 0.0
-        self.tmin = math.inf
-        self.n_int = self.below = 0
-        self.bins_sum, self.bins_n = np.zeros(0), np.zeros(0, np.int64)
+        self.inter_bits, self.geo = inter_bits, geo
+        self.acc = np.array([0.0, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0])
+        self.bins_sum, self.bins_n = np.zeros(n_bins), np.zeros(n_bins, np.int64)
 
-    def add(self, lv: np.ndarray, ii: np.ndarray, jj: np.ndarray, bidx) -> None:
-        self.tot += float(lv.sum())
-        if ii.size:
-            t = lv[ii, jj]
-            self.n_int += int(ii.size)
-            self.tmin = min(self.tmin, float(t.min()))
-            self.tsum += float(t.sum())
-            self.below += int((t < 0.5 * self.landed_mean).sum())
-            nb = int(bidx.max()) + 1
-            if self.bins_sum.size < nb:
-                self.bins_sum = np.pad(self.bins_sum, (0, nb - self.bins_sum.size))
-                self.bins_n = np.pad(self.bins_n, (0, nb - self.bins_n.size))
-            self.bins_sum[:nb] += np.bincount(bidx, weights=t, minlength=nb)
-            self.bins_n[:nb] += np.bincount(bidx, minlength=nb)
+    def add(self, lv: np.ndarray, r0: int) -> None:
+        from . import _levelling_kernels as _lk
+
+        _lk.film_stats_jit(lv, self.inter_bits[r0: r0 + lv.shape[0]], r0, self.geo, 0.5 * self.landed_mean, self.acc,
+                           self.bins_sum, self.bins_n)
+
+    @property
+    def tot(self) -> float:
+        return float(self.acc[0] + self.acc[1])
+
+    @property
+    def tsum(self) -> float:
+        return float(self.acc[2] + self.acc[3])
+
+    @property
+    def tmin(self) -> float:
+        return float(self.acc[4])
+
+    @property
+    def n_int(self) -> int:
+        return int(self.acc[5])
+
+    @property
+    def below(self) -> int:
+        return int(self.acc[6])
 
     def film(self, lev: LevelOptions, h0: float, rule: str, rate: float, halo: tuple[int, int], factor: int,
              deposited: float, area_mm2: float) -> LevelledFilm:
@@ -811,7 +808,8 @@ def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
     deposit grid in windows with halos (:func:`_level_film_exact`); the others share one
     pass restricting their wet films to their coarse grids, the coarse convolutions, and one
     pass interpolating back, strip by strip (``landed_rows`` gives a film's rows as landed,
-    ``interior`` a strip's interior cells and radial bins).
+    ``interior`` the packed interior mask, the radius geometry and the number of 1 mm bins for
+    :class:`_LevelledStats`).
     """
     from . import _levelling as _lv
     from . import _levelling_kernels as _lk
@@ -833,7 +831,7 @@ def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
         landed_mean = acc[si]["tsum"] / acc[si]["interior"] if acc[si]["interior"] else float("nan")
         if f == 1:
             stats, lmap = _level_film_exact(si, lev, dt, gx, gy, rows, cols, landed_mean, interior, landed_rows,
-                                            keep_map and si == 0, strip_rows)
+                                            keep_map and si == 0)
             out[si] = stats.film(lev, h0, rule, rate, stats.halo, 1, acc[si]["dep"], area_mm2)
             if lmap is not None:
                 full_lev = lmap
@@ -860,37 +858,32 @@ def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
         c["g"] *= scale
         c["n"] *= scale
         del c["h"], c["w"]
-        c["stats"] = _LevelledStats(c["landed_mean"])
+        c["stats"] = _LevelledStats(c["landed_mean"], *interior)
     first = 0 if keep_map and 0 in coarse else None
     if first is not None:
         full_lev = np.zeros((rows, cols), np.float64)
+    buf = np.empty((min(rows, strip_rows), cols), np.float64)  # one strip's levelled film, reused
     for r0 in range(0, rows, strip_rows):
         r1 = min(rows, r0 + strip_rows)
-        ii, jj, bidx = interior(r0, r1)
         for si, c in coarse.items():
             film = landed_rows(si, r0, r1)
-            lv = full_lev[r0:r1] if si == first else np.empty_like(film)
+            lv = full_lev[r0:r1] if si == first else buf[: r1 - r0]
             _lk.prolong_combine_jit(film, r0, c["f"], c["cols"][0], c["cols"][1], c["n"], c["g"], lv)
-            c["stats"].add(lv, ii, jj, bidx)
+            c["stats"].add(lv, r0)
     for si, c in coarse.items():
         out[si] = c["stats"].film(c["lev"], c["h0"], c["rule"], c["rate"], c["halo"], c["f"], acc[si]["dep"], area_mm2)
     return out, full_lev
 
 
-def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean, interior, landed_rows, keep_map,
-                      strip_rows):
+def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean, interior, landed_rows, keep_map):
     """Level film ``si`` on the deposit grid, window by window: its :class:`_LevelledStats`
-    (with ``halo``, deposit cells) and (``keep_map``) its map. A window's core is whole
-    deposit strips (``strip_rows``) where it holds one, so the first pass's interior cells of
-    each strip serve its figures."""
+    (with ``halo``, deposit cells) and (``keep_map``) its map."""
     from . import _levelling as _lv
 
     kernel = _lv.levelling_kernel(dt, gx, gy, lev.halo_lengths)
     hy, hx = (kernel.shape[0] - 1) // 2, (kernel.shape[1] - 1) // 2
     core_rows = max(2 * hy, int(lev.window_cells) // (cols + 2 * hx) - 2 * hy, 1)
-    if core_rows >= strip_rows:
-        core_rows -= core_rows % strip_rows
-    stats = _LevelledStats(landed_mean)
+    stats = _LevelledStats(landed_mean, *interior)
     stats.halo = (hx, hy)
     full = np.zeros((rows, cols), np.float64) if keep_map else None
     for r0 in range(0, rows, core_rows):
@@ -901,9 +894,7 @@ def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean
         del film_w
         if full is not None:
             full[r0:r1] = lv
-        for s0 in range(r0, r1, strip_rows if core_rows % strip_rows == 0 else core_rows):
-            s1 = min(r1, s0 + strip_rows) if core_rows % strip_rows == 0 else r1
-            stats.add(lv[s0 - r0: s1 - r0], *interior(s0, s1))
+        stats.add(lv, r0)
     return stats, full
 
 
