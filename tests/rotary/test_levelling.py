@@ -304,3 +304,34 @@ def test_coats_level_as_one_coat_each(head):
     assert np.abs(dw.levelled_thickness - dc.levelled_thickness).max() > 0.01 * c * scale  # not the same film
     with pytest.raises(ConfigError, match="coats must be a number in 1..1e6"):
         LevelOptions(coats=0.5)
+
+
+def test_film_stats_kernel_matches_numpy():
+    """film_stats_jit (the levelled figures, strip by strip) against numpy on the same cells: the
+    sums, the thinnest, the count below half the mean, the 1 mm bins as Placement.to_platform
+    puts the cells; any split into strips gives the same."""
+    from rotoprint.rotary import _levelling_kernels as LK
+
+    rng = np.random.default_rng(2)
+    rows, cols, nx, ny, ox, oy = 90, 70, 3, 2, 5, 4
+    pl = Placement(21, 41, 0.4, 0.3, inner_radius_mm=12.0, angle_deg=17.0)
+    lv = rng.uniform(0.0, 9.0, (rows, cols))
+    inter = rng.random((rows, cols)) < 0.6
+    bits = np.packbits(inter, axis=1)
+    a = math.radians(pl.angle_deg)
+    geo = np.array([ox, oy, nx, ny, pl.inner_radius_mm, pl.pitch_x_mm, pl.pitch_y_mm, pl.height_px, math.cos(a), math.sin(a)])
+    nb = int(pl.radial_range_mm()[1]) + 2
+    ii, jj = np.nonzero(inter)
+    x, y = pl.to_platform((jj + 0.5 - ox) / nx, (ii + 0.5 - oy) / ny)
+    b = np.floor(np.hypot(x, y)).astype(np.int64)
+    t = lv[ii, jj]
+    for splits in ([0, rows], [0, 1, 37, 38, rows]):
+        acc = np.array([0.0, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0])
+        bs, bn = np.zeros(nb), np.zeros(nb, np.int64)
+        for r0, r1 in zip(splits[:-1], splits[1:]):
+            LK.film_stats_jit(lv[r0:r1], bits[r0:r1], r0, geo, 2.5, acc, bs, bn)
+        assert acc[0] + acc[1] == pytest.approx(lv.sum(), rel=1e-14)
+        assert acc[2] + acc[3] == pytest.approx(t.sum(), rel=1e-14)
+        assert acc[4] == t.min() and acc[5] == t.size and acc[6] == (t < 2.5).sum()
+        assert np.array_equal(bn, np.bincount(b, minlength=nb))
+        assert np.allclose(bs, np.bincount(b, weights=t, minlength=nb), rtol=1e-13, atol=0)
