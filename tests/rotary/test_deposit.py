@@ -126,6 +126,30 @@ def test_interior_is_design_less_half_a_footprint(head):
     assert 0 < f.volume_outside_design_fraction < 1
 
 
+def test_interior_kernel_is_the_distance_transforms_threshold():
+    """interior_rows_jit gives what scipy's distance_transform_edt (with the cells' sampling)
+    thresholded gives, on block masks like an upsampled design, any core rows, square and
+    non-square cells, thresholds at and between whole cells."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(0)
+    for trial in range(150):
+        rows, cols = int(rng.integers(5, 90)), int(rng.integers(5, 90))
+        by, bx = int(rng.integers(1, 6)), int(rng.integers(1, 6))
+        m = np.kron(rng.random((rows // by + 1, cols // bx + 1)) < 0.8, np.ones((by, bx), bool))[:rows, :cols]
+        m[:, :2] = False
+        gx, gy = float(rng.uniform(5, 15)), float(rng.uniform(5, 15))
+        if trial % 3 == 0:
+            gy = gx
+        thr = float(rng.uniform(3, 60)) if trial % 5 else 4 * gx
+        c0 = int(rng.integers(0, rows))
+        c1 = int(rng.integers(c0 + 1, rows + 1))
+        want = (ndimage.distance_transform_edt(m, sampling=(gy, gx)) >= thr)[c0:c1] & m[c0:c1]
+        got = np.empty((c1 - c0, cols), bool)
+        K.interior_rows_jit(m, c0, c1, thr, gx, gy, got)
+        assert np.array_equal(got, want), trial
+
+
 def test_reagent_pair(head):
     pl = Placement(60, 60, PX, PX, inner_radius_mm=60.0)
     mask = np.ones((60, 60), bool)

@@ -135,11 +135,13 @@ def test_tiling_does_not_change_the_levelled_film_and_dry_stays_dry(head):
     assert landed.shape[0] > 2 * hy
 
 
-def test_coarse_grid_levels_as_the_exact_path(head):
-    """The default (convolutions on a grid f = 6 cells coarse, L = 320 um) against the
-    deposit-grid path on a small thick film with a hole: the same volume (1e-9), dry cells
-    dry, the levelled thinnest within 1e-3 and mean within 2e-5 (relative), the map within
-    1e-3 of the mean everywhere; kept or re-deposited films (window_cells) give the same."""
+@pytest.mark.parametrize("set_time_s, factor", [(0.05, 10), (1e-4, 2)])
+def test_coarse_grid_levels_as_the_exact_path(head, set_time_s, factor):
+    """The default (convolutions on a grid f cells coarse, its cell within L / 3.5: f = 10 at
+    L = 320 um, f = 2 at L = 68 um, the coil demo's levelling length) against the deposit-grid
+    path on a small thick film with a hole: the same volume (1e-9), dry cells dry, the levelled
+    thinnest within 1e-3 and mean within 2e-5 (relative), the map within 1e-3 of the mean
+    everywhere; kept or re-deposited films (window_cells) give the same."""
     n = 60
     pl = Placement(n, n, PX, PX, inner_radius_mm=60.0)
     mask = np.ones((n, n), bool)
@@ -152,14 +154,14 @@ def test_coarse_grid_levels_as_the_exact_path(head):
     drops = InkDrops(c[keep], r[keep], rng.uniform(60.0, 100.0, int(keep.sum())))
     runs = {}
     for name, kw in (("exact", dict(exact=True)), ("coarse", {}), ("coarse, re-deposited", dict(window_cells=20_000))):
-        lo = LevelOptions(set_time_s=0.05, **kw)
+        lo = LevelOptions(set_time_s=set_time_s, **kw)
         runs[name] = deposit_film(mask, pl, head, [drops], keep_map=True, options=DepositOptions(level=lo))
     ex = runs["exact"].films[0].levelled
     assert ex.coarse_factor == 1 and runs["exact"].films[0].thinnest_to_mean < 0.6 < ex.thinnest_to_mean
     for name in ("coarse", "coarse, re-deposited"):
         d = runs[name]
         lv = d.films[0].levelled
-        assert lv.coarse_factor == 6 and lv.levelling_length_um == ex.levelling_length_um, name
+        assert lv.coarse_factor == factor and lv.levelling_length_um == ex.levelling_length_um, name
         assert lv.thinnest_um == pytest.approx(ex.thinnest_um, rel=1e-3), name
         assert lv.mean_um == pytest.approx(ex.mean_um, rel=2e-5), name
         assert lv.radial_spread == pytest.approx(ex.radial_spread, abs=1e-3), name
@@ -168,6 +170,19 @@ def test_coarse_grid_levels_as_the_exact_path(head):
         assert np.abs(d.levelled_thickness - runs["exact"].levelled_thickness).max() < 1e-3 * ex.mean_um, name
     a, b = runs["coarse"].levelled_thickness, runs["coarse, re-deposited"].levelled_thickness
     assert np.abs(a - b).max() < 1e-9 * float(a.max())
+
+
+def test_coarse_response_is_the_sampled_tents():
+    """The round trip's response per axis: T^2 (T the box of f cells) at an odd f; at an even f
+    the tent sampled at the cells' offsets is not a product of two boxes (f = 2: cos^3)."""
+    k = np.linspace(1e-6, 0.3, 50)
+    c = 8.8
+    for f in (3, 5, 7):
+        t = np.sin(0.5 * k * c * f) / (f * np.sin(0.5 * k * c))
+        assert np.abs(LV._interp_response(k, c, f) - t * t).max() < 1e-12
+    assert np.abs(LV._interp_response(k, c, 2) - np.cos(0.5 * k * c) ** 3).max() < 1e-12
+    assert np.abs(LV._interp_response(k, c, 2) - np.cos(0.5 * k * c) ** 2).max() > 0.1
+    assert LV._interp_response(np.zeros(1), c, 6)[0] == pytest.approx(1.0, abs=1e-15)
 
 
 def test_coarse_grid_round_trip_is_symmetric_and_keeps_a_flat_film():
@@ -289,3 +304,34 @@ def test_coats_level_as_one_coat_each(head):
     assert np.abs(dw.levelled_thickness - dc.levelled_thickness).max() > 0.01 * c * scale  # not the same film
     with pytest.raises(ConfigError, match="coats must be a number in 1..1e6"):
         LevelOptions(coats=0.5)
+
+
+def test_film_stats_kernel_matches_numpy():
+    """film_stats_jit (the levelled figures, strip by strip) against numpy on the same cells: the
+    sums, the thinnest, the count below half the mean, the 1 mm bins as Placement.to_platform
+    puts the cells; any split into strips gives the same."""
+    from rotoprint.rotary import _levelling_kernels as LK
+
+    rng = np.random.default_rng(2)
+    rows, cols, nx, ny, ox, oy = 90, 70, 3, 2, 5, 4
+    pl = Placement(21, 41, 0.4, 0.3, inner_radius_mm=12.0, angle_deg=17.0)
+    lv = rng.uniform(0.0, 9.0, (rows, cols))
+    inter = rng.random((rows, cols)) < 0.6
+    bits = np.packbits(inter, axis=1)
+    a = math.radians(pl.angle_deg)
+    geo = np.array([ox, oy, nx, ny, pl.inner_radius_mm, pl.pitch_x_mm, pl.pitch_y_mm, pl.height_px, math.cos(a), math.sin(a)])
+    nb = int(pl.radial_range_mm()[1]) + 2
+    ii, jj = np.nonzero(inter)
+    x, y = pl.to_platform((jj + 0.5 - ox) / nx, (ii + 0.5 - oy) / ny)
+    b = np.floor(np.hypot(x, y)).astype(np.int64)
+    t = lv[ii, jj]
+    for splits in ([0, rows], [0, 1, 37, 38, rows]):
+        acc = np.array([0.0, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0])
+        bs, bn = np.zeros(nb), np.zeros(nb, np.int64)
+        for r0, r1 in zip(splits[:-1], splits[1:]):
+            LK.film_stats_jit(lv[r0:r1], bits[r0:r1], r0, geo, 2.5, acc, bs, bn)
+        assert acc[0] + acc[1] == pytest.approx(lv.sum(), rel=1e-14)
+        assert acc[2] + acc[3] == pytest.approx(t.sum(), rel=1e-14)
+        assert acc[4] == t.min() and acc[5] == t.size and acc[6] == (t < 2.5).sum()
+        assert np.array_equal(bn, np.bincount(b, minlength=nb))
+        assert np.allclose(bs, np.bincount(b, weights=t, minlength=nb), rtol=1e-13, atol=0)

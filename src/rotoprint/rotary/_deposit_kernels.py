@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["drop_norms_jit", "deposit_strip_jit", "drop_norms_numpy", "deposit_strip_numpy"]
+__all__ = ["drop_norms_jit", "deposit_strip_jit", "drop_norms_numpy", "deposit_strip_numpy", "interior_rows_jit"]
 
 
 @njit(cache=True, nogil=True)
@@ -106,3 +106,56 @@ def deposit_strip_numpy(u, v, vol_um3, a_um, rs_um, h_um, norm, gx_um, gy_um, ro
         okc = (c >= 0) & (c < cols)
         if okr.any() and okc.any():
             out[np.ix_(rr[okr], c[okc])] += w[np.ix_(okr, okc)] * (vol_um3[d] / (area * norm[d]))
+
+
+@njit(cache=True, nogil=True)
+def interior_rows_jit(dmask, core0, core1, thr_um, gx_um, gy_um, out):
+    """The interior of rows ``core0..core1`` of ``dmask`` ``(R, C) bool`` into ``out``
+    ``(core1 - core0, C) bool``: cells of ``dmask`` whose centre is at least ``thr_um`` from
+    the nearest centre of a cell of ``dmask`` that is False, as ``scipy.ndimage``'s
+    ``distance_transform_edt(dmask, sampling=(gy_um, gx_um)) >= thr_um`` (the same
+    arithmetic, ``sqrt((dy gy)^2 + (dx gx)^2)``, where it decides; only cells within
+    ``dmask`` count).
+
+    Each column's nearest False row (above or below) is found by two scans over the rows; a
+    cell is then interior unless a column within ``thr_um`` holds a False cell nearer than
+    ``thr_um``. Memory: one ``int32`` per cell of ``dmask`` and two per column.
+    """
+    rows, cols = dmask.shape
+    big = rows + 1  # no False cell in this column of the window
+    dv = np.empty((rows, cols), np.int32)
+    last = np.full(cols, -big, np.int64)
+    for r in range(rows):
+        for c in range(cols):
+            if not dmask[r, c]:
+                last[c] = r
+            dv[r, c] = r - last[c] if last[c] > -big else big
+    for c in range(cols):
+        last[c] = -1
+    for r in range(rows - 1, -1, -1):
+        for c in range(cols):
+            if not dmask[r, c]:
+                last[c] = r
+            if last[c] >= 0 and last[c] - r < dv[r, c]:
+                dv[r, c] = last[c] - r
+    kx = int(math.ceil(thr_um / gx_um)) + 1
+    t2 = thr_um * thr_um
+    lo2, hi2 = t2 * (1.0 - 1e-9), t2 * (1.0 + 1e-9)
+    for r in range(core0, core1):
+        o = r - core0
+        for c in range(cols):
+            if not dmask[r, c]:
+                out[o, c] = False
+                continue
+            ok = True
+            for c2 in range(max(0, c - kx), min(cols - 1, c + kx) + 1):
+                d = dv[r, c2]
+                if d >= big:
+                    continue
+                dy = d * gy_um
+                dx = (c2 - c) * gx_um
+                q = dy * dy + dx * dx
+                if q < lo2 or (q <= hi2 and math.sqrt(q) < thr_um):
+                    ok = False
+                    break
+            out[o, c] = ok

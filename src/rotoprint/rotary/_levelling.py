@@ -37,14 +37,21 @@ __all__ = ["levelling_kernel", "level_window", "convolve_rows"]
 
 
 def _interp_response(k: np.ndarray, cell_um: float, factor: int) -> np.ndarray:
-    """Response ``T(k)^2`` of linear interpolation from a grid ``factor`` times coarser than
-    ``cell_um`` to it (one axis; ``T`` is the box of ``factor`` cells), 1 at ``k = 0``."""
+    """Response of the restriction ``Q^T`` (and of the interpolation ``Q``) between the deposit
+    grid of ``cell_um`` cells and a grid ``factor`` times coarser, one axis, over ``factor``:
+    the Fourier sum of the bilinear weights a coarse node gives the cells around it (at
+    offsets ``(m + 1/2) / f - 1/2`` coarse cells, ``_levelling_kernels``), 1 at ``k = 0``.
+
+    For an odd ``factor`` this is ``T(k)^2``, ``T`` the box of ``factor`` cells; for an even
+    one it is not (``cos^3(k cell / 2)`` at ``factor = 2``, where ``T^2 = cos^2``), so it is
+    summed rather than assumed.
+    """
     if factor == 1:
         return np.ones_like(k)
-    num = np.sin(0.5 * k * cell_um * factor)
-    den = factor * np.sin(0.5 * k * cell_um)
-    t = np.divide(num, den, out=np.ones_like(k), where=den != 0.0)
-    return t * t
+    f = int(factor)
+    off = (np.arange(-f, 2 * f) + 0.5) / f - 0.5  # every offset with a weight > 0 (|o| < 1)
+    w = np.maximum(0.0, 1.0 - np.abs(off))
+    return (w[None, :] * np.cos(np.multiply.outer(k * (cell_um * f), off))).sum(axis=1) / f
 
 
 def levelling_kernel(dt_um4: float, gx_um: float, gy_um: float, halo_lengths: float, factor: int = 1) -> np.ndarray:

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["axis_weights", "restrict_wet_jit", "prolong_combine_jit"]
+__all__ = ["axis_weights", "restrict_wet_jit", "prolong_combine_jit", "film_stats_jit"]
 
 
 def axis_weights(n: int, f: int) -> tuple[np.ndarray, np.ndarray]:
@@ -86,3 +86,50 @@ def prolong_combine_jit(film, row0, f, cx0, ctx, n_c, g_c, out):
                 out[i, j] = h * (1.0 - n) + g
             else:
                 out[i, j] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def film_stats_jit(lv, inter_bits, row0, geo, half_mean, acc, bins_sum, bins_n):
+    """Accumulate the figures of film rows ``lv`` ``(rows, cols) float64`` (grid rows
+    ``row0..``) without temporaries: ``acc`` ``(7,) float64`` holds the sum of every cell and
+    its compensation, the interior's sum and its compensation, its thinnest, its cell count
+    and its cells below ``half_mean``; ``bins_sum``, ``bins_n`` ``(B,)`` the interior per 1 mm
+    of platform radius. ``inter_bits`` ``(rows, ceil(cols / 8)) uint8``: the interior mask
+    packed as ``np.packbits`` (big-endian bits) packs it; ``geo`` ``(10,) float64``: grid
+    origin ``ox, oy``, cells per pixel ``nx, ny``, the placement's inner radius, pitches, height
+    (px) and ``cos, sin`` of its angle (the radius as ``Placement.to_platform`` computes it).
+    Sums are compensated (Neumaier), so they do not depend on how the rows are split.
+    """
+    rows, cols = lv.shape
+    ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
+    r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
+    nb = bins_sum.size
+    for i in range(rows):
+        row = (i + row0 + 0.5 - oy) / ny
+        yl = (hpx / 2.0 - row) * py
+        for j in range(cols):
+            t = lv[i, j]
+            s = acc[0] + t  # Neumaier: acc[1] keeps what the sum lost
+            if abs(acc[0]) >= abs(t):
+                acc[1] += (acc[0] - s) + t
+            else:
+                acc[1] += (t - s) + acc[0]
+            acc[0] = s
+            if (inter_bits[i, j >> 3] >> (7 - (j & 7))) & 1:
+                s = acc[2] + t
+                if abs(acc[2]) >= abs(t):
+                    acc[3] += (acc[2] - s) + t
+                else:
+                    acc[3] += (t - s) + acc[2]
+                acc[2] = s
+                if t < acc[4]:
+                    acc[4] = t
+                acc[5] += 1.0
+                if t < half_mean:
+                    acc[6] += 1.0
+                col = (j + 0.5 - ox) / nx
+                xl = r_in + col * px
+                b = int(math.floor(math.hypot(ca * xl - sa * yl, sa * xl + ca * yl)))
+                if 0 <= b < nb:
+                    bins_sum[b] += t
+                    bins_n[b] += 1

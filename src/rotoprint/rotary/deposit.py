@@ -39,7 +39,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import ndimage
 
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, ImageError, RasterTooLargeError
@@ -232,7 +231,7 @@ class LevelOptions:
     coats: float = 1.0
     halo_lengths: float = 10.0
     window_cells: int = 24_000_000
-    coarse_per_length: float = 6.0
+    coarse_per_length: float = 3.5
     exact: bool = False
 
     def __post_init__(self) -> None:
@@ -556,17 +555,6 @@ def deposit_film(
                 bins_sum=np.zeros(0), bins_n=np.zeros(0, np.int64), covered_design=0) for _ in range(nsets)]
     pair_acc = [[0, 0] for _ in pairs]
     full = np.zeros((rows, cols), np.float64) if keep_map else None
-    def interior_cells(r0: int, r1: int, inter_bits: np.ndarray):
-        """The interior's (row, col) and radial bin of grid rows r0..r1 from the packed
-        interior mask of the first pass (the levelling pass does not recompute distances)."""
-        inter = np.unpackbits(inter_bits[r0:r1], axis=1, count=cols).astype(bool)
-        ii, jj = np.nonzero(inter)
-        bidx = None
-        if ii.size:
-            X, Y = placement.to_platform((jj + 0.5 - ox) / nx, (ii + r0 + 0.5 - oy) / ny)
-            bidx = np.floor(np.hypot(X, Y)).astype(np.int64)
-        return ii, jj, bidx
-
     def geometry(r0: int, r1: int):
         """Design, interior and band cells of grid rows r0..r1, the interior's (row, col)
         and radial bin (independent of the strips: the distance reaches ``margin``)."""
@@ -577,9 +565,9 @@ def deposit_film(
         dmask = mask[np.clip(drow, 0, h_px - 1)][:, dcol] & drow_ok[:, None] & dcol_ok[None, :]
         core = slice(r0 - e0, r1 - e0)
         des = dmask[core]
-        if des.any():
-            dist = ndimage.distance_transform_edt(dmask, sampling=(gy, gx))[core]
-            inter = des & (dist >= a_nom + 0.5 * g_min)
+        if des.any():  # distance_transform_edt(dmask, sampling=(gy, gx))[core] >= thr, without its temporaries
+            inter = np.empty_like(des)
+            _k.interior_rows_jit(dmask, r0 - e0, r1 - e0, a_nom + 0.5 * g_min, gx, gy, inter)
         else:
             inter = des
         band = des & ~inter
@@ -620,14 +608,11 @@ def deposit_film(
         for si in range(nsets):
             if levels[si] is not None:
                 landed[si] = full if (full is not None and si == 0) else np.zeros((rows, cols), np.float64)
-    strip_interior: dict[int, tuple] = {}
     for r0 in range(0, rows, strip_rows):
         r1 = min(rows, r0 + strip_rows)
         des, inter, band, ii, jj, bidx = geometry(r0, r1)
         if inter_bits is not None:
             inter_bits[r0:r1] = np.packbits(inter, axis=1)
-        if keep_landed:  # int32: 12 bytes an interior cell
-            strip_interior[r0] = (ii.astype(np.int32), jj.astype(np.int32), None if bidx is None else bidx.astype(np.int32))
         covered = []
         for si in range(nsets):
             film = deposit_rows(si, r0, r1)
@@ -666,14 +651,14 @@ def deposit_film(
     def landed_rows(si: int, r0: int, r1: int) -> np.ndarray:
         return landed[si][r0:r1] if si in landed else deposit_rows(si, r0, r1)
 
-    def interior_of(r0: int, r1: int):
-        hit = strip_interior.get(r0)
-        if hit is not None and r1 == min(rows, r0 + strip_rows):
-            return hit
-        return interior_cells(r0, r1, inter_bits)
+    # the levelled figures' geometry: the interior (packed above) and each cell's radius
+    ang = math.radians(placement.angle_deg)
+    geo = np.array([ox, oy, nx, ny, placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm,
+                    placement.height_px, math.cos(ang), math.sin(ang)], np.float64)
+    n_bins = int(placement.radial_range_mm()[1]) + 2
 
-    levelled, full_lev = _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows, interior_of,
-                                      landed_rows, keep_map)
+    levelled, full_lev = _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
+                                      (inter_bits, geo, n_bins), landed_rows, keep_map)
     films = []
     for si, (s, ac, prep) in enumerate(zip(drop_sets, acc, prepared)):
         planned = float(np.sum(s.volume_pl))
@@ -744,29 +729,40 @@ def _bins_spread(bins_sum: np.ndarray, bins_n: np.ndarray, area_mm2: float):
 
 
 class _LevelledStats:
-    """The levelled film's interior figures, strip by strip."""
+    """The levelled film's interior figures, strip by strip (``_levelling_kernels.film_stats_jit``:
+    the interior from the first pass's packed mask, the radial bins computed per cell)."""
 
-    def __init__(self, landed_mean: float):
+    def __init__(self, landed_mean: float, inter_bits: np.ndarray, geo: np.ndarray, n_bins: int):
         self.landed_mean = landed_mean
-        self.tot = self.tsum = 0.0
-        self.tmin = math.inf
-        self.n_int = self.below = 0
-        self.bins_sum, self.bins_n = np.zeros(0), np.zeros(0, np.int64)
+        self.inter_bits, self.geo = inter_bits, geo
+        self.acc = np.array([0.0, 0.0, 0.0, 0.0, math.inf, 0.0, 0.0])
+        self.bins_sum, self.bins_n = np.zeros(n_bins), np.zeros(n_bins, np.int64)
 
-    def add(self, lv: np.ndarray, ii: np.ndarray, jj: np.ndarray, bidx) -> None:
-        self.tot += float(lv.sum())
-        if ii.size:
-            t = lv[ii, jj]
-            self.n_int += int(ii.size)
-            self.tmin = min(self.tmin, float(t.min()))
-            self.tsum += float(t.sum())
-            self.below += int((t < 0.5 * self.landed_mean).sum())
-            nb = int(bidx.max()) + 1
-            if self.bins_sum.size < nb:
-                self.bins_sum = np.pad(self.bins_sum, (0, nb - self.bins_sum.size))
-                self.bins_n = np.pad(self.bins_n, (0, nb - self.bins_n.size))
-            self.bins_sum[:nb] += np.bincount(bidx, weights=t, minlength=nb)
-            self.bins_n[:nb] += np.bincount(bidx, minlength=nb)
+    def add(self, lv: np.ndarray, r0: int) -> None:
+        from . import _levelling_kernels as _lk
+
+        _lk.film_stats_jit(lv, self.inter_bits[r0: r0 + lv.shape[0]], r0, self.geo, 0.5 * self.landed_mean, self.acc,
+                           self.bins_sum, self.bins_n)
+
+    @property
+    def tot(self) -> float:
+        return float(self.acc[0] + self.acc[1])
+
+    @property
+    def tsum(self) -> float:
+        return float(self.acc[2] + self.acc[3])
+
+    @property
+    def tmin(self) -> float:
+        return float(self.acc[4])
+
+    @property
+    def n_int(self) -> int:
+        return int(self.acc[5])
+
+    @property
+    def below(self) -> int:
+        return int(self.acc[6])
 
     def film(self, lev: LevelOptions, h0: float, rule: str, rate: float, halo: tuple[int, int], factor: int,
              deposited: float, area_mm2: float) -> LevelledFilm:
@@ -812,7 +808,8 @@ def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
     deposit grid in windows with halos (:func:`_level_film_exact`); the others share one
     pass restricting their wet films to their coarse grids, the coarse convolutions, and one
     pass interpolating back, strip by strip (``landed_rows`` gives a film's rows as landed,
-    ``interior`` a strip's interior cells and radial bins).
+    ``interior`` the packed interior mask, the radius geometry and the number of 1 mm bins for
+    :class:`_LevelledStats`).
     """
     from . import _levelling as _lv
     from . import _levelling_kernels as _lk
@@ -861,18 +858,18 @@ def _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
         c["g"] *= scale
         c["n"] *= scale
         del c["h"], c["w"]
-        c["stats"] = _LevelledStats(c["landed_mean"])
+        c["stats"] = _LevelledStats(c["landed_mean"], *interior)
     first = 0 if keep_map and 0 in coarse else None
     if first is not None:
         full_lev = np.zeros((rows, cols), np.float64)
+    buf = np.empty((min(rows, strip_rows), cols), np.float64)  # one strip's levelled film, reused
     for r0 in range(0, rows, strip_rows):
         r1 = min(rows, r0 + strip_rows)
-        ii, jj, bidx = interior(r0, r1)
         for si, c in coarse.items():
             film = landed_rows(si, r0, r1)
-            lv = full_lev[r0:r1] if si == first else np.empty_like(film)
+            lv = full_lev[r0:r1] if si == first else buf[: r1 - r0]
             _lk.prolong_combine_jit(film, r0, c["f"], c["cols"][0], c["cols"][1], c["n"], c["g"], lv)
-            c["stats"].add(lv, ii, jj, bidx)
+            c["stats"].add(lv, r0)
     for si, c in coarse.items():
         out[si] = c["stats"].film(c["lev"], c["h0"], c["rule"], c["rate"], c["halo"], c["f"], acc[si]["dep"], area_mm2)
     return out, full_lev
@@ -886,7 +883,7 @@ def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean
     kernel = _lv.levelling_kernel(dt, gx, gy, lev.halo_lengths)
     hy, hx = (kernel.shape[0] - 1) // 2, (kernel.shape[1] - 1) // 2
     core_rows = max(2 * hy, int(lev.window_cells) // (cols + 2 * hx) - 2 * hy, 1)
-    stats = _LevelledStats(landed_mean)
+    stats = _LevelledStats(landed_mean, *interior)
     stats.halo = (hx, hy)
     full = np.zeros((rows, cols), np.float64) if keep_map else None
     for r0 in range(0, rows, core_rows):
@@ -897,7 +894,7 @@ def _level_film_exact(si, lev: LevelOptions, dt, gx, gy, rows, cols, landed_mean
         del film_w
         if full is not None:
             full[r0:r1] = lv
-        stats.add(lv, *interior(r0, r1))
+        stats.add(lv, r0)
     return stats, full
 
 
