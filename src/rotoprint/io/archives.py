@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .._dataclass import dataclass
 from ..errors import ConfigError, ImageError, InputFileError
 from .atomic import OutputClaim
 from .formats import FORMATS as _REGISTRY

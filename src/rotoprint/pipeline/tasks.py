@@ -12,10 +12,10 @@ from __future__ import annotations
 import hashlib
 import json
 import weakref
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._dataclass import dataclass, field
 from .._version import __version__
 from .producer import LayerSource, Rendered
 

@@ -10,11 +10,11 @@ import copy
 
 import logging
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .._dataclass import dataclass
 from .._resources import check_raster_fits
 from ..mesh import Mesh
 from ._fill import FILL_RULES, fill_numpy
