@@ -221,6 +221,28 @@ def test_fast_path_imports_no_typer_rich_pydantic_numba(tmp_path, part, quiet, m
 
 
 # ------------------------------------------------------------------- devices without pydantic
+def test_short_coverage_job_skips_openssl_tempfile_and_thread_pools(tmp_path, part):
+    """A 10-layer-like coverage job needs neither OpenSSL's hashlib (``rotoprint._hashing``),
+    tempfile (with random) nor concurrent.futures (no render threads for so little work): each
+    was a few ms of its start-up."""
+    from rotoprint._accel import native
+    from rotoprint._hashing import _builtin_sha256
+
+    if native is None or _builtin_sha256 is None:
+        pytest.skip("needs rotoprint._native and Python's built-in SHA-256")
+    code = (
+        "import sys\n"
+        "from rotoprint.cli.entry import main\n"
+        f"rc = main(['dlp', {str(part)!r}, '-d', 'prusa-sl1s', '--layer-height', '0.5', '-o', {str(tmp_path / 'j.sl1s')!r},"
+        " '--mode', 'coverage', '--quiet'])\n"
+        "print(rc, sorted({m.split('.')[0] for m in sys.modules} & {'_hashlib', 'hashlib', 'tempfile', 'random', 'concurrent'}))\n"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env={"PATH": "/usr/bin:/bin", "ROTOPRINT_NATIVE": "1"})
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split("\n")[0] == "0 []", p.stdout + p.stderr
+
+
 def test_plain_projector_fields_are_the_models():
     from rotoprint.devices import Projector
 

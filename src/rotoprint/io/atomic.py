@@ -30,8 +30,6 @@ import errno
 import json
 import os
 import shutil
-import signal
-import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -61,6 +59,8 @@ def kill_point(name: str) -> None:
     ``archive-N`` (N members written into an archive's ``.part``).
     """
     if os.environ.get(KILL_ENV) == name:
+        import signal
+
         os.kill(os.getpid(), signal.SIGKILL)
 
 
@@ -94,6 +94,8 @@ def atomic_file(path: str | Path, mode: str = "wb") -> Iterator:
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.is_dir():
         raise InputFileError("output folder does not exist", path=parent)
+    import tempfile  # (with random: imported when used, not at a job's start)
+
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=parent)
     try:
         with os.fdopen(fd, mode) as fh:
