@@ -243,6 +243,39 @@ def test_short_coverage_job_skips_openssl_tempfile_and_thread_pools(tmp_path, pa
     assert p.stdout.split("\n")[0] == "0 []", p.stdout + p.stderr
 
 
+def test_numpy_core_preloaded_off_the_main_thread():
+    """``rotoprint dlp`` loads numpy's core extension in a thread (dlopen without the GIL)
+    before numpy is imported; numpy then imports and works as ever, with one BLAS thread."""
+    from rotoprint._accel import native
+
+    if native is None:
+        pytest.skip("rotoprint._native is not built")
+    code = (
+        "import os, sys, threading\n"
+        "from rotoprint.cli import entry\n"
+        "assert entry._looks_like_dlp(['-q', 'dlp', 'x.stl']) and not entry._looks_like_dlp(['check', 'dlp'])\n"
+        "entry._preload_numpy()\n"
+        "for t in threading.enumerate():\n"
+        "    if t.name == 'rotoprint-preload':\n"
+        "        t.join()\n"
+        "maps = open('/proc/self/maps').read()\n"
+        "print('numpy' in sys.modules, '_multiarray_umath' in maps, os.environ['OPENBLAS_NUM_THREADS'])\n"
+        "import numpy as np\n"
+        "print(float(np.linalg.inv(np.eye(3) * 2)[0, 0]), len(os.listdir('/proc/self/task')))\n"
+    )
+    env = {"PATH": "/usr/bin:/bin"}
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split("\n")[:2] == ["False True 1", "0.5 1"], p.stdout
+    # turned off with the C extension: nothing loaded ahead
+    off = code.replace("print('numpy' in sys.modules", "print('numpy' in sys.modules or 'x'")
+    p = subprocess.run([sys.executable, "-c", off], capture_output=True, text=True, timeout=120,
+                       env={**env, "ROTOPRINT_NATIVE": "0", "OPENBLAS_NUM_THREADS": "2"})
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split("\n")[0] == "x False 2", p.stdout
+    assert native.preload("/nonexistent/lib.so") is False
+
+
 def test_plain_projector_fields_are_the_models():
     from rotoprint.devices import Projector
 
