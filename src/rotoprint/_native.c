@@ -491,7 +491,8 @@ make_run_chunk(long width, int fbyte, int level, int k, chunk_t *out)
     size_t rows = (size_t)1 << k, rowlen = (size_t)width + 1;
     unsigned char *raw = (unsigned char *)calloc(rows * rowlen, 1);
     if (raw == NULL) return -1;
-    for (size_t r = 0; r < rows; r++) raw[r * rowlen] = (unsigned char)fbyte;
+    if (fbyte) /* (rows of zeros: calloc's pages stay untouched, unmapped until deflate reads them) */
+        for (size_t r = 0; r < rows; r++) raw[r * rowlen] = (unsigned char)fbyte;
     z_stream zs;
     memset(&zs, 0, sizeof zs);
     if (deflateInit2(&zs, level, Z_DEFLATED, -15, 9, Z_RLE) != Z_OK) { free(raw); return -1; }
