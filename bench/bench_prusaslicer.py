@@ -312,3 +312,56 @@ def _one(c: Case, tool: str, stl: Path, ini: Path, tmp: Path, prusa: str, env: d
         cmd = [prusa, "--export-sla", "--loglevel", "1", "--load", str(ini), str(stl), "-o", str(out)]
     wall, rss = run_process(cmd, env)
     return wall, rss, out.stat().st_size
+
+
+def plate_rounds(rounds: int = 15) -> dict:
+    """The 10-layer plate alone, both programs alternating ``rounds`` times: min and median of
+    the wall time and of the CPU time (user + sys of the process and its threads, from
+    ``wait4``), seconds. The commands are the table's; the processes are spawned directly
+    (peak RSS is not taken here, see :func:`run_process`)."""
+    prusa = shutil.which("prusa-slicer")
+    if prusa is None:
+        raise SystemExit("prusa-slicer is not installed (apt-get install prusa-slicer)")
+    from rotoprint.examples import write_binary_stl
+
+    _compile_rotoprint()
+    c = CASES[-1]
+    env = dict(os.environ)
+    env.setdefault("SOURCE_DATE_EPOCH", "1700000000")
+    got: dict[str, list[tuple[float, float]]] = {"rotoprint": [], "prusaslicer": []}
+    with tempfile.TemporaryDirectory(prefix="rotoprint-vs-prusa-plate-") as tmp:
+        tmp = Path(tmp)
+        stl, ini = tmp / "plate.stl", tmp / "plate.ini"
+        write_binary_stl(stl, _triangles(c))
+        ini.write_text(prusa_profile(c.display, c.layer_height_mm))
+        cmds = {
+            "rotoprint": [*_rotoprint_cmd(), "dlp", str(stl), "--device", c.display.preset, "--layer-height",
+                          f"{c.layer_height_mm:g}", "--mode", "coverage", "--out", str(tmp / "r.sl1s"), "--quiet"],
+            "prusaslicer": [prusa, "--export-sla", "--loglevel", "1", "--load", str(ini), str(stl), "-o", str(tmp / "p.sl1s")],
+        }
+        for _ in range(rounds):
+            for tool, cmd in cmds.items():
+                t0 = time.perf_counter()
+                with open(os.devnull, "wb") as null:
+                    pid = os.posix_spawn(cmd[0], cmd, env, file_actions=[(os.POSIX_SPAWN_DUP2, null.fileno(), 1)])
+                    _, status, ru = os.wait4(pid, 0)
+                wall = time.perf_counter() - t0
+                if status != 0:
+                    raise RuntimeError(f"{' '.join(cmd)} failed ({status})")
+                got[tool].append((wall, ru.ru_utime + ru.ru_stime))
+    out = {"rounds": rounds, "load average before / after": None}
+    for tool, runs in got.items():
+        walls, cpus = sorted(r[0] for r in runs), sorted(r[1] for r in runs)
+        out[tool] = {"wall s min / median": (round(walls[0], 4), round(statistics.median(walls), 4)),
+                     "CPU s min / median": (round(cpus[0], 4), round(statistics.median(cpus), 4))}
+    ratio = statistics.median(r[0] for r in got["rotoprint"]) / statistics.median(r[0] for r in got["prusaslicer"])
+    out["wall ratio (medians)"] = round(ratio, 3)
+    return out
+
+
+if __name__ == "__main__":  # python bench/bench_prusaslicer.py [ROUNDS]: the plate alone, alternating
+    load0 = os.getloadavg()
+    res = plate_rounds(int(sys.argv[1]) if len(sys.argv) > 1 else 15)
+    res["load average before / after"] = (round(load0[0], 2), round(os.getloadavg()[0], 2))
+    for k, v in res.items():
+        print(f"{k}: {v}")

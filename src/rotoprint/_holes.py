@@ -24,9 +24,9 @@ Which loops are filled is decided in :func:`find_and_fill` (see :data:`FILL_POLI
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
+
+from ._dataclass import dataclass
 
 __all__ = ["FilledHole", "HoleReport", "find_and_fill", "FILL_POLICY"]
 

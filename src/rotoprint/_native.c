@@ -20,11 +20,16 @@
  *                short runs and runs of up to 1024 Up rows, which are deflated with the other
  *                rows; those are left unfiltered ("None"); zlib's run-length strategy.
  *
+ * - preload():   dlopen a shared library with the GIL released (the fast ``dlp`` entry loads
+ *                numpy's core extension this way on the second core while the first one goes on
+ *                importing; numpy's own import then finds it loaded).
+ *
  * All of them release the GIL. Inputs are buffers (numpy arrays); the Python side (the
  * validating public functions) checks shapes, dtypes and contiguity before calling.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <dlfcn.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdint.h>
@@ -486,7 +491,8 @@ make_run_chunk(long width, int fbyte, int level, int k, chunk_t *out)
     size_t rows = (size_t)1 << k, rowlen = (size_t)width + 1;
     unsigned char *raw = (unsigned char *)calloc(rows * rowlen, 1);
     if (raw == NULL) return -1;
-    for (size_t r = 0; r < rows; r++) raw[r * rowlen] = (unsigned char)fbyte;
+    if (fbyte) /* (rows of zeros: calloc's pages stay untouched, unmapped until deflate reads them) */
+        for (size_t r = 0; r < rows; r++) raw[r * rowlen] = (unsigned char)fbyte;
     z_stream zs;
     memset(&zs, 0, sizeof zs);
     if (deflateInit2(&zs, level, Z_DEFLATED, -15, 9, Z_RLE) != Z_OK) { free(raw); return -1; }
@@ -1114,7 +1120,31 @@ native_fill(PyObject *self, PyObject *args)
     Py_RETURN_NONE;
 }
 
+/* ------------------------------------------------------------------------ preload */
+
+static PyObject *
+native_preload(PyObject *self, PyObject *args)
+{
+    /* preload(path) -> bool: dlopen(path, RTLD_NOW | RTLD_LOCAL) without the GIL. The library
+     * stays loaded (its handle is never closed: the import that follows uses it). False when
+     * it cannot be loaded: the import that follows then says why. */
+    PyObject *path;
+    if (!PyArg_ParseTuple(args, "O&", PyUnicode_FSConverter, &path))
+        return NULL;
+    void *handle;
+    Py_BEGIN_ALLOW_THREADS
+    handle = dlopen(PyBytes_AS_STRING(path), RTLD_NOW | RTLD_LOCAL);
+    Py_END_ALLOW_THREADS
+    Py_DECREF(path);
+    if (handle == NULL) {
+        (void)dlerror(); /* (cleared: the import reports its own) */
+        Py_RETURN_FALSE;
+    }
+    Py_RETURN_TRUE;
+}
+
 static PyMethodDef methods[] = {
+    {"preload", native_preload, METH_VARARGS, "preload(path) -> bool"},
     {"fill", native_fill, METH_VARARGS, "fill(ua, va, ub, vb, n_fib, n_samp, evenodd, out)"},
     {"merge_keys", native_merge_keys, METH_VARARGS, "merge_keys(keys, first, ids) -> number of distinct keys"},
     {"first_two", native_first_two, METH_VARARGS, "first_two(ids, n, a, b)"},

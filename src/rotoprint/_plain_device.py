@@ -15,10 +15,11 @@ to the model's fields, defaults and bounds, and the presets' dumps to the model'
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
+from ._dataclass import dataclass
 from ._projector import ProjectorGeometry
 
 __all__ = ["PlainProjector", "PlainProjectorDevice", "PROJECTOR_FIELDS", "load_projector", "device_from_dump"]

@@ -23,11 +23,11 @@ winding number of magnitude above 1/2 with respect to the other.
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
+from ._dataclass import dataclass, field
 from .constants import DEGENERATE_AREA_REL, MAX_COORDINATE_MM, MAX_OPEN_SIDE_FRACTION
 from .errors import MeshError
 from ._holes import HoleReport, find_and_fill

@@ -45,9 +45,9 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass
 from pathlib import Path
 
+from ._dataclass import dataclass
 from .errors import ConfigError, RotoprintError
 
 __all__ = ["Range", "check_range", "check_count", "check_direction", "field", "show_value", "MAX_COUNT"]

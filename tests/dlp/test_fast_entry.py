@@ -221,6 +221,61 @@ def test_fast_path_imports_no_typer_rich_pydantic_numba(tmp_path, part, quiet, m
 
 
 # ------------------------------------------------------------------- devices without pydantic
+def test_short_coverage_job_skips_openssl_tempfile_and_thread_pools(tmp_path, part):
+    """A 10-layer-like coverage job needs neither OpenSSL's hashlib (``rotoprint._hashing``),
+    tempfile (with random) nor concurrent.futures (no render threads for so little work): each
+    was a few ms of its start-up."""
+    from rotoprint._accel import native
+    from rotoprint._hashing import _builtin_sha256
+
+    if native is None or _builtin_sha256 is None:
+        pytest.skip("needs rotoprint._native and Python's built-in SHA-256")
+    code = (
+        "import sys\n"
+        "from rotoprint.cli.entry import main\n"
+        f"rc = main(['dlp', {str(part)!r}, '-d', 'prusa-sl1s', '--layer-height', '0.5', '-o', {str(tmp_path / 'j.sl1s')!r},"
+        " '--mode', 'coverage', '--quiet'])\n"
+        "print(rc, sorted({m.split('.')[0] for m in sys.modules} & {'_hashlib', 'hashlib', 'tempfile', 'random', 'concurrent'}))\n"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env={"PATH": "/usr/bin:/bin", "ROTOPRINT_NATIVE": "1"})
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split("\n")[0] == "0 []", p.stdout + p.stderr
+
+
+def test_numpy_core_preloaded_off_the_main_thread():
+    """``rotoprint dlp`` loads numpy's core extension in a thread (dlopen without the GIL)
+    before numpy is imported; numpy then imports and works as ever, with one BLAS thread."""
+    from rotoprint._accel import native
+
+    if native is None:
+        pytest.skip("rotoprint._native is not built")
+    code = (
+        "import os, sys, threading\n"
+        "from rotoprint.cli import entry\n"
+        "assert entry._looks_like_dlp(['-q', 'dlp', 'x.stl']) and not entry._looks_like_dlp(['check', 'dlp'])\n"
+        "entry._preload_numpy()\n"
+        "for t in threading.enumerate():\n"
+        "    if t.name == 'rotoprint-preload':\n"
+        "        t.join()\n"
+        "maps = open('/proc/self/maps').read()\n"
+        "print('numpy' in sys.modules, '_multiarray_umath' in maps, os.environ['OPENBLAS_NUM_THREADS'])\n"
+        "import numpy as np\n"
+        "print(float(np.linalg.inv(np.eye(3) * 2)[0, 0]), len(os.listdir('/proc/self/task')))\n"
+    )
+    env = {"PATH": "/usr/bin:/bin"}
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split("\n")[:2] == ["False True 1", "0.5 1"], p.stdout
+    # turned off with the C extension: nothing loaded ahead
+    off = code.replace("print('numpy' in sys.modules", "print('numpy' in sys.modules or 'x'")
+    p = subprocess.run([sys.executable, "-c", off], capture_output=True, text=True, timeout=120,
+                       env={**env, "ROTOPRINT_NATIVE": "0", "OPENBLAS_NUM_THREADS": "2"})
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split("\n")[0] == "x False 2", p.stdout
+    assert native.preload("/nonexistent/lib.so") is False
+
+
 def test_plain_projector_fields_are_the_models():
     from rotoprint.devices import Projector
 

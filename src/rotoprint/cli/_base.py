@@ -8,9 +8,9 @@ from __future__ import annotations
 import logging
 import math
 import unicodedata
-from dataclasses import dataclass
 from pathlib import Path
 
+from .._dataclass import dataclass
 from .. import ranges as R
 from ..errors import ConfigError
 from ..ranges import check_range

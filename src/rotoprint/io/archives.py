@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .._dataclass import dataclass
 from ..errors import ConfigError, ImageError, InputFileError
 from .atomic import OutputClaim
 from .formats import FORMATS as _REGISTRY
@@ -111,7 +111,9 @@ def format_from_path(path: str | Path, fmt: str | None = None) -> str:
 @dataclass(frozen=True)
 class Encoded:
     """One mask ready to store: its PNG bytes, the sum of its plain (unmirrored, uninverted)
-    grey levels, and a footprint crop ``(row0, col0, array)`` to merge (or None)."""
+    grey levels, and a footprint crop ``(row0, col0, array)`` to merge (or None).
+    ``whole_footprint``: the crop is already the merge of every mask's (the others carry
+    None), so the thumbnails can be drawn from it while the masks are stored."""
 
     number: int
     layer: int
@@ -120,6 +122,7 @@ class Encoded:
     png: bytes
     plain_sum: int
     footprint: tuple[int, int, np.ndarray] | None
+    whole_footprint: bool = False
 
 
 

@@ -4,7 +4,6 @@ is used (reading; writing without the C extension)."""
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import io
 import re
 import warnings
@@ -13,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._hashing import sha256 as _sha256
 from ..errors import ImageError, InputFileError
 
 __all__ = ["png_bytes", "png_bytes_window", "write_png", "read_grey_image", "open_image"]
@@ -159,7 +159,7 @@ def write_png(path: str | Path, image: np.ndarray, *, compress_level: int = 3) -
     """
     data = png_bytes(image, compress_level=compress_level)
     Path(path).write_bytes(data)
-    return hashlib.sha256(data).hexdigest()
+    return _sha256(data).hexdigest()
 
 
 def read_grey_image(path: str | Path) -> np.ndarray:

@@ -29,19 +29,19 @@ written and not read again when the marker is made; any other file is hashed the
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import heapq
 import json
 import os
 import re
 import struct
-import tempfile
 import threading
 import zipfile
 import zlib
 from collections.abc import Iterable, Iterator
 from itertools import islice
 from pathlib import Path
+
+from .._hashing import sha256 as _sha256
 
 __all__ = [
     "MARKER_NAME",
@@ -83,10 +83,10 @@ def _canonical(obj) -> bytes:
 
 
 def _sha_file(path: Path) -> str:
-    h = hashlib.sha256()
     buf = bytearray(_HASH_CHUNK)  # one buffer, read into: memory does not follow the file's size
     view = memoryview(buf)
     with open(path, "rb", buffering=0) as fh:
+        h = _sha256(expect_bytes=os.fstat(fh.fileno()).st_size)
         while n := fh.readinto(buf):
             h.update(view[:n])
     return h.hexdigest()
@@ -120,6 +120,8 @@ class _Spool:
             self._spill()
 
     def _run_of(self, recs: Iterable[list]):
+        import tempfile  # (with random: imported when a spool spills, not at a job's start)
+
         fh = tempfile.TemporaryFile("w+b", buffering=_RUN_BUFFER)
         try:
             for r in recs:
@@ -290,7 +292,7 @@ def write_tracked(path: str | Path, data: bytes, *, sha256: str | None = None) -
     """Write ``data`` to ``path``, record it in its folder's ledger (if any); returns its SHA-256
     (``sha256``: the caller's, already computed from ``data``)."""
     Path(path).write_bytes(data)
-    sha = hashlib.sha256(data).hexdigest() if sha256 is None else sha256
+    sha = _sha256(data).hexdigest() if sha256 is None else sha256
     led = ledger_for(path)
     if led is not None:
         led.record(path, sha)
@@ -303,7 +305,7 @@ class _TrackedFile:
     def __init__(self, path: str | Path, text: bool) -> None:
         self.path = Path(path)
         self._text = text
-        self._h = hashlib.sha256()
+        self._h = _sha256()
         self._fh = open(self.path, "wb")  # noqa: SIM115 - closed by close()
 
     def write(self, data) -> int:
@@ -393,7 +395,7 @@ def write_folder_marker(folder: str | Path, kind: str, *, ledger: FolderLedger |
     """
     folder = Path(folder)
     ledger = ledger if ledger is not None else _LEDGERS.get(os.path.abspath(folder))
-    canon = hashlib.sha256()
+    canon = _sha256()
     target = folder / MARKER_NAME
     with _Spool() as files, _Spool() as dirs:
         _scan(folder, files, dirs)  # before the marker is opened (it is not listed)
@@ -560,7 +562,7 @@ class _Marker:
             return f"its {MARKER_NAME} is too large to be ours"
         invalid = f"its {MARKER_NAME} is not a valid rotoprint marker"
         try:
-            canon = hashlib.sha256(b'{"files":{')
+            canon = _sha256(b'{"files":{')
             n_files = n_dirs = 0
             for ev in _layout(mp):
                 if ev[0] == "file":
@@ -586,7 +588,7 @@ class _Marker:
             marker = json.loads(mp.read_bytes())
             body = {k: v for k, v in marker.items() if k != "sha256"}
             ok = (marker.get("format") == FORMAT and isinstance(marker.get("files"), dict) and isinstance(marker.get("folders"), list)
-                  and marker.get("sha256") == hashlib.sha256(_canonical(body)).hexdigest())
+                  and marker.get("sha256") == _sha256(_canonical(body)).hexdigest())
         except (ValueError, AttributeError, TypeError, RecursionError):
             ok = False
         return cls(mp, marker) if ok else invalid
@@ -687,7 +689,7 @@ def _png_chunks(data: bytes):
 
 
 def _idat_sha(data: bytes) -> str:
-    h = hashlib.sha256()
+    h = _sha256(expect_bytes=len(data))
     for _, ctype, body in _png_chunks(data):
         if ctype == b"IDAT":
             h.update(body)
@@ -727,7 +729,7 @@ def _png_not_ours(path: Path) -> str | None:
 
 
 def _members_sha(zf: zipfile.ZipFile) -> str:
-    return hashlib.sha256(_canonical([[i.filename, i.CRC, i.file_size] for i in zf.infolist()])).hexdigest()
+    return _sha256(_canonical([[i.filename, i.CRC, i.file_size] for i in zf.infolist()])).hexdigest()
 
 
 def zip_marker(zf: zipfile.ZipFile, kind: str) -> None:
@@ -752,7 +754,7 @@ def _zip_not_ours(path: Path) -> str | None:
 def mark_json(obj: dict) -> dict:
     """``obj`` with a ``rotoprint_output`` marker: the SHA-256 of the rest of its content."""
     body = {k: v for k, v in obj.items() if k != JSON_KEY}
-    return {**body, JSON_KEY: {"format": FORMAT, "sha256": hashlib.sha256(_canonical(body)).hexdigest()}}
+    return {**body, JSON_KEY: {"format": FORMAT, "sha256": _sha256(_canonical(body)).hexdigest()}}
 
 
 def _json_not_ours(path: Path) -> str | None:
@@ -762,7 +764,7 @@ def _json_not_ours(path: Path) -> str | None:
         obj = json.loads(path.read_bytes())
         body = {k: v for k, v in obj.items() if k != JSON_KEY}
         m = obj.get(JSON_KEY)
-        if isinstance(m, dict) and m.get("format") == FORMAT and m.get("sha256") == hashlib.sha256(_canonical(body)).hexdigest():
+        if isinstance(m, dict) and m.get("format") == FORMAT and m.get("sha256") == _sha256(_canonical(body)).hexdigest():
             return None
     except (ValueError, AttributeError, TypeError, RecursionError):
         pass
@@ -774,7 +776,7 @@ _SVG_TAG = b"<!-- rotoprint-output "
 
 def mark_svg(data: bytes, kind: str) -> bytes:
     """``data`` (an SVG document) followed by a comment marker of ours."""
-    text = _canonical({"format": FORMAT, "kind": kind, "sha256": hashlib.sha256(data).hexdigest()})
+    text = _canonical({"format": FORMAT, "kind": kind, "sha256": _sha256(data).hexdigest()})
     return data + _SVG_TAG + text + b" -->\n"
 
 
@@ -789,7 +791,7 @@ def _svg_not_ours(path: Path) -> str | None:
         m = json.loads(data[i + len(_SVG_TAG) : -len(b" -->\n")])
     except ValueError:
         return "it carries no rotoprint marker"
-    if isinstance(m, dict) and m.get("format") == FORMAT and m.get("sha256") == hashlib.sha256(data[:i]).hexdigest():
+    if isinstance(m, dict) and m.get("format") == FORMAT and m.get("sha256") == _sha256(data[:i]).hexdigest():
         return None
     return "its rotoprint marker does not match its content (the file was changed)"
 

@@ -13,7 +13,6 @@ a half-written output there.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import logging
 import os
@@ -23,6 +22,7 @@ from array import array
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 
+from .._hashing import sha256 as _sha256
 from .._resources import available_memory_bytes, format_bytes
 from ..errors import InputFileError, ResourceError
 from .atomic import OutputClaim, disk_full, kill_point
@@ -232,7 +232,7 @@ class PartialOutput:
                     raise InputFileError(f"corrupt resume journal: layer {rec['index']} file {f!r} is not a regular file; "
                                          "run without --resume to start afresh", path=jpath)
                 data = read_input_bytes(fp, what="layer file", limit_bytes=MAX_JOURNAL_LAYER_BYTES)
-                if hashlib.sha256(data).hexdigest() != h:
+                if _sha256(data).hexdigest() != h:
                     ok = False
                     break
             if ok:
@@ -251,7 +251,7 @@ class PartialOutput:
 
     def record(self, index: int, files: dict[str, bytes], **payload) -> dict:
         """Write a layer's files, then journal them; returns the journal record."""
-        rec = {"index": index, "files": list(files), "sha256s": [hashlib.sha256(d).hexdigest() for d in files.values()], **payload}
+        rec = {"index": index, "files": list(files), "sha256s": [_sha256(d).hexdigest() for d in files.values()], **payload}
         where = self.dir / JOURNAL
         try:
             for (name, data), sha in zip(files.items(), rec["sha256s"], strict=True):

@@ -8,6 +8,7 @@ else is refused with a message that says which of the two it resembled and why i
 
 from __future__ import annotations
 
+import functools
 import re
 
 import numpy as np
@@ -21,13 +22,19 @@ BINARY_RECORD = np.dtype(
 assert BINARY_RECORD.itemsize == 50  # noqa: S101 - a dtype invariant, not input validation
 
 _NUM = r"([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf|infinity))"
-_FACET = re.compile(
-    rb"facet\s+normal\s+\S+\s+\S+\s+\S+\s+outer\s+loop\s+"
-    + rb"\s+".join([rb"vertex\s+" + _NUM.encode() + rb"\s+" + _NUM.encode() + rb"\s+" + _NUM.encode()] * 3)
-    + rb"\s+endloop\s+endfacet",
-    re.IGNORECASE,
-)
-_FACET_KEYWORD = re.compile(rb"(?<![a-z])facet\s+normal", re.IGNORECASE)
+
+
+@functools.cache
+def _facet_patterns() -> tuple[re.Pattern, re.Pattern]:
+    """A whole ASCII facet, and its keyword; compiled when an ASCII file is read (about 1 ms
+    that a binary STL's job need not pay at start-up)."""
+    facet = re.compile(
+        rb"facet\s+normal\s+\S+\s+\S+\s+\S+\s+outer\s+loop\s+"
+        + rb"\s+".join([rb"vertex\s+" + _NUM.encode() + rb"\s+" + _NUM.encode() + rb"\s+" + _NUM.encode()] * 3)
+        + rb"\s+endloop\s+endfacet",
+        re.IGNORECASE,
+    )
+    return facet, re.compile(rb"(?<![a-z])facet\s+normal", re.IGNORECASE)
 
 
 def _looks_like_text(data: bytes) -> bool:
@@ -72,14 +79,15 @@ def read_stl_bytes(data: bytes, path: str) -> np.ndarray:
 def _read_ascii(data: bytes, path: str) -> np.ndarray:
     if not re.match(rb"\s*solid\b", data, re.IGNORECASE):
         raise MeshError("not an STL file: text that does not start with 'solid'", path=path)
-    matches = list(_FACET.finditer(data))
-    n_keywords = len(_FACET_KEYWORD.findall(data))
+    facet, keyword = _facet_patterns()
+    matches = list(facet.finditer(data))
+    n_keywords = len(keyword.findall(data))
     if n_keywords == 0:
         raise MeshError("ASCII STL holds zero facets", path=path)
     if len(matches) != n_keywords:
         # Locate the first facet keyword not covered by a well-formed facet.
         covered = {m.start() for m in matches}
-        for m in _FACET_KEYWORD.finditer(data):
+        for m in keyword.finditer(data):
             if m.start() not in covered:
                 line = data.count(b"\n", 0, m.start()) + 1
                 raise MeshError(f"ASCII STL has a broken facet at line {line}", path=path)

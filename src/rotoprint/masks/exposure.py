@@ -14,10 +14,11 @@ thin wall below what cures).
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 
 import numpy as np
 
+from .._dataclass import dataclass
 from ..errors import ConfigError
 
 __all__ = ["FeatureExposure", "feature_exposure", "exposure_table", "format_exposure_table", "narrowest_kept_um"]

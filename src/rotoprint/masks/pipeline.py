@@ -8,10 +8,11 @@ fraction, or ``smooth`` = binary then the paper's PIL SMOOTH); first-layer inset
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 
 import numpy as np
 
+from .._dataclass import dataclass
 from ..errors import ConfigError
 from .coverage import coverage_mask
 from .ops import erm_shift, first_layer_offsets_um, inset_mask, invert_mask, mirror_mask, smooth_mask

@@ -13,10 +13,10 @@ from __future__ import annotations
 import time
 from array import array
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TypeVar
 
+from .._dataclass import dataclass
 from ..io.resumable import PartialOutput, check_resources
 from .producer import LayerSource, Rendered, RunOptions, produce_layers, render_one
 

@@ -164,7 +164,8 @@ def write_dlp_job(job, out: str | Path, info, options, *, fmt: str | None = None
                     for c, (name, s) in enumerate(zip(rec["files"], rec["plain_sums"], strict=True)):
                         # the merged part of the footprint only (not a pass over the whole field)
                         fp = (box[0], box[1], footprint[box[0] : box[2], box[1] : box[3]]) if (i == 0 and c == 0 and box[2] > box[0]) else None
-                        yield Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp)
+                        yield Encoded(i * copies + c, i, c, z, (partial.dir / name).read_bytes(), int(s), fp,
+                                      whole_footprint=fp is not None)
 
             try:
                 summary = write_encoded(out, items(), info, fmt=fmt, claim=claim)

@@ -15,10 +15,9 @@ import os
 import re
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
-from concurrent.futures import ThreadPoolExecutor  # the process pool is imported when used
-from dataclasses import dataclass, field
 from typing import Any
 
+from .._dataclass import dataclass, field
 from ..errors import ConfigError
 from .._window import ordered
 
@@ -176,6 +175,8 @@ def _produce_local(source: LayerSource, indices: list[int], workers: int, window
             for i in indices:
                 yield render_one(source, i)
             return
+        from concurrent.futures import ThreadPoolExecutor  # (imported when threads start: a short job makes none)
+
         with ThreadPoolExecutor(max_workers=threads, thread_name_prefix="rotoprint-layer") as ex:
             yield from ordered(lambda i: ex.submit(render_one, source, i), indices, window or 2 * threads)
         return

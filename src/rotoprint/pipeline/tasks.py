@@ -9,13 +9,13 @@ only these two callables and their key.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import weakref
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._hashing import sha256 as _sha256
+from .._dataclass import dataclass, field
 from .._version import __version__
 from .producer import LayerSource, Rendered
 
@@ -236,7 +236,7 @@ def layer_source(make_job: MeshJob, render, extra: dict | None = None) -> LayerS
     -------
     LayerSource
     """
-    h = hashlib.sha256()
+    h = _sha256(expect_bytes=make_job.vertices.nbytes + make_job.faces.nbytes)
     h.update(np.ascontiguousarray(make_job.vertices, dtype="<f8").tobytes())
     h.update(np.ascontiguousarray(make_job.faces, dtype="<i8").tobytes())
     meta = {**make_job.fingerprint_meta(), "render": type(render).__name__, "render_options": render.__dict__,

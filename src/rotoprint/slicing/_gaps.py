@@ -13,10 +13,10 @@ or a non-manifold edge. Unclosed chains would make a fill rule run to the edge o
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 
 import numpy as np
 
+from .._dataclass import dataclass
 from ._sections import Segments
 
 

@@ -15,10 +15,10 @@ lower and upper vertex only, so both faces of an edge get the bit-identical poin
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 
 import numpy as np
 
+from .._dataclass import dataclass
 from ..mesh import Mesh
 
 

@@ -10,11 +10,11 @@ import copy
 
 import logging
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .._dataclass import dataclass
 from .._resources import check_raster_fits
 from ..mesh import Mesh
 from ._fill import FILL_RULES, fill_numpy
@@ -118,7 +118,7 @@ class SliceJob:
     def pixel_segments(self, index: int) -> tuple[np.ndarray, np.ndarray, GapReport]:
         """Layer ``index``'s segments as ``(S, 2)`` start and end in pixel ``(col, row)``."""
         seg, rep = self.segments(index)
-        m = self.grid.model_to_pixel
+        m = self._to_uv  # (grid.model_to_pixel, computed once: not two inverses per layer)
         return _affine(m, seg.start), _affine(m, seg.end), rep
 
     def image_at(self, z_mm: float) -> tuple[np.ndarray, GapReport]:

@@ -13,10 +13,10 @@ then translating it: by default its footprint's centre goes to the platform orig
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
+from .._dataclass import dataclass
 from ..errors import GeometryError
 
 __all__ = ["Grid", "make_grid"]

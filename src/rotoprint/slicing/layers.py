@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
+from .._dataclass import dataclass
 from ..constants import MIN_LAST_LAYER_FRACTION
 from ..errors import ConfigError
 

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields, replace
+from dataclasses import asdict, fields, replace
 from typing import Any
 
+from .._dataclass import dataclass
 from ..constants import DEFAULT_GAP_RADIUS_MM
 from ..errors import ConfigError
 from ._fill import FILL_RULES

@@ -11,11 +11,11 @@ import struct
 import zipfile
 import zlib
 from collections.abc import Callable
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ..._dataclass import dataclass, field
 from ...errors import ConfigError, ImageError, InputFileError
 from ...ranges import Range, check_range
 from ..images import open_image

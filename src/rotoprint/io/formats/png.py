@@ -3,11 +3,11 @@ folder writer and reader the Perfactory-style job shares."""
 
 from __future__ import annotations
 
-import hashlib
 import json
 from collections.abc import Callable
 from pathlib import Path
 
+from ..._hashing import sha256 as _sha256
 from ..._version import __version__
 from ...errors import ConfigError, InputFileError
 from ..atomic import MANIFEST_NAME, OutputClaim
@@ -40,7 +40,7 @@ def write_folder(path, items, info: JobInfo, on_mask, claim: OutputClaim, *, fmt
                 "copy": m.copy,
                 "z_mm": m.z_mm,
                 "exposed_area_mm2": area,
-                "sha256": hashlib.sha256(data).hexdigest(),
+                "sha256": _sha256(data).hexdigest(),
             }
         )
         if on_mask is not None:

@@ -50,69 +50,106 @@ def _write_sl1(path, items, info: JobInfo, on_mask, claim: OutputClaim, *, fmt: 
     thickness = info.layer_height_mm / info.copies
     stats = _Stats(info, thickness)
     names: list[str] = []
-    with open(claim.part, "wb") as fh, zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
-        for m in items:
-            name = f"{job_dir}{m.number:05d}.png"
-            # deflated again, as PrusaSlicer does: the layer PNGs of a mostly empty field
-            # shrink 3-30x more (repeated deflate codes of empty rows)
-            zf.writestr(_zinfo(name), m.png, compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
-            names.append(name)
-            kill_point(f"archive-{len(names)}")
-            stats.add_sum(m.plain_sum)
-            stats.add_footprint(m.footprint)
-            if on_mask is not None:
-                on_mask(m.number)
-        if len(names) != n_out:
-            raise ConfigError(f"expected {n_out} masks, got {len(names)}")
-        for size in THUMBNAIL_SIZES:
-            # deflated too: a thumbnail of flat colour (a prism's footprint) shrinks 8x (1417 to
-            # 175 bytes); the fixed part of the archive is most of a small job's bytes
-            zf.writestr(_zinfo(f"thumbnail/thumbnail{size[0]}x{size[1]}.png"), thumbnail_png(stats.footprint_crop, size),
-                        compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
-        model = info.printer_model if info.printer_model != "rotoprint" else ("SL1S" if fmt == "sl1s" else "SL1")
-        nfade = min(info.first_exposure_layers, n_out)
-        config = {
-            "action": "print",
-            "jobDir": job_dir,
-            "layerHeight": _fmt(thickness),
-            "expTime": _fmt(info.exposure_s),
-            "expTimeFirst": _fmt(info.first_exposure_s),
-            "expUserProfile": 0,
-            "fileCreationTimestamp": creation_time().strftime("%Y-%m-%d at %H:%M:%S UTC"),
-            "hollow": 0,
-            "materialName": info.material_name,
-            "numFade": nfade,
-            "numFast": n_out,
-            "numSlow": 0,
-            "printProfile": f"{_fmt(thickness)}mm rotoprint",
-            "printTime": _fmt(round(_print_time_s(info, n_out), 1)),
-            "printerModel": model,
-            "printerProfile": f"rotoprint {info.device_name or model}",
-            "printerVariant": "default",
-            "prusaSlicerVersion": f"rotoprint {__version__}",
-            "usedMaterial": _fmt(stats.volume_mm3 / 1000.0),
-        }
-        prusa = {
-            "display_width": _fmt(info.width_px * info.pixel_x_mm),
-            "display_height": _fmt(info.height_px * info.pixel_y_mm),
-            "display_pixels_x": info.width_px,
-            "display_pixels_y": info.height_px,
-            "display_mirror_x": int(info.mirror_x),
-            "display_mirror_y": int(info.mirror_y),
-            "display_orientation": info.orientation,
-            "layer_height": _fmt(thickness),
-            "exposure_time": _fmt(info.exposure_s),
-            "initial_exposure_time": _fmt(info.first_exposure_s),
-            "gamma_correction": 1,
-            "printer_model": model,
-            "printer_technology": "SLA",
-            "faded_layers": nfade,
-        }
-        zf.writestr(_zinfo("config.ini"), _ini(config), compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
-        zf.writestr(_zinfo("prusaslicer.ini"), _ini(prusa), compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
-        zip_marker(zf, f"dlp-{fmt}")
+    thumbs: _Background | None = None
+    try:
+        with open(claim.part, "wb") as fh, zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+            for m in items:
+                if thumbs is None and not names and m.whole_footprint and m.footprint is not None:
+                    # the job's whole footprint comes first: the thumbnails (mostly zlib and C,
+                    # without the GIL) are drawn on another core while the masks are stored
+                    thumbs = _Background(lambda crop=m.footprint[2]: [thumbnail_png(crop, size) for size in THUMBNAIL_SIZES])
+                name = f"{job_dir}{m.number:05d}.png"
+                # deflated again, as PrusaSlicer does: the layer PNGs of a mostly empty field
+                # shrink 3-30x more (repeated deflate codes of empty rows)
+                zf.writestr(_zinfo(name), m.png, compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
+                names.append(name)
+                kill_point(f"archive-{len(names)}")
+                stats.add_sum(m.plain_sum)
+                stats.add_footprint(m.footprint)
+                if on_mask is not None:
+                    on_mask(m.number)
+            if len(names) != n_out:
+                raise ConfigError(f"expected {n_out} masks, got {len(names)}")
+            pngs = thumbs.result() if thumbs is not None else [thumbnail_png(stats.footprint_crop, size) for size in THUMBNAIL_SIZES]
+            for size, png in zip(THUMBNAIL_SIZES, pngs, strict=True):
+                # deflated too: a thumbnail of flat colour (a prism's footprint) shrinks 8x (1417 to
+                # 175 bytes); the fixed part of the archive is most of a small job's bytes
+                zf.writestr(_zinfo(f"thumbnail/thumbnail{size[0]}x{size[1]}.png"), png,
+                            compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
+            model = info.printer_model if info.printer_model != "rotoprint" else ("SL1S" if fmt == "sl1s" else "SL1")
+            nfade = min(info.first_exposure_layers, n_out)
+            config = {
+                "action": "print",
+                "jobDir": job_dir,
+                "layerHeight": _fmt(thickness),
+                "expTime": _fmt(info.exposure_s),
+                "expTimeFirst": _fmt(info.first_exposure_s),
+                "expUserProfile": 0,
+                "fileCreationTimestamp": creation_time().strftime("%Y-%m-%d at %H:%M:%S UTC"),
+                "hollow": 0,
+                "materialName": info.material_name,
+                "numFade": nfade,
+                "numFast": n_out,
+                "numSlow": 0,
+                "printProfile": f"{_fmt(thickness)}mm rotoprint",
+                "printTime": _fmt(round(_print_time_s(info, n_out), 1)),
+                "printerModel": model,
+                "printerProfile": f"rotoprint {info.device_name or model}",
+                "printerVariant": "default",
+                "prusaSlicerVersion": f"rotoprint {__version__}",
+                "usedMaterial": _fmt(stats.volume_mm3 / 1000.0),
+            }
+            prusa = {
+                "display_width": _fmt(info.width_px * info.pixel_x_mm),
+                "display_height": _fmt(info.height_px * info.pixel_y_mm),
+                "display_pixels_x": info.width_px,
+                "display_pixels_y": info.height_px,
+                "display_mirror_x": int(info.mirror_x),
+                "display_mirror_y": int(info.mirror_y),
+                "display_orientation": info.orientation,
+                "layer_height": _fmt(thickness),
+                "exposure_time": _fmt(info.exposure_s),
+                "initial_exposure_time": _fmt(info.first_exposure_s),
+                "gamma_correction": 1,
+                "printer_model": model,
+                "printer_technology": "SLA",
+                "faded_layers": nfade,
+            }
+            zf.writestr(_zinfo("config.ini"), _ini(config), compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
+            zf.writestr(_zinfo("prusaslicer.ini"), _ini(prusa), compress_type=zipfile.ZIP_DEFLATED, compresslevel=9)
+            zip_marker(zf, f"dlp-{fmt}")
+    finally:
+        if thumbs is not None:  # (also when storing the masks failed: nothing outlives the writer)
+            thumbs.join()
     claim.install()
     return {"format": fmt, "path": str(path), "masks": n_out, "config": config, "prusaslicer": prusa, "volume_mm3": stats.volume_mm3}
+
+
+class _Background:
+    """``fn()`` run in a thread; :meth:`result` waits for it and returns its value or raises
+    its exception."""
+
+    def __init__(self, fn) -> None:
+        import threading
+
+        self._fn, self._value, self._exc = fn, None, None
+        self._thread = threading.Thread(target=self._run, name="rotoprint-thumbnails", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        try:
+            self._value = self._fn()
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller in result()
+            self._exc = exc
+
+    def join(self) -> None:
+        self._thread.join()
+
+    def result(self):
+        self._thread.join()
+        if self._exc is not None:
+            raise self._exc
+        return self._value
 
 
 def _open(path: Path, manifest=None, names=None) -> ArchiveContents:
