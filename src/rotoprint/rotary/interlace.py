@@ -736,6 +736,11 @@ class PassOptions:
         (:func:`pass_overlap_mm` ``(dead_spread=True)``, as ``edge_overlap`` does), so that a
         dead nozzle's missing tracks (one per pass) lie apart. On by default; False plans
         the offsets within one row period (as before).
+    dead_cover : bool
+        With dead nozzles (more than one pass, a binary head): each dead track's drops go to
+        the nearest live tracks of every pass (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`,
+        realised by :func:`thin_print`); without ``equalise`` every live track keeps the same
+        share below 1 to leave them room. On by default; the manifest's ``dead_cover`` reports it.
     """
 
     setup: RotarySetup
@@ -746,6 +751,7 @@ class PassOptions:
     phases: bool = False
     edge_overlap: bool = False
     spread_dead: bool = True
+    dead_cover: bool = True
 
     def __post_init__(self) -> None:
         parse_passes(self.passes)
@@ -874,11 +880,21 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         # drops at most ceil(1 / f) firings apart, so a share >= EQUALISE_FLOOR keeps every track
         # within the planned spacing (measured: at the plan's clock alone, thinned clusters open
         # holes), and a track keeps less only where its kept drops stay within the lattice reach
+        # with the dead-track cover, the shares of the print were every nozzle live (the dead
+        # tracks' drops then go to their live neighbours, below)
+        cover_all = bool(options.dead_cover and head.dead_nozzles and pp.passes > 1)
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
-                                reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR))
+                                reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR), dead_nozzles=() if cover_all else None)
         clock = clock * EQUALISE_CLOCK_FACTOR
     elif options.balance:
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
+    dead_cover, thin_landing = None, False
+    if options.dead_cover and head.dead_nozzles and pp.passes > 1 and not grey:
+        from .deadcover import cover_dead_tracks
+
+        thin_landing = fracs is None
+        fracs, dead_cover = cover_dead_tracks(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), shares=fracs,
+                                              footprint_um=d_um)
     if pp.phases:
         angles, achieved = phase_angles(sp, pp.phases, dpi_y=clock, ref_radius_mm=st.ref_radius_mm)
     else:
@@ -892,13 +908,17 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
             from .halftone import halftone_print
 
             pr = halftone_print(pr, fracs[q])
-        elif fracs is not None:
+        elif fracs is not None and not (dead_cover is not None and thin_landing):
             pr = thin_print(pr, fracs[q], pass_index=q)
         sw = tuple(dataclasses.replace(s, extra={**s.extra, "pass": q, "passes": pp.passes, "pass_offset_mm": off,
                                                  "pass_phase": float(achieved[q, j]), "pass_phase_angle_deg": angles[q]})
                    for j, s in enumerate(pr.swathes))
         pr = dataclasses.replace(pr, swathes=sw)
         prints.append(pr)
+    if dead_cover is not None and thin_landing:
+        from .deadcover import thin_by_landing
+
+        prints = thin_by_landing(prints, fracs)
     manifest = {
         "format": PASSES_FORMAT,
         "version": 1,
@@ -911,6 +931,8 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         "phase_angles_deg": list(angles),
         "phases_by_swathe": [[float(x) for x in row] for row in achieved],
     }
+    if dead_cover is not None:
+        manifest["dead_cover"] = dead_cover
     return device_name, prints, manifest
 
 
