@@ -32,7 +32,7 @@ __all__ = ["cover_dead_nozzles", "cover_dead_tracks", "thin_by_landing", "DEAD_C
 DEAD_COVER_WINDOW_MM = 0.15
 #: Smallest share of its drops every live track keeps to leave room for the dead tracks' drops
 #: (:func:`cover_dead_tracks`, a print without shares).
-DEAD_COVER_MIN_SCALE = 0.75
+DEAD_COVER_MIN_SCALE = 0.85
 
 
 def cover_dead_nozzles(pr, dead_nozzles: Sequence[int], *, search: int = 3):
