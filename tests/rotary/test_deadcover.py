@@ -102,7 +102,10 @@ def test_dead_tracks_drops_go_to_live_tracks_of_other_passes(setting):
     st = RotarySetup(tilt_deg=0.0, dpi_y=pp.dpi_y)
     # at the head's native clock (70 um along the track) a missed drop opens a hole: no room
     assert cover_dead_tracks(dh, sp, pp.offsets_mm, footprint_um=49.6)[1]["tracks_with_room"] == 0
-    f, rep = cover_dead_tracks(dh, sp, pp.offsets_mm, st, footprint_um=49.6)
+    from rotoprint.rotary.deadcover import DeadCoverOptions
+
+    wide = DeadCoverOptions(min_scale=0.75)
+    f, rep = cover_dead_tracks(dh, sp, pp.offsets_mm, st, footprint_um=49.6, options=wide)
     assert rep["dead_tracks"] > 0 and rep["lost"] == 0 and rep["demand"] > 0 and rep["moved"] == pytest.approx(rep["demand"])
     s = rep["scale"]
     assert 0.75 <= s < 1 and 0 < rep["tracks_with_room"] <= rep["tracks"]
@@ -142,7 +145,13 @@ def test_dead_tracks_drops_go_to_live_tracks_of_other_passes(setting):
     up = sum(int(np.sum(fj > 0.5 + 1e-12)) for per in f2 for fj in per)
     assert 0 < up < 12 * rep2["dead_tracks"]
     with pytest.raises(ConfigError, match="window"):
-        cover_dead_tracks(dh, sp, pp.offsets_mm, footprint_um=49.6, window_mm=0.0)
+        DeadCoverOptions(window_mm=0.0)
+    with pytest.raises(ConfigError, match="scale"):
+        DeadCoverOptions(min_scale=0.2)
+    # a narrow window: less room near the dead tracks (their two neighbours beside the gap
+    # have none), so a smaller common share and drops lost even at the smallest
+    narrow = cover_dead_tracks(dh, sp, pp.offsets_mm, st, footprint_um=49.6, options=DeadCoverOptions(window_mm=0.05, min_scale=0.5))[1]
+    assert narrow["scale"] < s and narrow["lost"] > 0
     with pytest.raises(ConfigError, match="footprint"):
         cover_dead_tracks(dh, sp, pp.offsets_mm)
     with pytest.raises(ConfigError, match="one array per pass"):

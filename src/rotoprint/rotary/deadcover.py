@@ -25,7 +25,7 @@ import numpy as np
 from ..errors import ConfigError
 from .head import Mount, nozzle_layout
 
-__all__ = ["cover_dead_nozzles", "cover_dead_tracks", "thin_by_landing", "DEAD_COVER_WINDOW_MM", "DEAD_COVER_MIN_SCALE"]
+__all__ = ["cover_dead_nozzles", "cover_dead_tracks", "DeadCoverOptions", "thin_by_landing", "DEAD_COVER_WINDOW_MM", "DEAD_COVER_MIN_SCALE"]
 
 #: A dead track's drops go to live tracks of every pass within this radial distance, mm (about
 #: the levelling length of one coat, ``docs/rotary.md``: the film evens out within it).
@@ -126,9 +126,38 @@ def cover_dead_nozzles(pr, dead_nozzles: Sequence[int], *, search: int = 3):
     return dataclasses.replace(pr, swathes=tuple(out)), report
 
 
+@dataclasses.dataclass(frozen=True)
+class DeadCoverOptions:
+    """How :func:`cover_dead_tracks` places a dead track's drops.
+
+    Parameters
+    ----------
+    window_mm : float
+        Radial reach of a dead track's drops, mm, (0, 1].
+    min_scale : float
+        Smallest common share of a print without shares, [0.5, 1].
+    cover_share : float
+        A live track has room (without shares) only where a missed drop leaves every point
+        within this share of the footprint radius of the drops left, (0, 1].
+    """
+
+    window_mm: float = DEAD_COVER_WINDOW_MM
+    min_scale: float = DEAD_COVER_MIN_SCALE
+    cover_share: float = 0.85
+
+    def __post_init__(self) -> None:
+        import math
+
+        if not (isinstance(self.window_mm, (int, float)) and math.isfinite(self.window_mm) and 0.0 < self.window_mm <= 1.0):
+            raise ConfigError(f"dead cover window must be in (0, 1] mm, got {self.window_mm!r}")
+        if not (isinstance(self.min_scale, (int, float)) and math.isfinite(self.min_scale) and 0.5 <= self.min_scale <= 1.0):
+            raise ConfigError(f"dead cover scale must be in [0.5, 1], got {self.min_scale!r}")
+        if not (isinstance(self.cover_share, (int, float)) and math.isfinite(self.cover_share) and 0.0 < self.cover_share <= 1.0):
+            raise ConfigError(f"dead cover share must be in (0, 1], got {self.cover_share!r}")
+
+
 def cover_dead_tracks(head, plan, offsets_mm: Sequence[float], setup=None, *, shares=None, footprint_um: float | None = None,
-                      window_mm: float = DEAD_COVER_WINDOW_MM, min_scale: float = DEAD_COVER_MIN_SCALE,
-                      cover_share: float = 0.85):
+                      options: DeadCoverOptions | None = None):
     """Give each dead track's drops to the nearest live tracks of every pass (shares of drops).
 
     Interlaced passes print a dead nozzle's track once per pass, at ``r_k + delta_q``; the
@@ -159,10 +188,8 @@ def cover_dead_tracks(head, plan, offsets_mm: Sequence[float], setup=None, *, sh
         tracks' own shares are what they give away. None: every drop.
     footprint_um : float, optional
         Footprint diameter of a drop (needed without ``shares``).
-    window_mm : float
-        Radial reach of a dead track's drops, mm, (0, 1].
-    min_scale : float
-        Smallest common share of a print without shares, [0.5, 1].
+    options : DeadCoverOptions, optional
+        The window, the smallest common share and the cover share (defaults above).
 
     Returns
     -------
@@ -176,7 +203,7 @@ def cover_dead_tracks(head, plan, offsets_mm: Sequence[float], setup=None, *, sh
     Raises
     ------
     ConfigError
-        A window or scale out of range, shares of the wrong shape.
+        Shares of the wrong shape, no footprint without shares (bad options: when made).
     """
     import math
 
@@ -184,10 +211,8 @@ def cover_dead_tracks(head, plan, offsets_mm: Sequence[float], setup=None, *, sh
     from .options import RotarySetup
     from .swathes import pass_enabled
 
-    if not (math.isfinite(window_mm) and 0.0 < window_mm <= 1.0):
-        raise ConfigError(f"dead cover window must be in (0, 1] mm, got {window_mm!r}")
-    if not (math.isfinite(min_scale) and 0.5 <= min_scale <= 1.0):
-        raise ConfigError(f"dead cover scale must be in [0.5, 1], got {min_scale!r}")
+    opts = options or DeadCoverOptions()
+    window_mm, min_scale, cover_share = opts.window_mm, opts.min_scale, opts.cover_share
     if shares is None and not (footprint_um is not None and math.isfinite(footprint_um) and footprint_um > 0):
         raise ConfigError(f"dead cover without shares needs a footprint > 0 um, got {footprint_um!r}")
     st = setup or RotarySetup(tilt_deg=plan.tilt_deg)
