@@ -201,6 +201,7 @@ def test_thin_by_landing_keeps_the_share_and_staggers_neighbours(setting):
 @pytest.mark.parametrize("equalise", [True, False])
 def test_pass_prints_cover_the_dead_tracks(setting, equalise):
     """pass_prints with 3 dead nozzles, tilt 0, a band of 12 x 284 px (60-80 mm): with the cover
+    (a plain print: with the reserve)
     the film keeps its volume and stays closed, the rings at the dead tracks are shallower (the
     levelled film's thinnest 20 um ring over its mean, away from the band's edges) and the
     equalised 1 mm bins are evener; the manifest reports it."""
@@ -216,7 +217,8 @@ def test_pass_prints_cover_the_dead_tracks(setting, equalise):
     dh = head.model_copy(update={"dead_nozzles": dead})
     out = {}
     for cover in (True, False):
-        _, prs, man = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=0.0), passes=4, equalise=equalise, dead_cover=cover))
+        _, prs, man = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=0.0), passes=4, equalise=equalise, dead_cover=cover,
+                                                           dead_reserve=True))
         lev = LevelOptions.from_head(head, set_time_s=1.0, coats=len(prs))
         dep = deposit_print(prs, d, dead_nozzles=dead, keep_map=True, options=DepositOptions(level=lev))
         f = dep.films[0]
@@ -235,5 +237,11 @@ def test_pass_prints_cover_the_dead_tracks(setting, equalise):
     assert rep and rep["lost_fraction"] < 0.15 and out[False][2] is None
     assert rep["scale"] == 1.0 if equalise else rep["scale"] < 1.0
     assert out[True][0] > out[False][0] + 0.02
+    # a plain print without the reserve is as before
+    if not equalise:
+        _, prs, man = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=0.0), passes=4))
+        _, prs0, _ = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=0.0), passes=4, dead_cover=False))
+        assert "dead_cover" not in man
+        assert all(np.array_equal(a.levels, b.levels) for p, p0 in zip(prs, prs0) for a, b in zip(p.swathes, p0.swathes))
     if equalise:
         assert out[True][1] < out[False][1]
