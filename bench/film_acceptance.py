@@ -16,9 +16,11 @@ transform at the native clock (today's print of a layer), best of 3, and the sam
 slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
 
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
+                                                  [--dead-only]
 
 ``--equalised-only``: only the equalised rows (equalised; with the 5 dead nozzles; with phases and
-overlap), then the cost table.
+overlap), then the cost table. ``--dead-only``: only the rows with the 5 dead nozzles (of those
+the other options keep).
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
 before it sets, ``LevelOptions.from_head``: set time 1 s (the preset's nominal; the convolutions on the coarse grid, ``levelled.coarse_factor``), the preset's nominal 10 mPa s, 30 mN/m, h0 the
@@ -177,6 +179,8 @@ def main() -> None:
                                        ("planned passes, 5 dead nozzles, equalised", dead_head, True, False),
                                        ("planned passes, equalised, phases + overlap", head0, True, True)):
             if "--equalised-only" in sys.argv and not eq:
+                continue
+            if "--dead-only" in sys.argv and head is head0:
                 continue
             if quick and (inter or eq):
                 continue
