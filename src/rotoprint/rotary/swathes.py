@@ -83,6 +83,9 @@ class SwathePlan:
     #: Each swathe's full-density band reaches this far inside its owned band (mm), so that a
     #: pass with a pivot offset in ``[0, overlap_mm]`` still covers the whole band.
     overlap_mm: float = 0.0
+    #: With an overlap: every swathe but the first also prints this far inside its owned band's
+    #: inner end (mm; :func:`pass_enabled`), so both swathes print a seam's ``seam_mm``.
+    seam_mm: float = 0.0
 
     def __len__(self) -> int:
         return len(self.swathes)
@@ -115,6 +118,7 @@ def plan_swathes(
     direction: int = 1,
     max_swathes: int | None = None,
     overlap_mm: float = 0.0,
+    seam_mm: float = 0.0,
 ) -> SwathePlan:
     """Pivot radii and nozzle sets covering the radial range ``[inner, outer]`` mm.
 
@@ -141,6 +145,12 @@ def plan_swathes(
         whose pivot is moved outwards by up to ``overlap_mm`` then still covers its swathe's
         whole band with the tracks of :func:`pass_enabled`: the design's edge and every seam
         are printed by every pass, each radius by one swathe per pass. 0 (default): as before.
+    seam_mm : float
+        With ``overlap_mm``: every swathe but the first also prints (:func:`pass_enabled`)
+        the ``seam_mm`` below its owned band, where the previous swathe prints too (at most
+        ``overlap_mm``; the usable nozzles reach no further): the seam's tracks are then those
+        of both swathes, for a caller that leaves the excess out
+        (:func:`~rotoprint.rotary.equalise.even_line_shares`). 0 (default): one swathe per radius.
 
     Returns
     -------
@@ -171,6 +181,8 @@ def plan_swathes(
         raise ConfigError(f"max_swathes must be at least 1, got {max_swathes}")
     if not (math.isfinite(overlap_mm) and overlap_mm >= 0):
         raise ConfigError(f"swathe overlap must be >= 0 mm, got {overlap_mm!r}")
+    if not (math.isfinite(seam_mm) and 0 <= seam_mm <= overlap_mm):
+        raise ConfigError(f"swathe seam must be in 0 .. the overlap ({overlap_mm!r} mm), got {seam_mm!r}")
     s, t, row = nozzle_offsets(head)
     th = math.radians(tilt_deg)
     X = s * math.cos(th) - t * math.sin(th)
@@ -280,6 +292,7 @@ def plan_swathes(
         outer_radius_mm=float(outer_radius_mm),
         swathes=tuple(swathes),
         overlap_mm=float(overlap_mm),
+        seam_mm=float(seam_mm),
     )
 
 
@@ -297,10 +310,13 @@ def pass_enabled(plan: SwathePlan, j: int, r_mm: np.ndarray) -> np.ndarray:
     -------
     (N,) bool
         ``plan.swathes[j].enabled`` when the plan has no overlap (as before); else the usable
-        nozzles whose track lies in the swathe's band ``[lo, hi)``.
+        nozzles whose track lies in the swathe's band ``[lo, hi)`` (``[lo - seam_mm, hi)`` for
+        every swathe but the first).
     """
     sw = plan.swathes[j]
     if plan.overlap_mm <= 0 or sw.usable is None:
         return sw.enabled
     lo, hi = sw.band_mm
+    if j > 0:
+        lo -= plan.seam_mm
     return sw.usable & (r_mm >= lo - _EPS_MM) & (r_mm < hi)
