@@ -300,13 +300,13 @@ _LINE_STEP_MM = 0.002
 
 
 def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
-                     line_mm: float, largest_gap_mm: float, along_track_mm: float,
+                     line_mm: float, footprint_um: float, largest_gap_mm: float, along_track_mm: float,
                      dead_nozzles: Sequence[int] | None = None) -> tuple[list[list[np.ndarray]], tuple[int, int]]:
     """Whole tracks left out where the union of the passes crowds, so that every narrow line gets about the same ink.
 
     The film of a narrow feature (a line ``line_mm`` wide along the track, e.g. one design
-    pixel) holds the ink of the tracks inside it: ``sum_k n_k`` over the union's tracks in
-    ``[c, c + line_mm)``, ``n_k = 1 / (r_k dphi_k)`` drops per mm (one angular clock per swathe:
+    pixel) holds the ink of the tracks inside it: ``sum_k n_k p_k(c)``, ``p_k`` the share of
+    track ``k``'s footprint cross-section inside ``[c, c + line_mm)``, ``n_k = 1 / (r_k dphi_k)`` drops per mm (one angular clock per swathe:
     a swathe's inner tracks lay up to ``r_out / r_in`` times more). A tilted head's tracks pair
     up and crowd, so these *line volumes* range 0.5-2 x their mean (``docs/rotary.md``), while
     the levelled film flows only ~0.1 mm. Tracks are left out (share 0; the clock and every
@@ -330,6 +330,9 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[fl
         The printed clock (``dpi_y``, default the head's) and ``ref_radius_mm``.
     line_mm : float
         Width of the lines, mm (> 0).
+    footprint_um : float
+        A drop's footprint: a track adds to a line the share of its drops' cross-section
+        ``(1 - x^2/a^2)^(3/2)`` that falls inside it.
     largest_gap_mm, along_track_mm : float
         The plan's largest gap and drop spacing at the reference radius (:class:`PassPlan`).
 
@@ -344,6 +347,8 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[fl
 
     if not (math.isfinite(line_mm) and line_mm > 0):
         raise ConfigError(f"line width must be > 0 mm, got {line_mm!r}")
+    if not (math.isfinite(footprint_um) and footprint_um > 0):
+        raise ConfigError(f"footprint must be > 0 um, got {footprint_um!r}")
     st = setup or RotarySetup(tilt_deg=plan.tilt_deg)
     dpi_y = head.dpi_y if st.dpi_y is None else float(st.dpi_y)
     live = np.ones(head.nozzles, bool)
@@ -368,7 +373,7 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[fl
         return out, (int(r_all.size), int(r_all.size))
     order = np.argsort(r_all, kind="stable")
     r, n = r_all[order], np.concatenate(ns)[order]
-    keep = _leave_out(r, n, plan.inner_radius_mm, plan.outer_radius_mm, float(line_mm),
+    keep = _leave_out(r, n, plan.inner_radius_mm, plan.outer_radius_mm, float(line_mm), 0.5e-3 * float(footprint_um),
                       float(largest_gap_mm) ** 2 + float(along_track_mm) ** 2)
     k_all = np.empty(r.size)
     k_all[order] = keep
@@ -379,18 +384,30 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[fl
     return out, (int(keep.sum()), int(keep.size))
 
 
-def _leave_out(r: np.ndarray, n: np.ndarray, lo: float, hi: float, line_mm: float, cell2: float) -> np.ndarray:
+def _leave_out(r: np.ndarray, n: np.ndarray, lo: float, hi: float, line_mm: float, a_mm: float, cell2: float) -> np.ndarray:
     """Kept tracks ``(M,) float64`` (1/0) of sorted radii ``r`` (mm) with ``n`` drops per mm (see
-    :func:`even_line_shares`; ``cell2`` the squared diagonal of the plan's widest lattice cell)."""
-    c = np.arange(lo, max(lo + _LINE_STEP_MM, hi - line_mm), _LINE_STEP_MM)
-    cum = np.concatenate([[0.0], np.cumsum(n)])
-    vol = cum[np.searchsorted(r, c + line_mm)] - cum[np.searchsorted(r, c)]
+    :func:`even_line_shares`; ``a_mm`` the footprint radius, ``cell2`` the squared diagonal of the
+    plan's widest lattice cell)."""
+    step = _LINE_STEP_MM
+    c = np.arange(lo, max(lo + step, hi - line_mm), step)
+    # share of a drop's ink (its cross-section (1 - x^2/a^2)^(3/2) along the track) inside the
+    # line [c, c + line) for a track at c - u
+    x = np.linspace(-a_mm, a_mm, 401)
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (np.clip(1 - (x[1:] / a_mm) ** 2, 0, None) ** 1.5
+                                                  + np.clip(1 - (x[:-1] / a_mm) ** 2, 0, None) ** 1.5))])
+    cdf /= cdf[-1]
+
+    def share(u: np.ndarray) -> np.ndarray:
+        return np.interp(-u + line_mm, x, cdf) - np.interp(-u, x, cdf)
+
+    ka = np.searchsorted(c, r - a_mm - line_mm, side="right")
+    kb = np.searchsorted(c, r + a_mm, side="right")
+    parts = [share(c[ka[k]:kb[k]] - r[k]) for k in range(r.size)]
+    vol = np.zeros(c.size)
+    for k in range(r.size):
+        vol[ka[k]:kb[k]] += n[k] * parts[k]
     target = float(np.percentile(vol, EVEN_LINE_PERCENTILE))
-    # the lines holding track k: c in (r_k - line, r_k]
-    ka = np.searchsorted(c, r - line_mm, side="right")
-    kb = np.searchsorted(c, r, side="right")
-    cv = np.concatenate([[0.0], np.cumsum(vol)])
-    dens = (cv[kb] - cv[ka]) / np.maximum(kb - ka, 1)
+    dens = np.array([float(vol[ka[k]:kb[k]] @ parts[k]) / max(float(parts[k].sum()), 1e-300) for k in range(r.size)])
     inside = (r >= lo) & (r < hi) & (kb > ka)
     spacing = 1.0 / n  # drops' spacing along the track, mm
     keep = np.ones(r.size)
@@ -402,15 +419,16 @@ def _leave_out(r: np.ndarray, n: np.ndarray, lo: float, hi: float, line_mm: floa
         p, q = prev[k], nxt[k]
         if p < 0 or q >= r.size:
             continue
-        i, j = ka[k], kb[k]
-        if vol[i:j].min() - n[k] < target:
-            continue
         g = r[q] - r[p]
         s_ = max(spacing[p], spacing[q])
         if g * g + s_ * s_ > cell2:
             continue
+        i, j = ka[k], kb[k]
+        after = vol[i:j] - n[k] * parts[k]
+        if (after[parts[k] > 1e-6] < target).any():
+            continue
         keep[k] = 0.0
-        vol[i:j] -= n[k]
+        vol[i:j] = after
         nxt[p], prev[q] = q, p
     return keep
 

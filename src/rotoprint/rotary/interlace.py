@@ -906,8 +906,8 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
     elif even:
         fracs, kept = even_line_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock),
-                                 line_mm=max(placement.pitch_x_mm, placement.pitch_y_mm, 1e-3 * d_um),
-                                 largest_gap_mm=pp.largest_gap_mm, along_track_mm=25.4 / clock)
+                                       line_mm=max(placement.pitch_x_mm, placement.pitch_y_mm, 1e-3 * d_um), footprint_um=d_um,
+                                       largest_gap_mm=pp.largest_gap_mm, along_track_mm=25.4 / clock)
     if pp.phases:
         angles, achieved = phase_angles(sp, pp.phases, dpi_y=clock, ref_radius_mm=st.ref_radius_mm)
     else:
