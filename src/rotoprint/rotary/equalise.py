@@ -299,9 +299,8 @@ EVEN_LINE_PERCENTILE = 1.0
 _LINE_STEP_MM = 0.002
 
 
-def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
-                     line_mm: float, footprint_um: float, largest_gap_mm: float, along_track_mm: float,
-                     dead_nozzles: Sequence[int] | None = None) -> tuple[list[list[np.ndarray]], tuple[int, int]]:
+def even_line_shares(head: InkjetHead, plan: SwathePlan, pass_plan, setup: RotarySetup | None = None, *,
+                     line_mm: float, dead_nozzles: Sequence[int] | None = None) -> tuple[list[list[np.ndarray]], tuple[int, int]]:
     """Whole tracks left out where the union of the passes crowds, so that every narrow line gets about the same ink.
 
     The film of a narrow feature (a line ``line_mm`` wide along the track, e.g. one design
@@ -325,16 +324,14 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[fl
         Its ``dead_nozzles`` unless ``dead_nozzles`` is given (dead tracks are not in the union).
     plan : SwathePlan
         The passes' swathes (with a ``seam_mm``, both swathes' tracks of a seam are in the union).
-    offsets_mm : sequence of float
+    pass_plan : PassPlan
+        Its ``offsets_mm``, ``largest_gap_mm`` and ``footprint_um`` (a track adds to a line the
+        share of its drops' cross-section ``(1 - x^2/a^2)^(3/2)`` that falls inside it).
     setup : RotarySetup, optional
-        The printed clock (``dpi_y``, default the head's) and ``ref_radius_mm``.
+        The printed clock (``dpi_y``, default the plan's) and ``ref_radius_mm``.
     line_mm : float
         Width of the lines, mm (> 0).
-    footprint_um : float
-        A drop's footprint: a track adds to a line the share of its drops' cross-section
-        ``(1 - x^2/a^2)^(3/2)`` that falls inside it.
-    largest_gap_mm, along_track_mm : float
-        The plan's largest gap and drop spacing at the reference radius (:class:`PassPlan`).
+    dead_nozzles : sequence of int, optional
 
     Returns
     -------
@@ -347,10 +344,9 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[fl
 
     if not (math.isfinite(line_mm) and line_mm > 0):
         raise ConfigError(f"line width must be > 0 mm, got {line_mm!r}")
-    if not (math.isfinite(footprint_um) and footprint_um > 0):
-        raise ConfigError(f"footprint must be > 0 um, got {footprint_um!r}")
     st = setup or RotarySetup(tilt_deg=plan.tilt_deg)
-    dpi_y = head.dpi_y if st.dpi_y is None else float(st.dpi_y)
+    dpi_y = float(pass_plan.dpi_y) if st.dpi_y is None else float(st.dpi_y)
+    offsets_mm = pass_plan.offsets_mm
     live = np.ones(head.nozzles, bool)
     live[list(head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles))] = False
     psi = math.radians(plan.mount_angle_deg)
@@ -373,8 +369,8 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[fl
         return out, (int(r_all.size), int(r_all.size))
     order = np.argsort(r_all, kind="stable")
     r, n = r_all[order], np.concatenate(ns)[order]
-    keep = _leave_out(r, n, plan.inner_radius_mm, plan.outer_radius_mm, float(line_mm), 0.5e-3 * float(footprint_um),
-                      float(largest_gap_mm) ** 2 + float(along_track_mm) ** 2)
+    keep = _leave_out(r, n, plan.inner_radius_mm, plan.outer_radius_mm, float(line_mm), 0.5e-3 * float(pass_plan.footprint_um),
+                      float(pass_plan.largest_gap_mm) ** 2 + (25.4 / dpi_y) ** 2)
     k_all = np.empty(r.size)
     k_all[order] = keep
     pos = 0

@@ -868,7 +868,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     overlap = max(overlap, EVEN_OVERLAP_PERIODS * head.rows * head.pitch_mm) if even else overlap
     sp = plan_swathes(head, tilt_deg=st.tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
                       mount_angle_deg=st.mount_angle_deg, direction=st.direction, max_swathes=st.max_swathes,
-                      overlap_mm=overlap, seam_mm=seam)
+                      overlap_mm=overlap).with_seam(seam)
     d_um = DepositOptions(footprint_um=options.footprint_um).full_footprint_um(head)
     pp = plan_passes(head, sp, footprint_um=d_um, passes=n, phases=options.phases)
     if spread and max(pp.offsets_mm) <= head.rows * head.pitch_mm:
@@ -878,7 +878,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         overlap = max(overlap, EVEN_OVERLAP_PERIODS * head.rows * head.pitch_mm) if even else overlap
         sp = plan_swathes(head, tilt_deg=st.tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
                           mount_angle_deg=st.mount_angle_deg, direction=st.direction, max_swathes=st.max_swathes,
-                          overlap_mm=overlap, seam_mm=seam)
+                          overlap_mm=overlap).with_seam(seam)
         pp = plan_passes(head, sp, footprint_um=d_um, passes=n, phases=options.phases)
     clock = pp.dpi_y if st.dpi_y is None else float(st.dpi_y)
     fracs = None
@@ -905,9 +905,8 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     elif options.balance:
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
     elif even:
-        fracs, kept = even_line_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock),
-                                       line_mm=max(placement.pitch_x_mm, placement.pitch_y_mm, 1e-3 * d_um), footprint_um=d_um,
-                                       largest_gap_mm=pp.largest_gap_mm, along_track_mm=25.4 / clock)
+        fracs, kept = even_line_shares(head, sp, pp, dataclasses.replace(st, dpi_y=clock),
+                                       line_mm=max(placement.pitch_x_mm, placement.pitch_y_mm, 1e-3 * d_um))
     if pp.phases:
         angles, achieved = phase_angles(sp, pp.phases, dpi_y=clock, ref_radius_mm=st.ref_radius_mm)
     else:

@@ -53,7 +53,7 @@ class RotarySetup:
         swathe's band (the design's edges and the seams covered by every pass). 0: as before.
     swathe_seam_mm : float
         With ``swathe_overlap_mm``: every swathe but the first also prints this far below its
-        band (both swathes print the seam; :func:`~rotoprint.rotary.swathes.plan_swathes`). 0: as before.
+        band (both swathes print the seam; :meth:`~rotoprint.rotary.swathes.SwathePlan.with_seam`). 0: as before.
     """
 
     tilt_deg: float

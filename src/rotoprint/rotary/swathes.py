@@ -83,9 +83,22 @@ class SwathePlan:
     #: Each swathe's full-density band reaches this far inside its owned band (mm), so that a
     #: pass with a pivot offset in ``[0, overlap_mm]`` still covers the whole band.
     overlap_mm: float = 0.0
-    #: With an overlap: every swathe but the first also prints this far inside its owned band's
-    #: inner end (mm; :func:`pass_enabled`), so both swathes print a seam's ``seam_mm``.
+    #: With an overlap: every swathe but the first also prints (:func:`pass_enabled`) this far
+    #: below its owned band (mm, at most ``overlap_mm``: the usable nozzles reach no further),
+    #: where the previous swathe prints too, so a seam's tracks are those of both swathes, for a
+    #: caller that leaves the excess out (:func:`~rotoprint.rotary.equalise.even_line_shares`).
+    #: 0 (default): one swathe per radius. Set with :meth:`with_seam`.
     seam_mm: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.seam_mm) and 0 <= self.seam_mm <= self.overlap_mm + 1e-12):
+            raise ConfigError(f"swathe seam must be in 0 .. the overlap ({self.overlap_mm!r} mm), got {self.seam_mm!r}")
+
+    def with_seam(self, seam_mm: float) -> SwathePlan:
+        """This plan with every swathe but the first also printing ``seam_mm`` below its band."""
+        import dataclasses
+
+        return self if float(seam_mm) == self.seam_mm else dataclasses.replace(self, seam_mm=float(seam_mm))
 
     def __len__(self) -> int:
         return len(self.swathes)
@@ -118,7 +131,6 @@ def plan_swathes(
     direction: int = 1,
     max_swathes: int | None = None,
     overlap_mm: float = 0.0,
-    seam_mm: float = 0.0,
 ) -> SwathePlan:
     """Pivot radii and nozzle sets covering the radial range ``[inner, outer]`` mm.
 
@@ -145,12 +157,6 @@ def plan_swathes(
         whose pivot is moved outwards by up to ``overlap_mm`` then still covers its swathe's
         whole band with the tracks of :func:`pass_enabled`: the design's edge and every seam
         are printed by every pass, each radius by one swathe per pass. 0 (default): as before.
-    seam_mm : float
-        With ``overlap_mm``: every swathe but the first also prints (:func:`pass_enabled`)
-        the ``seam_mm`` below its owned band, where the previous swathe prints too (at most
-        ``overlap_mm``; the usable nozzles reach no further): the seam's tracks are then those
-        of both swathes, for a caller that leaves the excess out
-        (:func:`~rotoprint.rotary.equalise.even_line_shares`). 0 (default): one swathe per radius.
 
     Returns
     -------
@@ -181,8 +187,6 @@ def plan_swathes(
         raise ConfigError(f"max_swathes must be at least 1, got {max_swathes}")
     if not (math.isfinite(overlap_mm) and overlap_mm >= 0):
         raise ConfigError(f"swathe overlap must be >= 0 mm, got {overlap_mm!r}")
-    if not (math.isfinite(seam_mm) and 0 <= seam_mm <= overlap_mm):
-        raise ConfigError(f"swathe seam must be in 0 .. the overlap ({overlap_mm!r} mm), got {seam_mm!r}")
     s, t, row = nozzle_offsets(head)
     th = math.radians(tilt_deg)
     X = s * math.cos(th) - t * math.sin(th)
@@ -292,7 +296,6 @@ def plan_swathes(
         outer_radius_mm=float(outer_radius_mm),
         swathes=tuple(swathes),
         overlap_mm=float(overlap_mm),
-        seam_mm=float(seam_mm),
     )
 
 
