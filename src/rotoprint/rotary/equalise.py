@@ -394,7 +394,7 @@ def _leave_out(r: np.ndarray, n: np.ndarray, lo: float, hi: float, line_mm: floa
     cdf /= cdf[-1]
 
     def share(u: np.ndarray) -> np.ndarray:
-        return np.interp(-u + line_mm, x, cdf) - np.interp(-u, x, cdf)
+        return np.interp(u + line_mm, x, cdf) - np.interp(u, x, cdf)
 
     ka = np.searchsorted(c, r - a_mm - line_mm, side="right")
     kb = np.searchsorted(c, r + a_mm, side="right")
