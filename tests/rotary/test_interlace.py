@@ -576,3 +576,10 @@ def test_even_lines_give_every_one_pixel_line_of_a_tilted_head_more_even_ink(hea
     assert mans[True]["pass_plan"]["swathe_overlap_mm"] > 0
     assert lines[True].min() > lines[False].min() + 0.05
     assert lines[True].std() < lines[False].std()
+    # at tilt 0 the rows interleave evenly: the print is the one without the even lines
+    small = np.full((6, 40), 255, np.uint8)
+    pl0 = Placement(40, 6, PX, PX, inner_radius_mm=60.0)
+    outs = [pass_prints(small, head, pl0, PassOptions(RotarySetup(tilt_deg=0.0), passes=3, even_lines=ev)) for ev in (True, False)]
+    assert outs[0][2]["even_lines"] is None and outs[0][2]["pass_plan"] == outs[1][2]["pass_plan"]
+    for a, b in zip(outs[0][1], outs[1][1]):
+        assert all(np.array_equal(x.levels, y.levels) for x, y in zip(a.swathes, b.swathes))

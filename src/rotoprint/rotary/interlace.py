@@ -742,8 +742,9 @@ class PassOptions:
         kept tracks' drops unchanged), so that every line one design pixel wide gets about
         the same ink, and the swathes are planned with an overlap of :data:`EVEN_OVERLAP_PERIODS`
         row periods and a seam of :data:`EVEN_SEAM_PERIODS` (both swathes print the seam's
-        tracks; the excess is left out). On by default: measured on the test design (levelled
-        per coat, ``docs/rotary.md``) thinnest / mean 0.415 -> 0.5xx at tilt 20.
+        tracks; the excess is left out). Only at a tilt whose rows do not interleave evenly
+        (:func:`tilt_scan`; at tilt 0 the print is as without). On by default: measured on the
+        test design (levelled per coat, ``docs/rotary.md``).
     spread_dead : bool
         With dead nozzles (and more than one pass): the passes' offsets may span
         :data:`DEAD_SPREAD_PERIODS` row periods, with the swathes planned with that overlap
@@ -808,9 +809,12 @@ def density_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[floa
     return [[np.where(np.isfinite(s_), np.minimum(1.0, np.nan_to_num(s_) / widest), 0.0) for s_ in row] for row in spacing]
 
 
-def _even_seam(head: InkjetHead, options: PassOptions) -> tuple[bool, float]:
-    """Whether :func:`pass_prints` evens the lines (:attr:`PassOptions.even_lines`), and its seam, mm."""
+def _even_seam(head: InkjetHead, options: PassOptions, inner_radius_mm: float) -> tuple[bool, float]:
+    """Whether :func:`pass_prints` evens the lines (:attr:`PassOptions.even_lines`; not at a tilt
+    whose rows interleave evenly, :func:`tilt_scan`: there the union is even already), and its seam, mm."""
     even = bool(options.even_lines and not options.equalise and not options.balance)
+    if even:
+        even = not tilt_scan(head, [float(options.setup.tilt_deg)], pivot_radius_mm=float(inner_radius_mm))[0].even
     return even, (EVEN_SEAM_PERIODS * head.rows * head.pitch_mm if even else 0.0)
 
 
@@ -863,7 +867,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     n = parse_passes(options.passes)
     r_in, r_out = placement.radial_range_mm()
     spread = bool(options.spread_dead and head.dead_nozzles and n != 1)
-    even, seam = _even_seam(head, options)
+    even, seam = _even_seam(head, options, r_in)
     overlap = pass_overlap_mm(head, dead_spread=spread) if (options.edge_overlap or spread) else 0.0
     overlap = max(overlap, EVEN_OVERLAP_PERIODS * head.rows * head.pitch_mm) if even else overlap
     sp = plan_swathes(head, tilt_deg=st.tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
