@@ -43,7 +43,13 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   instead of side by side; kept only where the largest gap stays within
   :data:`DEAD_GAP_TOLERANCE` (at tilt 0; a tilted head's interleave changes with whole shifts).
 
-Both are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``): the
+- Even lines (``even_lines``, on by default in :func:`pass_prints` at a tilt whose rows do not
+  interleave evenly): the swathes overlap by :data:`EVEN_OVERLAP_PERIODS` row periods, both
+  swathes print each seam (:data:`EVEN_SEAM_PERIODS`), and whole tracks are left out where the
+  union crowds (:func:`~rotoprint.rotary.equalise.even_line_shares`), so that every line one
+  design pixel wide gets about the same ink (the levelled film is thinnest in such lines).
+
+Phases and edge overlap are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``): the
 interior closes at every tilt; the thinnest point stays below half the mean at tilted settings
 (``1/r`` within a swathe, one angular clock per swathe, sets the local mean; the phases move the
 pinholes between the passes' drops, with no steady gain).
