@@ -547,7 +547,7 @@ def test_swathe_seam_prints_both_sides_and_is_bounded_by_the_overlap(head):
 
 
 def test_even_lines_give_every_one_pixel_line_of_a_tilted_head_more_even_ink(head):
-    """One-pixel radial lines at tilt 20 across a swathe seam: with the even lines (the default)
+    """One-pixel radial lines at tilt 20 across a swathe seam: with the even lines (opt-in)
     crowded tracks are left out and the seam is printed by both swathes, so the thinnest line
     holds more of the mean line's ink, the film stays closed and the volume is what was planned."""
     from rotoprint.rotary.interlace import EVEN_SEAM_PERIODS, PassOptions, pass_prints

@@ -43,7 +43,7 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   instead of side by side; kept only where the largest gap stays within
   :data:`DEAD_GAP_TOLERANCE` (at tilt 0; a tilted head's interleave changes with whole shifts).
 
-- Even lines (``even_lines``, on by default in :func:`pass_prints` at a tilt whose rows do not
+- Even lines (``even_lines``, opt-in, in :func:`pass_prints` at a tilt whose rows do not
   interleave evenly): the swathes overlap by :data:`EVEN_OVERLAP_PERIODS` row periods, both
   swathes print each seam (:data:`EVEN_SEAM_PERIODS`), and whole tracks are left out where the
   union crowds (:func:`~rotoprint.rotary.equalise.even_line_shares`), so that every line one
@@ -767,7 +767,7 @@ class PassOptions:
     phases: bool = False
     edge_overlap: bool = False
     spread_dead: bool = True
-    even_lines: bool = True
+    even_lines: bool = False
 
     def __post_init__(self) -> None:
         parse_passes(self.passes)
