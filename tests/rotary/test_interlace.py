@@ -152,7 +152,8 @@ def test_spread_dead_tracks_thicken_the_equalised_film(head):
     for f in films.values():
         assert f.uncovered_fraction == 0 and abs(f.volume_error_fraction) < 1e-9
     assert films[True].thinnest_to_mean > 0.38 > 0.3 > films[False].thinnest_to_mean
-    _, _, man = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=20.0), passes=4))
+    # (without the even lines' own swathe overlap, so that the fallback's plan is the plain one)
+    _, _, man = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=20.0), passes=4, even_lines=False))
     sp20 = plan_swathes(dh, tilt_deg=20.0, inner_radius_mm=pl.radial_range_mm()[0], outer_radius_mm=pl.radial_range_mm()[1])
     assert man["pass_plan"]["swathe_overlap_mm"] == 0
     assert man["pass_plan"]["offsets_mm"] == list(plan_passes(dh, sp20, footprint_um=49.6, passes=4).offsets_mm)
@@ -336,7 +337,7 @@ def test_pass_options_and_density_shares(head, tmp_path):
     # a preset name, a device or a bare head; the manifest records the device's name only
     d = np.full((20, 20), 255, np.uint8)
     pl = Placement(20, 20, PX, PX, inner_radius_mm=60.0)
-    m1 = transform_passes(d, "omnidot760", pl, tmp_path / "a.png", PassOptions(RotarySetup(tilt_deg=0.0), passes=2))
+    m1 = transform_passes(d, "omnidot760", pl, tmp_path / "a.png", PassOptions(RotarySetup(tilt_deg=0.0), passes=2, even_lines=False))
     m2 = transform_passes(d, head, pl, tmp_path / "b.png", PassOptions(RotarySetup(tilt_deg=0.0), passes=2, balance=True))
     assert m1["device"] == "omnidot760" and m2["device"] == "" and m2["balance"] is True and m1["balance"] is False
     assert len(read_passes(tmp_path / "a-passes.json")) == 2 and m1["pass_plan"] == m2["pass_plan"]
@@ -432,7 +433,8 @@ def test_interlaced_passes_record_phases_and_even_a_small_film(head, tmp_path):
     for inter in (False, True):
         out = tmp_path / f"i{int(inter)}" / "p.png"
         out.parent.mkdir()
-        m = transform_passes(d, head, pl, out, PassOptions(RotarySetup(tilt_deg=20.0, mount_angle_deg=10.0), phases=inter, edge_overlap=inter))
+        m = transform_passes(d, head, pl, out, PassOptions(RotarySetup(tilt_deg=20.0, mount_angle_deg=10.0), phases=inter, edge_overlap=inter,
+                                                           even_lines=False))
         sides = read_passes(out.with_name("p-passes.json"))
         prs = [read_print(s)[0] for s in sides]
         pp = m["pass_plan"]
@@ -525,3 +527,61 @@ def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within):
                          for q, o in enumerate(pp.offsets_mm) for j in range(len(sp.swathes))])
     per_plain = ((fp * w)[:, None] * np.diff(below, axis=1)).sum(axis=0)
     assert np.abs(per_plain / per_plain.mean() - 1.0).max() > 2 * within, np.abs(per_plain / per_plain.mean() - 1.0).max()
+
+
+def test_swathe_seam_prints_both_sides_and_is_bounded_by_the_overlap(head):
+    from rotoprint.rotary.head import nozzle_layout
+    from rotoprint.rotary.swathes import pass_enabled
+
+    per = head.rows * head.pitch_mm
+    sp = plan_swathes(head, tilt_deg=20.0, inner_radius_mm=60.0, outer_radius_mm=130.0, overlap_mm=2 * per)
+    seamed = sp.with_seam(per)
+    assert len(sp) >= 2 and seamed.seam_mm == per and sp.with_seam(0.0) is sp
+    lo1 = sp.swathes[1].band_mm[0]
+    r1 = nozzle_layout(head, seamed.mount(1)).r_mm
+    plain, both = pass_enabled(sp, 1, r1), pass_enabled(seamed, 1, r1)
+    assert (both >= plain).all() and r1[plain].min() >= lo1 - 1e-9
+    assert r1[both].min() < lo1 - 0.5 * per  # swathe 1 also prints the seam below its band
+    r0 = nozzle_layout(head, seamed.mount(0)).r_mm
+    assert (pass_enabled(seamed, 0, r0) == pass_enabled(sp, 0, r0)).all()  # the first swathe as before
+    with pytest.raises(ConfigError, match="seam"):
+        sp.with_seam(3 * per)
+
+
+def test_even_lines_give_every_one_pixel_line_of_a_tilted_head_more_even_ink(head):
+    """One-pixel radial lines at tilt 20 across a swathe seam: with the even lines (opt-in)
+    crowded tracks are left out and the seam is printed by both swathes, so the thinnest line
+    holds more of the mean line's ink, the film stays closed and the volume is what was planned."""
+    from rotoprint.rotary.interlace import EVEN_SEAM_PERIODS, PassOptions, pass_prints
+
+    w = 760  # 60 .. 113.6 mm: two swathes at tilt 20 (seam near 110.7 mm)
+    d = np.zeros((14, w), np.uint8)
+    d[:, ::3] = 255  # one-pixel lines two pixels apart (their films do not touch)
+    d[:, 680:] = 255  # and a solid block across the seam
+    pl = Placement(w, 14, PX, PX, inner_radius_mm=60.0)
+    lines, blocks, mans = {}, {}, {}
+    for even in (False, True):
+        _, prs, man = pass_prints(d, head, pl, PassOptions(RotarySetup(tilt_deg=20.0), passes=4, even_lines=even))
+        dep = deposit_print(prs, d, keep_map=True)
+        f = dep.films[0]
+        assert f.uncovered_fraction == 0.0 and abs(f.volume_error_fraction) < 1e-9
+        nx, ny = dep.cells_per_pixel
+        ox, oy = dep.origin_cells
+        t = dep.thickness[oy + 3 * ny:oy + 11 * ny, ox:ox + w * nx]  # the lines' middle rows
+        col = t.reshape(t.shape[0], w, nx).mean(axis=(0, 2))  # mean film per design column
+        lines[even] = col[:678:3] / col[:678:3].mean()
+        blocks[even] = f.thinnest_to_mean
+        mans[even] = man
+    assert mans[False]["even_lines"] is None
+    ev = mans[True]["even_lines"]
+    assert ev["tracks_left_out"] > 0 and ev["seam_mm"] == pytest.approx(EVEN_SEAM_PERIODS * head.rows * head.pitch_mm)
+    assert mans[True]["pass_plan"]["swathe_overlap_mm"] > 0
+    assert lines[True].min() > lines[False].min() + 0.05
+    assert lines[True].std() < lines[False].std()
+    # at tilt 0 the rows interleave evenly: the print is the one without the even lines
+    small = np.full((6, 40), 255, np.uint8)
+    pl0 = Placement(40, 6, PX, PX, inner_radius_mm=60.0)
+    outs = [pass_prints(small, head, pl0, PassOptions(RotarySetup(tilt_deg=0.0), passes=3, even_lines=ev)) for ev in (True, False)]
+    assert outs[0][2]["even_lines"] is None and outs[0][2]["pass_plan"] == outs[1][2]["pass_plan"]
+    for a, b in zip(outs[0][1], outs[1][1]):
+        assert all(np.array_equal(x.levels, y.levels) for x, y in zip(a.swathes, b.swathes))

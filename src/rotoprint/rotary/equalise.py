@@ -21,7 +21,8 @@ from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
 
-__all__ = ["EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "ReachFloor", "track_fractions", "thin_print"]
+__all__ = ["EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "EVEN_LINE_PERCENTILE", "ReachFloor",
+           "track_fractions", "even_line_shares", "thin_print"]
 
 
 @dataclass(frozen=True)
@@ -289,6 +290,143 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
                     last = r_s[k]
             f = settle(np.where(hi_f > 0, np.maximum(f, 0.5), 0.0))
     return f
+
+
+#: :func:`even_line_shares` keeps every line's volume at or above this percentile of the lines'
+#: volumes before any track is left out (a low percentile: the sparse stretches, not the seams).
+EVEN_LINE_PERCENTILE = 1.0
+#: Step of the line positions :func:`even_line_shares` checks, mm.
+_LINE_STEP_MM = 0.002
+
+
+def even_line_shares(head: InkjetHead, plan: SwathePlan, pass_plan, setup: RotarySetup | None = None, *,
+                     line_mm: float, dead_nozzles: Sequence[int] | None = None) -> tuple[list[list[np.ndarray]], tuple[int, int]]:
+    """Whole tracks left out where the union of the passes crowds, so that every narrow line gets about the same ink.
+
+    The film of a narrow feature (a line ``line_mm`` wide along the track, e.g. one design
+    pixel) holds the ink of the tracks inside it: ``sum_k n_k p_k(c)``, ``p_k`` the share of
+    track ``k``'s footprint cross-section inside ``[c, c + line_mm)``, ``n_k = 1 / (r_k dphi_k)`` drops per mm (one angular clock per swathe:
+    a swathe's inner tracks lay up to ``r_out / r_in`` times more). A tilted head's tracks pair
+    up and crowd, so these *line volumes* range 0.5-2 x their mean (``docs/rotary.md``), while
+    the levelled film flows only ~0.1 mm. Tracks are left out (share 0; the clock and every
+    kept track's drops unchanged), densest first, while every line that holds the track keeps
+    at least ``T``, the :data:`EVEN_LINE_PERCENTILE` percentile of the line volumes before
+    (lines are checked every :data:`_LINE_STEP_MM`), and the gap the track leaves, ``g``,
+    keeps the drop lattice no coarser than the plan's worst cell: ``g^2 + s^2 <=
+    largest_gap^2 + along_track^2``, ``s`` the neighbours' drop spacing along their tracks
+    (smaller at a swathe's inner end, so gaps there may be wider than the plan's largest).
+    So the sparse lines keep their ink, the crowded ones come down towards them, the mean
+    comes down, and no point is farther from a drop than in the plan's widest lattice cell.
+
+    Parameters
+    ----------
+    head : InkjetHead
+        Its ``dead_nozzles`` unless ``dead_nozzles`` is given (dead tracks are not in the union).
+    plan : SwathePlan
+        The passes' swathes (with a ``seam_mm``, both swathes' tracks of a seam are in the union).
+    pass_plan : PassPlan
+        Its ``offsets_mm``, ``largest_gap_mm`` and ``footprint_um`` (a track adds to a line the
+        share of its drops' cross-section ``(1 - x^2/a^2)^(3/2)`` that falls inside it).
+    setup : RotarySetup, optional
+        The printed clock (``dpi_y``, default the plan's) and ``ref_radius_mm``.
+    line_mm : float
+        Width of the lines, mm (> 0).
+    dead_nozzles : sequence of int, optional
+
+    Returns
+    -------
+    shares : list (pass) of list (swathe) of (N,) float64
+        1 for kept tracks, 0 for tracks left out and for nozzles that do not print.
+    kept : (int, int)
+        Tracks kept, and tracks of the union before.
+    """
+    from .exact import swathe_clock
+
+    if not (math.isfinite(line_mm) and line_mm > 0):
+        raise ConfigError(f"line width must be > 0 mm, got {line_mm!r}")
+    st = setup or RotarySetup(tilt_deg=plan.tilt_deg)
+    dpi_y = float(pass_plan.dpi_y) if st.dpi_y is None else float(st.dpi_y)
+    offsets_mm = pass_plan.offsets_mm
+    live = np.ones(head.nozzles, bool)
+    live[list(head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles))] = False
+    psi = math.radians(plan.mount_angle_deg)
+    e = np.array([math.cos(psi), math.sin(psi)])
+    rs, ns, where = [], [], []
+    for q, o in enumerate(offsets_mm):
+        for j in range(len(plan.swathes)):
+            dphi, _ = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=st.ref_radius_mm)
+            xy = nozzle_layout(head, plan.mount(j)).xy_mm + float(o) * e
+            r = np.hypot(xy[:, 0], xy[:, 1])
+            k = np.flatnonzero(pass_enabled(plan, j, r) & live)
+            rs.append(r[k])
+            ns.append(1.0 / (r[k] * dphi))
+            where.append((q, j, k))
+    out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
+    r_all = np.concatenate(rs)
+    if r_all.size < 3:
+        for q, j, k in where:
+            out[q][j][k] = 1.0
+        return out, (int(r_all.size), int(r_all.size))
+    order = np.argsort(r_all, kind="stable")
+    r, n = r_all[order], np.concatenate(ns)[order]
+    keep = _leave_out(r, n, plan.inner_radius_mm, plan.outer_radius_mm, float(line_mm), 0.5e-3 * float(pass_plan.footprint_um),
+                      float(pass_plan.largest_gap_mm) ** 2 + (25.4 / dpi_y) ** 2)
+    k_all = np.empty(r.size)
+    k_all[order] = keep
+    pos = 0
+    for q, j, k in where:
+        out[q][j][k] = k_all[pos:pos + k.size]
+        pos += k.size
+    return out, (int(keep.sum()), int(keep.size))
+
+
+def _leave_out(r: np.ndarray, n: np.ndarray, lo: float, hi: float, line_mm: float, a_mm: float, cell2: float) -> np.ndarray:
+    """Kept tracks ``(M,) float64`` (1/0) of sorted radii ``r`` (mm) with ``n`` drops per mm (see
+    :func:`even_line_shares`; ``a_mm`` the footprint radius, ``cell2`` the squared diagonal of the
+    plan's widest lattice cell)."""
+    step = _LINE_STEP_MM
+    c = np.arange(lo, max(lo + step, hi - line_mm), step)
+    # share of a drop's ink (its cross-section (1 - x^2/a^2)^(3/2) along the track) inside the
+    # line [c, c + line) for a track at c - u
+    x = np.linspace(-a_mm, a_mm, 401)
+    cdf = np.concatenate([[0.0], np.cumsum(0.5 * (np.clip(1 - (x[1:] / a_mm) ** 2, 0, None) ** 1.5
+                                                  + np.clip(1 - (x[:-1] / a_mm) ** 2, 0, None) ** 1.5))])
+    cdf /= cdf[-1]
+
+    def share(u: np.ndarray) -> np.ndarray:
+        return np.interp(u + line_mm, x, cdf) - np.interp(u, x, cdf)
+
+    ka = np.searchsorted(c, r - a_mm - line_mm, side="right")
+    kb = np.searchsorted(c, r + a_mm, side="right")
+    parts = [share(c[ka[k]:kb[k]] - r[k]) for k in range(r.size)]
+    vol = np.zeros(c.size)
+    for k in range(r.size):
+        vol[ka[k]:kb[k]] += n[k] * parts[k]
+    target = float(np.percentile(vol, EVEN_LINE_PERCENTILE))
+    dens = np.array([float(vol[ka[k]:kb[k]] @ parts[k]) / max(float(parts[k].sum()), 1e-300) for k in range(r.size)])
+    inside = (r >= lo) & (r < hi) & (kb > ka)
+    spacing = 1.0 / n  # drops' spacing along the track, mm
+    keep = np.ones(r.size)
+    prev = np.arange(r.size) - 1
+    nxt = np.arange(r.size) + 1
+    for k in np.argsort(-dens, kind="stable"):
+        if not inside[k] or dens[k] <= target:
+            continue
+        p, q = prev[k], nxt[k]
+        if p < 0 or q >= r.size:
+            continue
+        g = r[q] - r[p]
+        s_ = max(spacing[p], spacing[q])
+        if g * g + s_ * s_ > cell2:
+            continue
+        i, j = ka[k], kb[k]
+        after = vol[i:j] - n[k] * parts[k]
+        if (after[parts[k] > 1e-6] < target).any():
+            continue
+        keep[k] = 0.0
+        vol[i:j] = after
+        nxt[p], prev[q] = q, p
+    return keep
 
 
 def thin_print(pr, fractions: Sequence[np.ndarray], *, pass_index: int = 0):

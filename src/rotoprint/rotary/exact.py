@@ -310,7 +310,7 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
         direction=direction,
         max_swathes=max_swathes,
         overlap_mm=float(setup.swathe_overlap_mm),
-    )
+    ).with_seam(float(setup.swathe_seam_mm))
     a_lo, a_hi = placement.angular_range_rad()
     angle = math.radians(placement.angle_deg)
     width, height = placement.width_px, placement.height_px

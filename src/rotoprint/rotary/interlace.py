@@ -46,7 +46,13 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   nearest live tracks of every pass (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`;
   ``dead_reserve`` does it for a plain print too, leaving room by a common share below 1).
 
-Both are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``): the
+- Even lines (``even_lines``, opt-in, in :func:`pass_prints` at a tilt whose rows do not
+  interleave evenly): the swathes overlap by :data:`EVEN_OVERLAP_PERIODS` row periods, both
+  swathes print each seam (:data:`EVEN_SEAM_PERIODS`), and whole tracks are left out where the
+  union crowds (:func:`~rotoprint.rotary.equalise.even_line_shares`), so that every line one
+  design pixel wide gets about the same ink (the levelled film is thinnest in such lines).
+
+Phases and edge overlap are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``): the
 interior closes at every tilt; the thinnest point stays below half the mean at tilted settings
 (``1/r`` within a swathe, one angular clock per swathe, sets the local mean; the phases move the
 pinholes between the passes' drops, with no steady gain).
@@ -69,9 +75,9 @@ from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
 # the equalisation lives in its own module; its names stay importable from here
 from .equalise import (EQUALISE_CLOCK_FACTOR, EQUALISE_FLOOR, EQUALISE_ITERATIONS, EQUALISE_MIN_SHARE,  # noqa: F401
-                       EQUALISE_TARGET_PERCENTILE, GREY_FLOOR, ReachFloor, thin_print, track_fractions)
+                       EQUALISE_TARGET_PERCENTILE, GREY_FLOOR, ReachFloor, even_line_shares, thin_print, track_fractions)
 
-__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "DEAD_SPREAD_PERIODS", "DEAD_GAP_TOLERANCE", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
+__all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "DEAD_SPREAD_PERIODS", "DEAD_GAP_TOLERANCE", "EVEN_OVERLAP_PERIODS", "EVEN_SEAM_PERIODS", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
 
 #: A tilt interleaves evenly when its largest track gap is at most this times the mean gap.
 EVEN_RATIO = 1.25
@@ -106,6 +112,12 @@ DEAD_SPREAD_PERIODS = 4
 #: With spread dead tracks, largest gaps within this share of the smallest found count as equal
 #: (then the film profile decides; see :func:`plan_passes`).
 DEAD_GAP_TOLERANCE = 0.05
+#: With ``PassOptions(even_lines=True)`` the swathes overlap by this many row periods, and every
+#: swathe but the first also prints the last of them below its band (the seam, printed by both
+#: swathes; the tracks in excess left out): measured at tilt 20 a seam without it held lines of
+#: 0.38 of the mean line volume, with it none below 0.8.
+EVEN_OVERLAP_PERIODS = 2
+EVEN_SEAM_PERIODS = 1
 
 
 @dataclass(frozen=True)
@@ -733,6 +745,15 @@ class PassOptions:
         Swathes planned with an overlap of :func:`pass_overlap_mm`, so that every pass prints
         the design's edges and the seams (less of the boundary band uncovered: 1.80 -> 0.35 %
         at tilt 0). Off by default (see ``phases``).
+    even_lines : bool
+        Without ``equalise`` and ``balance``: whole tracks are left out where the union of the
+        passes crowds (:func:`~rotoprint.rotary.equalise.even_line_shares`, the clock and the
+        kept tracks' drops unchanged), so that every line one design pixel wide gets about
+        the same ink, and the swathes are planned with an overlap of :data:`EVEN_OVERLAP_PERIODS`
+        row periods and a seam of :data:`EVEN_SEAM_PERIODS` (both swathes print the seam's
+        tracks; the excess is left out). Only at a tilt whose rows do not interleave evenly
+        (:func:`tilt_scan`; at tilt 0 the print is as without). On by default: measured on the
+        test design (levelled per coat, ``docs/rotary.md``).
     spread_dead : bool
         With dead nozzles (and more than one pass): the passes' offsets may span
         :data:`DEAD_SPREAD_PERIODS` row periods, with the swathes planned with that overlap
@@ -764,6 +785,7 @@ class PassOptions:
     spread_dead: bool = True
     dead_cover: bool = True
     dead_reserve: bool = False
+    even_lines: bool = False
 
     def __post_init__(self) -> None:
         parse_passes(self.passes)
@@ -809,6 +831,15 @@ def density_shares(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[floa
         spacing.append(row)
     widest = max(float(np.nanmax(s_)) for row in spacing for s_ in row if np.isfinite(s_).any())
     return [[np.where(np.isfinite(s_), np.minimum(1.0, np.nan_to_num(s_) / widest), 0.0) for s_ in row] for row in spacing]
+
+
+def _even_seam(head: InkjetHead, options: PassOptions, inner_radius_mm: float) -> tuple[bool, float]:
+    """Whether :func:`pass_prints` evens the lines (:attr:`PassOptions.even_lines`; not at a tilt
+    whose rows interleave evenly, :func:`tilt_scan`: there the union is even already), and its seam, mm."""
+    even = bool(options.even_lines and not options.equalise and not options.balance)
+    if even:
+        even = not tilt_scan(head, [float(options.setup.tilt_deg)], pivot_radius_mm=float(inner_radius_mm))[0].even
+    return even, (EVEN_SEAM_PERIODS * head.rows * head.pitch_mm if even else 0.0)
 
 
 def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> tuple[str, list, dict]:
@@ -860,22 +891,26 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     n = parse_passes(options.passes)
     r_in, r_out = placement.radial_range_mm()
     spread = bool(options.spread_dead and head.dead_nozzles and n != 1)
+    even, seam = _even_seam(head, options, r_in)
     overlap = pass_overlap_mm(head, dead_spread=spread) if (options.edge_overlap or spread) else 0.0
+    overlap = max(overlap, EVEN_OVERLAP_PERIODS * head.rows * head.pitch_mm) if even else overlap
     sp = plan_swathes(head, tilt_deg=st.tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
                       mount_angle_deg=st.mount_angle_deg, direction=st.direction, max_swathes=st.max_swathes,
-                      overlap_mm=overlap)
+                      overlap_mm=overlap).with_seam(seam)
     d_um = DepositOptions(footprint_um=options.footprint_um).full_footprint_um(head)
     pp = plan_passes(head, sp, footprint_um=d_um, passes=n, phases=options.phases)
     if spread and max(pp.offsets_mm) <= head.rows * head.pitch_mm:
         # the passes' missing tracks could not be spread (a tilted head: whole shifts change
         # the interleave, and the gaps they leave are wider): plan as without the spread
         overlap = pass_overlap_mm(head) if options.edge_overlap else 0.0
+        overlap = max(overlap, EVEN_OVERLAP_PERIODS * head.rows * head.pitch_mm) if even else overlap
         sp = plan_swathes(head, tilt_deg=st.tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
                           mount_angle_deg=st.mount_angle_deg, direction=st.direction, max_swathes=st.max_swathes,
-                          overlap_mm=overlap)
+                          overlap_mm=overlap).with_seam(seam)
         pp = plan_passes(head, sp, footprint_um=d_um, passes=n, phases=options.phases)
     clock = pp.dpi_y if st.dpi_y is None else float(st.dpi_y)
     fracs = None
+    kept = None
     equalise = options.equalise
     grey = equalise and head.grey_levels > 1
     if grey:  # by drop size: every site keeps its drop; the plan is made for the smallest drop used
@@ -900,6 +935,9 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         clock = clock * EQUALISE_CLOCK_FACTOR
     elif options.balance:
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
+    elif even:
+        fracs, kept = even_line_shares(head, sp, pp, dataclasses.replace(st, dpi_y=clock),
+                                       line_mm=max(placement.pitch_x_mm, placement.pitch_y_mm, 1e-3 * d_um))
     dead_cover, thin_landing = None, False
     if options.dead_cover and head.dead_nozzles and pp.passes > 1 and not grey and (fracs is not None or options.dead_reserve):
         from .deadcover import cover_dead_tracks
@@ -913,7 +951,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         angles, achieved = tuple(0.0 for _ in pp.offsets_mm), np.zeros((pp.passes, len(sp.swathes)))
     prints = []
     for q, off in enumerate(pp.offsets_mm):
-        pst = dataclasses.replace(st, dpi_y=clock, pivot_offset_mm=off, swathe_overlap_mm=overlap,
+        pst = dataclasses.replace(st, dpi_y=clock, pivot_offset_mm=off, swathe_overlap_mm=overlap, swathe_seam_mm=seam,
                                   mount_angle_deg=float(st.mount_angle_deg) + angles[q])
         pr = transform_exact(design, head, placement, pst)
         if grey:
@@ -939,6 +977,8 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         "dpi_y": clock,
         "equalise": ("grey levels" if grey else "thinning") if equalise else None,
         "balance": bool(options.balance and not equalise),
+        "even_lines": {"seam_mm": seam, "swathe_overlap_mm": overlap, "tracks": kept[1], "tracks_left_out": kept[1] - kept[0]}
+        if even and kept is not None else None,
         "pass_plan": pp.to_json(),
         "phase_angles_deg": list(angles),
         "phases_by_swathe": [[float(x) for x in row] for row in achieved],

@@ -51,6 +51,9 @@ class RotarySetup:
         Swathes planned with this overlap (:func:`~rotoprint.rotary.swathes.plan_swathes`):
         then a pass prints, per swathe, the full-density nozzles whose moved track lies in the
         swathe's band (the design's edges and the seams covered by every pass). 0: as before.
+    swathe_seam_mm : float
+        With ``swathe_overlap_mm``: every swathe but the first also prints this far below its
+        band (both swathes print the seam; :meth:`~rotoprint.rotary.swathes.SwathePlan.with_seam`). 0: as before.
     """
 
     tilt_deg: float
@@ -62,6 +65,7 @@ class RotarySetup:
     backend: str = "jit"
     pivot_offset_mm: float = 0.0
     swathe_overlap_mm: float = 0.0
+    swathe_seam_mm: float = 0.0
 
     def __post_init__(self) -> None:
         _check_backend(self.backend)

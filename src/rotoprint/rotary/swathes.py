@@ -83,6 +83,22 @@ class SwathePlan:
     #: Each swathe's full-density band reaches this far inside its owned band (mm), so that a
     #: pass with a pivot offset in ``[0, overlap_mm]`` still covers the whole band.
     overlap_mm: float = 0.0
+    #: With an overlap: every swathe but the first also prints (:func:`pass_enabled`) this far
+    #: below its owned band (mm, at most ``overlap_mm``: the usable nozzles reach no further),
+    #: where the previous swathe prints too, so a seam's tracks are those of both swathes, for a
+    #: caller that leaves the excess out (:func:`~rotoprint.rotary.equalise.even_line_shares`).
+    #: 0 (default): one swathe per radius. Set with :meth:`with_seam`.
+    seam_mm: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.seam_mm) and 0 <= self.seam_mm <= self.overlap_mm + 1e-12):
+            raise ConfigError(f"swathe seam must be in 0 .. the overlap ({self.overlap_mm!r} mm), got {self.seam_mm!r}")
+
+    def with_seam(self, seam_mm: float) -> SwathePlan:
+        """This plan with every swathe but the first also printing ``seam_mm`` below its band."""
+        import dataclasses
+
+        return self if float(seam_mm) == self.seam_mm else dataclasses.replace(self, seam_mm=float(seam_mm))
 
     def __len__(self) -> int:
         return len(self.swathes)
@@ -297,10 +313,13 @@ def pass_enabled(plan: SwathePlan, j: int, r_mm: np.ndarray) -> np.ndarray:
     -------
     (N,) bool
         ``plan.swathes[j].enabled`` when the plan has no overlap (as before); else the usable
-        nozzles whose track lies in the swathe's band ``[lo, hi)``.
+        nozzles whose track lies in the swathe's band ``[lo, hi)`` (``[lo - seam_mm, hi)`` for
+        every swathe but the first).
     """
     sw = plan.swathes[j]
     if plan.overlap_mm <= 0 or sw.usable is None:
         return sw.enabled
     lo, hi = sw.band_mm
+    if j > 0:
+        lo -= plan.seam_mm
     return sw.usable & (r_mm >= lo - _EPS_MM) & (r_mm < hi)
