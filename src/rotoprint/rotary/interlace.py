@@ -37,25 +37,23 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   inside its owned band, and a pass prints with the nozzles whose moved track lies in the band
   (:func:`~rotoprint.rotary.swathes.pass_enabled`). Every pass then prints the design's inner
   edge and both sides of every seam, each radius with one swathe per pass (no doubled volume).
-- Dead nozzles (``spread_dead``, on by default): :func:`pass_prints` plans the swathes with an
-  overlap of :data:`DEAD_SPREAD_PERIODS` row periods and :func:`plan_passes` may then shift the
-  passes by whole row pitches, so that a dead nozzle's missing tracks (one per pass) lie apart
-  instead of side by side; kept only where the largest gap stays within
-  :data:`DEAD_GAP_TOLERANCE` (at tilt 0; a tilted head's interleave changes with whole shifts).
-  Then (``dead_cover``, on by default, with ``equalise``) each dead track's drops go to the
-  nearest live tracks of every pass (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`;
-  ``dead_reserve`` does it for a plain print too, leaving room by a common share below 1).
+- Dead nozzles (``spread_dead``, on by default): :func:`pass_prints` plans the swathes with an overlap of
+  :data:`DEAD_SPREAD_PERIODS` row periods and :func:`plan_passes` may then shift the passes by whole row
+  pitches, so that a dead nozzle's missing tracks (one per pass) lie apart instead of side by side; kept
+  only where the largest gap stays within :data:`DEAD_GAP_TOLERANCE` (at tilt 0; a tilted head's
+  interleave changes with whole shifts). Then (``dead_cover``, on by default, with ``equalise``) each
+  dead track's drops go to the nearest live tracks of every pass (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`;
+  ``dead_reserve`` does it for a plain print too, by a common share below 1).
+- Even lines (``even_lines``, opt-in, in :func:`pass_prints` at a tilt whose rows do not interleave
+  evenly): the swathes overlap by :data:`EVEN_OVERLAP_PERIODS` row periods, both swathes print each seam
+  (:data:`EVEN_SEAM_PERIODS`), and whole tracks are left out where the union crowds
+  (:func:`~rotoprint.rotary.equalise.even_line_shares`), so that every line one design pixel wide gets
+  about the same ink (the levelled film is thinnest in such lines).
 
-- Even lines (``even_lines``, opt-in, in :func:`pass_prints` at a tilt whose rows do not
-  interleave evenly): the swathes overlap by :data:`EVEN_OVERLAP_PERIODS` row periods, both
-  swathes print each seam (:data:`EVEN_SEAM_PERIODS`), and whole tracks are left out where the
-  union crowds (:func:`~rotoprint.rotary.equalise.even_line_shares`), so that every line one
-  design pixel wide gets about the same ink (the levelled film is thinnest in such lines).
-
-Phases and edge overlap are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``): the
-interior closes at every tilt; the thinnest point stays below half the mean at tilted settings
-(``1/r`` within a swathe, one angular clock per swathe, sets the local mean; the phases move the
-pinholes between the passes' drops, with no steady gain).
+Phases and edge overlap are opt-in (:class:`PassOptions`). Measured on the test design
+(``docs/rotary.md``): the interior closes at every tilt; the thinnest point stays below half the mean
+at tilted settings (``1/r`` within a swathe, one angular clock per swathe, sets the local mean; the
+phases move the pinholes between the passes' drops, with no steady gain).
 """
 
 from __future__ import annotations
@@ -767,12 +765,10 @@ class PassOptions:
         (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`, realised by :func:`thin_print`).
         On by default; the manifest's ``dead_cover`` reports it.
     dead_reserve : bool
-        With ``dead_cover`` and no shares (a plain print keeps every drop: no room): every live
-        track with room keeps one common share below 1 so that the dead tracks' drops fit
-        (thinned by :func:`~rotoprint.rotary.deadcover.thin_by_landing`). Off by default:
-        measured on the test design it takes out the dead rings but thins the film by 14 %,
-        and on the full design opened a pinhole at tilt 0 and lowered the levelled thinnest
-        at tilt 20 (0.393 -> 0.360; ``docs/rotary.md``).
+        With ``dead_cover`` and no shares (a plain print has no room): live tracks with room keep one common
+        share below 1 so the dead tracks' drops fit (:func:`~rotoprint.rotary.deadcover.thin_by_landing`).
+        Off by default: on the full test design it opened a pinhole at tilt 0 and lowered the levelled
+        thinnest at tilt 20 (0.393 -> 0.360), though it takes out the dead rings (``docs/rotary.md``).
     """
 
     setup: RotarySetup
@@ -900,8 +896,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     d_um = DepositOptions(footprint_um=options.footprint_um).full_footprint_um(head)
     pp = plan_passes(head, sp, footprint_um=d_um, passes=n, phases=options.phases)
     if spread and max(pp.offsets_mm) <= head.rows * head.pitch_mm:
-        # the passes' missing tracks could not be spread (a tilted head: whole shifts change
-        # the interleave, and the gaps they leave are wider): plan as without the spread
+        # missing tracks not spread (a tilted head: whole shifts change the interleave): plan without
         overlap = pass_overlap_mm(head) if options.edge_overlap else 0.0
         overlap = max(overlap, EVEN_OVERLAP_PERIODS * head.rows * head.pitch_mm) if even else overlap
         sp = plan_swathes(head, tilt_deg=st.tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out,
@@ -923,12 +918,10 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
                                 floor=g_floor)
     elif equalise:
-        # the print's clock is EQUALISE_CLOCK_FACTOR x the plan's; the ordered pattern spaces kept
-        # drops at most ceil(1 / f) firings apart, so a share >= EQUALISE_FLOOR keeps every track
-        # within the planned spacing (measured: at the plan's clock alone, thinned clusters open
-        # holes), and a track keeps less only where its kept drops stay within the lattice reach
-        # with the dead-track cover, the shares of the print were every nozzle live (the dead
-        # tracks' drops then go to their live neighbours, below)
+        # clock EQUALISE_CLOCK_FACTOR x the plan's; kept drops at most ceil(1 / f) firings apart, so a share
+        # >= EQUALISE_FLOOR keeps every track within the planned spacing (measured: at the plan's clock alone,
+        # thinned clusters open holes), and a track keeps less only where its kept drops stay within the lattice
+        # reach. With the dead-track cover the shares are those of every nozzle live (dead drops moved below)
         cover_all = bool(options.dead_cover and head.dead_nozzles and pp.passes > 1)  # as below
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
                                 reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR), dead_nozzles=() if cover_all else None)
