@@ -79,6 +79,10 @@ def test_the_shares_are_the_transform_paths_realised_by_thin_print():
             got = job.layer(layer)
             ref = thin_print(plain.layer(layer), shares[q], pass_index=q + 64 * layer)
             assert all(np.array_equal(a.levels, b.levels) for a, b in zip(got.swathes, ref.swathes))
+        # the numpy reference kernel thins the same way
+        ref_np = slice_rotary(mesh, dev, layer_height_mm=0.2, tilt_deg=20.0, inner_radius_mm=60.0, dpi_y=clock,
+                              pivot_offset_mm=pp.offsets_mm[q], backend="numpy", shares=shares[q], pass_index=q).layer(1)
+        assert all(np.array_equal(a.levels, b.levels) for a, b in zip(ref_np.swathes, job.layer(1).swathes))
         # a worker rebuilds the same pass from the JSON options
         again = slice_rotary(mesh, dev, **json.loads(json.dumps(job.rotary_options)))
         assert np.array_equal(again.layer(0).swathes[0].levels, job.layer(0).swathes[0].levels)
