@@ -45,7 +45,9 @@ from rotoprint.testing import torus_mesh
 #: then on branch level7 the levelled figures only (the coarse grid's cell within L / 3.5, f = 2
 #: instead of the deposit grid, and the round trip's exact response for an even f: in the coil
 #: demo the levelled thinnest moves by <= 3.6e-4, the mean by <= 7.2e-6, the bins by <= 8.6e-5,
-#: relative; the as-landed figures, images and sidecars are unchanged); the first values were
+#: relative; the as-landed figures, images and sidecars are unchanged); then the builds on
+#: branch slice8 (the build's interlaced passes print the union-equalised shares at 2 x the
+#: plan's clock: every pass image, the cycles, the films, plan.json); the first values were
 #: from main d2285d8. GOLDEN is what the
 #: numba / Pillow path writes (ROTOPRINT_NATIVE=0 or no C compiler), GOLDEN_NATIVE what the C
 #: extension writes (its zlib encodes other, equally valid, PNG bytes).
@@ -53,16 +55,16 @@ GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
     "sl1": ("b311c72eeac6b5ed945ace7361c8769099a0cb81de94450dbccbe527e60ba2a6", 1),
     "rotary-slices": ("0c5d921fee18ebb8ca445ce77fcda3ee991fa6d4ea0e6bc896818305206c442c", 26),
-    "build-coil-no-check": ("45813276ca90293d2d2f0247cb61bd1b0b8b3d0f4cb66df694392593126001d5", 737),
-    "build-gas": ("122a4b38b32d07a9594bca6073bdd4970f2da20e6f025be8468e18772e883b19", 407),
+    "build-coil-no-check": ("b439eb22a630c6710ac291bf61ade8bcf91f2debc6e924ff6c47c22247bd53a7", 737),
+    "build-gas": ("74529cfcef6eff934597fe16a1ba6eb1f05870cdfc6d3396c4a3539426cb60e3", 407),
 }
 
 GOLDEN_NATIVE = {
     "layer-folder": ("a7387385431f11fad6a75c3f1655d0c5721d3b034f209090b5cf3ed906dc52ca", 10),
     "sl1": ("8ab11667833cbd09409bbe35e638ce26203024f3a353cea8f535959258d13370", 1),
     "rotary-slices": ("334c6cf8e3fe3f562642fc295b6b1b5b4dc5a88776df3ab32daf1b205e24b80b", 26),
-    "build-coil-no-check": ("53155752c24305e1312cdd74d2e36e981179479da68e02a9ac01ab5ed00e819c", 737),
-    "build-gas": ("650a70a82aef8bea44cbc5eadb117c7d29f3e6490dd5e92e7fefdd3176cb3395", 407),
+    "build-coil-no-check": ("012410b77fe079a239bf7a1bcf72a4a813a615d91c2bc8201d989d5d3f930ab6", 737),
+    "build-gas": ("01e3ce42bfeb3f2cca2e94dc2ae3988d0ce0d253b7b31cf0a03e7d11a8d3f188", 407),
 }
 
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")

@@ -18,8 +18,8 @@ from rotoprint.rotary.interlace import plan_passes
 from rotoprint.rotary.deposit import DepositOptions
 
 
-def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None, cap=None, set_time_s=None):
-    printer = {"device": "omnidot760", "tilt_deg": 20.0, "passes": passes,
+def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None, cap=None, set_time_s=None, equalise=True):
+    printer = {"device": "omnidot760", "tilt_deg": 20.0, "passes": passes, "equalise": equalise,
                "heads": [{"name": "H1", "ink": "ammonium_sulphate"},
                          {"name": "H2", "ink": "calcium_chloride", "mount_angle_deg": 90.0}]}
     if dead is not None or set_time_s is not None:  # the preset edited, as a device file beside the job
@@ -43,19 +43,28 @@ def _job(tmp_path=None, *, passes="auto", dead=None, cycles=None, cap=None, set_
     return parse_job(d, base_dir=tmp_path or ".", source="small.toml")
 
 
-def test_each_pass_is_the_direct_slicers_print_at_its_offset_and_the_plans_clock():
-    plan = plan_job(_job())
+@pytest.mark.parametrize("equalise", [True, False])
+def test_each_pass_is_the_direct_slicers_print_at_its_offset_and_the_plans_clock(equalise):
+    from rotoprint.rotary.direct import union_pass_shares
+    from rotoprint.rotary.equalise import EQUALISE_CLOCK_FACTOR
+
+    plan = plan_job(_job(equalise=equalise))
     h = plan.heads[0]
     pp = plan_passes(plan.device.head, h.lattice.plan, footprint_um=DepositOptions().full_footprint_um(plan.device.head))
     assert h.passes == pp.passes > 1 and h.pass_offsets_mm == pp.offsets_mm
-    assert h.interlace["clock"] == "pass plan" and h.lattice.dpi_y == pytest.approx(pp.dpi_y)
+    # equalised: the union's shares at EQUALISE_CLOCK_FACTOR x the plan's clock; plain: the plan's clock, every drop
+    factor = EQUALISE_CLOCK_FACTOR if equalise else 1
+    assert h.interlace["clock"] == "pass plan" and h.lattice.dpi_y == pytest.approx(factor * pp.dpi_y)
+    assert h.interlace["equalise"] == ("union shares" if equalise else False)
+    shares = union_pass_shares(plan.device.head, h.lattice.plan, pp.offsets_mm, dpi_y=pp.dpi_y)[0] if equalise else None
     sched = plan.layer(0)
     prs = sched.pass_images[("plaster", h.ink)]
     assert len(prs) == h.passes and prs[0] is sched.images[("plaster", h.ink)]
     mesh = plan.meshes["b"]
     for q, pr in enumerate(prs):
-        want = slice_rotary(mesh, plan.device, layer_height_mm=0.05, tilt_deg=20.0, inner_radius_mm=60.0, dpi_y=pp.dpi_y,
-                            equalise=True, pivot_offset_mm=pp.offsets_mm[q]).layer(0)
+        want = slice_rotary(mesh, plan.device, layer_height_mm=0.05, tilt_deg=20.0, inner_radius_mm=60.0, dpi_y=factor * pp.dpi_y,
+                            equalise=False, pivot_offset_mm=pp.offsets_mm[q], shares=None if shares is None else shares[q],
+                            pass_index=q).layer(0)
         assert len(pr.swathes) == len(want.swathes)
         for a, b in zip(pr.swathes, want.swathes):
             assert a.pivot_radius_mm == pytest.approx(b.pivot_radius_mm) and np.array_equal(a.levels, b.levels)
@@ -189,3 +198,27 @@ def test_build_in_passes_headline_coverage_machine_and_sidecars(tmp_path):
     rev = [s for L in prog["layers"] for s in L["steps"] if s["kind"] == "revolution"]
     assert [s["interlace"] for s in rev if s["head"] == "H1" and s["repeat"] == 0] == [c % n for c in range(4)]
     assert len({s["radial_stage_mm"] for s in rev if s["head"] == "H1"}) == min(n, 4)
+
+
+def test_bad_equalise_is_refused_naming_the_field():
+    with pytest.raises(ConfigError, match=r"^small.toml: printer\.equalise: ") as ei:
+        _job(equalise="maybe")
+    assert "\n" not in str(ei.value)
+
+
+def test_equalised_build_passes_even_the_union_and_plan_the_true_volume(tmp_path):
+    """The union's shares: fewer drops per pass than every drop at the finer clock, the shares
+    recorded in plan.json, the cycles from the measured (thinned) drops, the film within floors."""
+    run_build(_job(tmp_path, cycles=4), tmp_path / "eq", check=False)
+    run_build(_job(tmp_path, cycles=4, equalise=False), tmp_path / "plain", check=False)
+    eq, plain = (json.loads((tmp_path / d / "plan.json").read_text()) for d in ("eq", "plain"))
+    us = eq["heads"][0]["interlace"]["union_shares"]
+    assert 0.5 <= us["mean_share"] < 1.0 and us["clock_factor"] == 2 and eq["heads"][0]["interlace"]["dpi_y"] == us["dpi_y"]
+    assert "union_shares" not in plain["heads"][0]["interlace"]
+    for d in (eq, plain):
+        for o in d["overlays"]:
+            assert o["deposit"]["uncovered_fraction"] <= 0.01 and abs(o["deposit"]["volume_error_fraction"]) < 1e-9
+    # the union-equalised film is even across the radius (the plain film has 1/r of one clock per swathe)
+    (o_eq,), (o_pl,) = eq["overlays"][:1], plain["overlays"][:1]
+    assert o_eq["deposit"]["radial_spread"] <= 0.05
+    assert o_eq["deposit"]["levelled"]["thinnest_to_mean"] >= 0.4

@@ -57,7 +57,7 @@ def slice_command(
     direction: Annotated[int, typer.Option("--direction", help="--rotary: +1 platform turns counter-clockwise seen from above, -1 clockwise.", callback=direction_cb)] = 1,
     ref_radius: Annotated[float | None, typer.Option("--ref-radius", help="--rotary: reference radius of the clock, mm (default: each swathe's outermost track).", callback=in_range(R.RADIUS_MM))] = None,
     max_swathes: Annotated[int | None, typer.Option("--max-swathes", help="--rotary: refuse parts that need more radial swathes.", callback=in_range(R.SWATHES))] = None,
-    equalise: Annotated[bool, typer.Option("--equalise", help="--rotary: thin inner tracks so drops per unit area are uniform.")] = False,
+    equalise: Annotated[bool | None, typer.Option("--equalise/--no-equalise", help="--rotary: thin dense tracks so drops per unit area are uniform; with --passes N > 1 (on by default) over the union of the passes, --no-equalise: every drop.")] = None,
     reference_images: Annotated[bool, typer.Option("--reference-images", help="--rotary: also write each layer's Cartesian cross-section (for 'rotoprint simulate').")] = False,
     force: ForceOpt = False,
     passes: Annotated[str, typer.Option("--passes", help="--rotary: interlaced passes N or 'auto' (at most 4); N > 1 writes DIR-p1/, DIR-p2/, ... and DIR-passes.json.")] = "1",
@@ -85,7 +85,7 @@ def slice_command(
     if rotary:
         _check_rotary_options(tilt=tilt, radius=radius, workers=workers, scheduler=scheduler, resume=resume,
                               fibre_angle=fibre_angle, offset=offset)
-    elif any(v is not None for v in (tilt, radius, ref_radius, max_swathes)) or equalise or reference_images or angle != 0.0 or direction != 1 or passes != "1":
+    elif any(v is not None for v in (tilt, radius, ref_radius, max_swathes)) or equalise is not None or reference_images or angle != 0.0 or direction != 1 or passes != "1":
         raise ConfigError("--tilt, --radius, --angle, --direction, --ref-radius, --max-swathes, --equalise, --reference-images and --passes need --rotary")
     dev = load_device(device, **overrides)
     m = load_mesh_from_options(mesh, units, scale, rotate, translate, fill_holes)
@@ -165,6 +165,7 @@ def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, rad
     if not isinstance(dev, InkjetDevice):
         raise ConfigError(f"device {dev.name!r} is a projector; --rotary needs an inkjet device")
     if passes != "1":
+        equalise = True if equalise is None else equalise  # union-equalised passes by default
         from ..constants import DEFAULT_GAP_RADIUS_MM
         from ..pipeline.passes import slice_rotary_passes
         from ..rotary.options import RotarySliceOptions
@@ -179,7 +180,12 @@ def _slice_rotary(m, mesh_path: Path, dev, out: Path, *, layer_height, tilt, rad
             console.print(f"{pp['passes']} interlaced pass(es), offsets {', '.join(f'{o * 1000:.1f}' for o in pp['offsets_mm'])} um, "
                           f"largest track gap {pp['largest_gap_mm'] * 1000:.1f} um (one pass {pp['single_pass_largest_gap_mm'] * 1000:.1f} um), "
                           f"clock {man['dpi_y']:.0f} dpi -> {', '.join(man['folders'])} ({out.name}-passes.json)")
+            us = man["union_shares"]
+            console.print(f"  equalised over the union of the passes: mean share {us['mean_share']:.3f}, {us['tracks_left_out']} of "
+                          f"{us['tracks']} tracks left out, clock {us['clock_factor']} x the plan's" if us is not None else
+                          "  plain passes: every track keeps every drop (--equalise: the union's shares)")
         return
+    equalise = bool(equalise)
     job = slice_rotary(m, dev, layer_height_mm=layer_height, tilt_deg=tilt, inner_radius_mm=radius, angle_deg=angle,
                        direction=direction, ref_radius_mm=ref_radius, max_swathes=max_swathes, equalise=equalise,
                        fill=fill, gap_radius_mm=gap_radius)

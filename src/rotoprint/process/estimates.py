@@ -209,7 +209,7 @@ def cycles_for_height(height_um: float, per_cycle_um: float) -> int:
     return max(1, math.ceil(height_um / per_cycle_um - 1e-9))
 
 
-def track_density_per_mm2(tracks, *, equalised: bool) -> tuple[np.ndarray, np.ndarray]:
+def track_density_per_mm2(tracks, *, equalised: bool, shares=None) -> tuple[np.ndarray, np.ndarray]:
     """Drops per mm^2 along the tracks of a direct-slicer job, sorted by radius.
 
     Parameters
@@ -217,6 +217,9 @@ def track_density_per_mm2(tracks, *, equalised: bool) -> tuple[np.ndarray, np.nd
     tracks : sequence of rotoprint.rotary.direct.TrackSet
     equalised : bool
         With density equalisation every track keeps ``a_k / max a`` of its drops.
+    shares : sequence (swathe) of (N,) float64, optional
+        The union's shares of an interlaced pass (by nozzle): every track keeps its share
+        (replaces ``equalised``).
 
     Returns
     -------
@@ -229,7 +232,9 @@ def track_density_per_mm2(tracks, *, equalised: bool) -> tuple[np.ndarray, np.nd
     if not r.size:
         return r, a
     dens = 1.0 / a
-    if equalised:
+    if shares is not None:
+        dens = np.concatenate([np.asarray(f, np.float64)[t.nozzle] for f, t in zip(shares, tracks)]) / a
+    elif equalised:
         dens = np.full_like(dens, 1.0 / float(a.max()))
     o = np.argsort(r, kind="stable")
     return r[o], dens[o]

@@ -9,7 +9,7 @@
     [printer]
     device = "omnidot760"      # preset or device .toml (relative: from the job file's folder)
     tilt_deg = 20.0
-    equalise = true            # thin inner tracks: the same drops per mm2 at every radius
+    equalise = true            # the same volume per area at every radius (with passes: over their union)
     passes = "auto"            # interlaced passes per layer (1..64 or "auto", the default)
     [printer.clock]
     dpi_y = 360.0              # drops per inch along the track at the reference radius
@@ -122,7 +122,11 @@ class PrinterSpec(_Strict):
     (:func:`rotoprint.rotary.interlace.plan_passes`); ``"auto"`` (the default) lets the planner
     choose up to :data:`~rotoprint.rotary.interlace.MAX_PASSES` so that the drops' footprints
     close the film, and then the clock follows from the plan unless ``clock.dpi_y`` is set;
-    ``1`` prints every cycle at the planned pivots with the job's clock (no interlace)."""
+    ``1`` prints every cycle at the planned pivots with the job's clock (no interlace).
+    ``equalise`` (default true): with more than one pass every track keeps its share of the
+    union-equalised film (:func:`rotoprint.rotary.direct.union_pass_shares`, the clock made
+    2 x the plan's); with one pass the tracks are thinned to the lowest drops per mm^2; false:
+    every drop."""
 
     device: str = "omnidot760"
     tilt_deg: Annotated[float, R.field(R.TILT_DEG)] = 0.0

@@ -20,9 +20,12 @@ How a plan is made:
    (:func:`~rotoprint.rotary.interlace.plan_passes`) chooses radial pivot offsets whose union of
    live tracks leaves no gap the drops' footprints cannot close (dead nozzles' tracks covered by
    live ones), and the clock along the track (unless ``printer.clock.dpi_y`` is set); with
-   ``printer.equalise`` the tracks are then thinned as always (a kept share ``f`` of a track's
-   drops, at most ``ceil(1 / f)`` firings apart), which widens the planned lattice locally: the
-   build's deposit figures (``coverage`` in ``plan.json``) measure the film that results. Every pass has its own
+   ``printer.equalise`` (the default) every track keeps the share of its drops that evens the
+   film of the **union** of the passes (:func:`~rotoprint.rotary.direct.union_pass_shares`: the
+   transform path's ``track_fractions`` over the pass plan, the clock made
+   ``EQUALISE_CLOCK_FACTOR`` times finer, dead tracks covered by the other passes), computed
+   once per tilt and realised on each pass's images by ``thin_print``; ``equalise = false``
+   prints every drop. The build's deposit figures (``coverage`` in ``plan.json``) measure the film that results. Every pass has its own
    lattice (the direct slicer with the pass's pivot offset), so its own exact images. Cycle
    ``c`` of a material is printed at pass ``c mod N`` of each ink's head.
 5. Cycles: per material, one *cycle* is every ink in order, each ``repeats`` times; the
@@ -678,9 +681,13 @@ def plan_job(job: ResolvedJob, *, backend: str = "jit") -> BuildPlan:
             else:
                 if tilt not in interlace_cache:
                     interlace_cache[tilt] = _interlace(union, device, lat, common, sp, warnings)
-                pp, clock, info = interlace_cache[tilt]
+                pp, clock, info, shares = interlace_cache[tilt]
                 offsets = pp.offsets_mm
-                lats = [slice_rotary(union, device, dpi_y=clock, pivot_offset_mm=o, **common) for o in offsets]
+                if shares is None:
+                    lats = [slice_rotary(union, device, dpi_y=clock, pivot_offset_mm=o, **common) for o in offsets]
+                else:  # the union's shares replace the per-pass equalisation
+                    lats = [slice_rotary(union, device, dpi_y=clock, pivot_offset_mm=o, **{**common, "equalise": False},
+                                         shares=shares[q], pass_index=q) for q, o in enumerate(offsets)]
         except RotoprintError as exc:
             fld = "printer.tilt_deg" if hs.tilt_deg is None else f"printer.heads[{j}].tilt_deg"
             if "tilt" not in exc.problem:
@@ -691,7 +698,7 @@ def plan_job(job: ResolvedJob, *, backend: str = "jit") -> BuildPlan:
         lat = lats[0]
         insides = tuple(DirectSliceJob(la.slice_job, la.head, la.part, la.design, la.plan, la.tracks,
                                        options=dataclasses.replace(la.options, equalise=False), dpi_y=la.dpi_y) for la in lats)
-        r, dens = track_density_per_mm2(lat.tracks, equalised=sp.printer.equalise)
+        r, dens = track_density_per_mm2(lat.tracks, equalised=sp.printer.equalise, shares=lat.shares)
         f = device.head.max_frequency_hz if clk.frequency_hz is None else clk.frequency_hz
         if f > device.head.max_frequency_hz:
             raise ConfigError(f"printer.clock.frequency_hz: {f:g} Hz is above the head's maximum "
@@ -741,5 +748,17 @@ def _interlace(union: Mesh, device, lat: DirectSliceJob, common: dict, sp, warni
     info = {"passes": pp.passes, "clock": src, "dpi_y": clock, "plan_dpi_y": pp.dpi_y,
             "footprint_um": d_um, "largest_gap_um": pp.largest_gap_mm * 1e3,
             "single_pass_largest_gap_um": pp.single_pass_largest_gap_mm * 1e3,
-            "dead_nozzles": list(pp.dead_nozzles), "dead_track_cover_um": [c * 1e3 for c in pp.dead_track_cover_mm]}
-    return pp, clock, info
+            "dead_nozzles": list(pp.dead_nozzles), "dead_track_cover_um": [c * 1e3 for c in pp.dead_track_cover_mm],
+            "equalise": "union shares" if sp.printer.equalise and pp.passes > 1 else
+            ("per track" if sp.printer.equalise else False)}
+    shares = None
+    if sp.printer.equalise and pp.passes > 1:
+        # the shares of the union of the passes (as transform --passes --equalise), once per plan,
+        # printed at EQUALISE_CLOCK_FACTOR x the clock; with dead nozzles their tracks covered
+        from ..rotary.direct import union_pass_shares
+
+        lat_c = slice_rotary(union, device, dpi_y=clock, **{**common, "equalise": False})
+        shares, clock, eq = union_pass_shares(head, lat_c.plan, pp.offsets_mm, dpi_y=clock, ref_radius_mm=clk.ref_radius_mm,
+                                              footprint_um=d_um)
+        info.update(dpi_y=clock, union_shares={k: v for k, v in eq.items() if k != "dead_cover"}, dead_cover=eq["dead_cover"])
+    return pp, clock, info, shares
