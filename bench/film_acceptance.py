@@ -4,11 +4,11 @@ spread factor 2 (49.6 um footprints), deposit model on the interior.
 
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX]
 
-Rows: one pass at the head's native clock (today's print); the planned interlaced passes at the
-planned clock (angular phases and swathe overlap, and beside them the same passes without
-either: radial offsets only); the same with 5 seeded dead nozzles; the planned passes equalised (also with the 5
-dead nozzles: their tracks are left out of the union the shares are equalised over, so the live tracks of
-the other passes beside them keep more drops). The issue's
+Rows: one pass at the head's native clock (the print without interlace); the planned interlaced
+passes as printed by default (equalised: ``PassOptions()``, the shares of ``track_fractions`` at 2 x the
+plan's clock, the dead-track cover on), with 5 seeded dead nozzles; beside them the plain print
+(``equalise=False``: every track keeps every drop at the plan's clock), with and without the dead nozzles;
+then angular phases and swathe overlap (equalised, and plain with and without the dead nozzles). The issue's
 baseline (60 um discs judged at design-pixel centres, `disc_uncovered_fraction`) is printed
 beside the one-pass row. A second table gives the cost floor: the time of one pass's firing
 images (the exact transform at the planned clock and the pass's pivot offset) over the same
@@ -18,16 +18,17 @@ slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs nati
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
                                                   [--dead-only]
 
-``--equalised-only``: only the equalised rows (equalised; with the 5 dead nozzles; with phases and
-overlap), then the cost table. ``--dead-only``: only the rows with the 5 dead nozzles (of those
-the other options keep).
+``--equalised-only``: only the equalised rows (the default; with the 5 dead nozzles; with phases and
+overlap), then the cost table. ``--default-only``: only the default print's two rows (without and
+with the dead nozzles). ``--dead-only``: only the rows with the 5 dead nozzles (of those the other
+options keep).
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
 before it sets, ``LevelOptions.from_head``: set time 1 s (the preset's nominal; the convolutions on the coarse grid, ``levelled.coarse_factor``), the preset's nominal 10 mPa s, 30 mN/m, h0 the
 10th percentile of the as-landed wet interior film) beside the as-landed figures; a third table
 is the sensitivity at the first tilt given after 0 (default 20), default plan: set time 0.1 / 1 /
 10 s with h0 at the 10th percentile, and at 1 s h0 at the 1st and 50th. ``--quick``: only the
-default and the 5-dead-nozzle plans (no one-pass, phases or equalised rows);
+default and the plain print, each with and without the 5 dead nozzles (no one-pass or phases rows);
 ``--no-sensitivity`` / ``--sensitivity-only``: without / only the third table.
 """
 
@@ -64,7 +65,7 @@ def film_row(label, tilt, passes, gap_um, dpi, f, secs, extra=""):
 def sensitivity_table(prs, d, head, tilt) -> None:
     """Levelled thinnest / mean of one film against the set time and the h0 rule."""
     print()
-    print(f"Sensitivity of the levelled film, tilt {tilt:g}, planned passes (10 mPa s, 30 mN/m):")
+    print(f"Sensitivity of the levelled film, tilt {tilt:g}, planned passes as printed by default (equalised; 10 mPa s, 30 mN/m):")
     print()
     print("| set time s | h0 rule | h0 um | levelling length um | levelled thinnest / mean | levelled 1 mm bins max dev % | "
           "below half the as-landed mean % | volume error | s |")
@@ -171,18 +172,20 @@ def main() -> None:
             print(film_row("one pass, native clock", tilt, 1, g1 * 1000, head0.dpi_y, f, time.perf_counter() - t,
                            f" issue's baseline (60 um discs at pixel centres): {100 * base:.1f} % |"), flush=True)
         dead_head = head0.model_copy(update={"dead_nozzles": dead})
-        for label, head, eq, inter in (("planned passes (radial offsets only, the default)", head0, False, False),
-                                       ("planned passes, angular phases + edge overlap", head0, False, True),
-                                       ("planned passes, 5 dead nozzles", dead_head, False, False),
-                                       ("planned passes, 5 dead nozzles, phases + overlap", dead_head, False, True),
-                                       ("planned passes, equalised", head0, True, False),
-                                       ("planned passes, 5 dead nozzles, equalised", dead_head, True, False),
-                                       ("planned passes, equalised, phases + overlap", head0, True, True)):
+        for label, head, eq, inter in (("planned passes (the default: equalised)", head0, True, False),
+                                       ("planned passes, 5 dead nozzles (the default: equalised)", dead_head, True, False),
+                                       ("planned passes, plain (--no-equalise)", head0, False, False),
+                                       ("planned passes, plain, 5 dead nozzles", dead_head, False, False),
+                                       ("planned passes, equalised, phases + overlap", head0, True, True),
+                                       ("planned passes, plain, angular phases + edge overlap", head0, False, True),
+                                       ("planned passes, plain, 5 dead nozzles, phases + overlap", dead_head, False, True)):
             if "--equalised-only" in sys.argv and not eq:
+                continue
+            if "--default-only" in sys.argv and (inter or not eq):
                 continue
             if "--dead-only" in sys.argv and head is head0:
                 continue
-            if quick and (inter or eq):
+            if quick and inter:
                 continue
             for passes in ("auto", "6"):
                 t = time.perf_counter()
@@ -196,7 +199,7 @@ def main() -> None:
                     continue
                 f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles,
                                   options=DepositOptions(level=level and replace(level, coats=len(prs)))).films[0]
-                if tilt == sens_tilt and head is head0 and not eq and not inter:
+                if tilt == sens_tilt and head is head0 and eq and not inter:
                     sens_prs = prs
                 pp = m["pass_plan"]
                 print(film_row(label, tilt, pp["passes"], pp["largest_gap_mm"] * 1000, m["dpi_y"], f, time.perf_counter() - t), flush=True)

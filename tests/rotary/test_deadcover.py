@@ -239,8 +239,8 @@ def test_pass_prints_cover_the_dead_tracks(setting, equalise):
     assert out[True][0] > out[False][0] + 0.02
     # a plain print without the reserve is as before
     if not equalise:
-        _, prs, man = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=0.0), passes=4))
-        _, prs0, _ = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=0.0), passes=4, dead_cover=False))
+        _, prs, man = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=0.0), passes=4, equalise=False))
+        _, prs0, _ = pass_prints(d, dh, pl, PassOptions(RotarySetup(tilt_deg=0.0), passes=4, equalise=False, dead_cover=False))
         assert "dead_cover" not in man
         assert all(np.array_equal(a.levels, b.levels) for p, p0 in zip(prs, prs0) for a, b in zip(p.swathes, p0.swathes))
     if equalise:
