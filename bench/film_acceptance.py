@@ -47,7 +47,8 @@ from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
 from rotoprint.rotary.deposit import DepositOptions, LevelOptions, deposit_print
 from rotoprint.rotary.files import read_print
-from rotoprint.rotary.interlace import PassOptions, pass_overlap_mm, phase_angles, plan_passes, read_passes
+from rotoprint.rotary.interlace import (COVER_SHARE, EQUALISE_CLOCK_FACTOR, PassOptions, ReachFloor, pass_overlap_mm, phase_angles,
+                                       plan_passes, read_passes, thin_print, track_fractions)
 from rotoprint.pipeline.prints import transform_passes
 from rotoprint.rotary.options import RotarySetup
 from rotoprint.rotary.testimage import test_design
@@ -105,9 +106,23 @@ def cost_table(d, pl, head, tilts) -> None:
     r_in, r_out = pl.radial_range_mm()
     print()
     print("| tilt deg | passes | planned clock dpi | transform (maps + images), native s | one pass, planned s | ratio | "
-          f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "equalised clock dpi | one pass equalised (transform + shares + thin_print) s | ratio | "
+          f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio | equalised clock s | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for tilt in tilts:
+        # the default print: equalised, no phases or overlap; one pass's images at EQUALISE_CLOCK_FACTOR x the plan's
+        # clock, plus the shares of every pass (computed once per layer, all counted here) and the pass's thinning
+        sp_e = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
+        pp_e = plan_passes(head, sp_e, footprint_um=49.6)
+        dpi_e = pp_e.dpi_y * EQUALISE_CLOCK_FACTOR
+
+        def equalised_pass():
+            fr = track_fractions(head, sp_e, pp_e.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp_e.dpi_y), footprint_um=49.6,
+                                 reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
+            pr = transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1])
+            thin_print(pr, fr[-1], pass_index=len(fr) - 1)
+
+        te = _best(equalised_pass)
         ov = pass_overlap_mm(head)
         sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out, overlap_mm=ov)
         pp = plan_passes(head, sp, footprint_um=49.6, phases=True)
@@ -116,13 +131,14 @@ def cost_table(d, pl, head, tilts) -> None:
         t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt))
         t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off,
                                            mount_angle_deg=ang, swathe_overlap_mm=ov))
-        row = f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.2f} | {t1:.2f} | {t1 / t0:.2f} |"
+        row = f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.2f} | {t1:.2f} | {t1 / t0:.2f} | {dpi_e:.0f} | {te:.2f} | {te / t0:.2f} |"
         if mesh is not None:
             h = float(mesh.bounds[1][2] - mesh.bounds[0][2])
             kw = dict(layer_height_mm=h / 3, tilt_deg=tilt, inner_radius_mm=60.0)
             s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1))
             s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1))
-            row += f" {s0:.2f} | {s1:.2f} | {s1 / s0:.2f} |"
+            s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1]).layer(1))
+            row += f" {s0:.2f} | {s1:.2f} | {s1 / s0:.2f} | {s2:.2f} | {s2 / s0:.2f} |"
         print(row, flush=True)
 
 
