@@ -16,12 +16,12 @@ transform at the native clock (today's print of a layer), best of 3, and the sam
 slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
 
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
-                                                  [--dead-only]
+                                                  [--default-only] [--dead-only | --live-only] [--no-sensitivity | --sensitivity-only]
 
 ``--equalised-only``: only the equalised rows (the default; with the 5 dead nozzles; with phases and
 overlap), then the cost table. ``--default-only``: only the default print's two rows (without and
-with the dead nozzles). ``--dead-only``: only the rows with the 5 dead nozzles (of those the other
-options keep).
+with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / without the 5 dead
+nozzles (of those the other options keep).
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
 before it sets, ``LevelOptions.from_head``: set time 1 s (the preset's nominal; the convolutions on the coarse grid, ``levelled.coarse_factor``), the preset's nominal 10 mPa s, 30 mN/m, h0 the
@@ -100,7 +100,9 @@ def cost_table(d, pl, head, tilts) -> None:
     from rotoprint.rotary.direct import slice_rotary
     from rotoprint.io.mesh import load_mesh
 
-    mesh_path = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes"
+    # /work/shared beside the checkout (the main checkout or a worktree one level deeper)
+    mesh_path = next((q / "shared" / "data" / "meshes" for q in Path(__file__).resolve().parents[1:4]
+                      if (q / "shared" / "data" / "meshes").is_dir()), Path("shared/data/meshes"))
     meshes = [m for m in (mesh_path / "sphere_openscad.stl",) if m.is_file()]
     mesh = load_mesh(meshes[0]) if meshes else None
     r_in, r_out = pl.radial_range_mm()
@@ -200,6 +202,8 @@ def main() -> None:
             if "--default-only" in sys.argv and (inter or not eq):
                 continue
             if "--dead-only" in sys.argv and head is head0:
+                continue
+            if "--live-only" in sys.argv and head is not head0:
                 continue
             if quick and inter:
                 continue
