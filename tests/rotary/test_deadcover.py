@@ -259,3 +259,34 @@ def test_pass_prints_cover_the_dead_tracks(setting, equalise):
         assert all(np.array_equal(a.levels, b.levels) for p, p0 in zip(prs, prs0) for a, b in zip(p.swathes, p0.swathes))
     if equalise:
         assert out[True][1] < out[False][1]
+
+
+def test_thin_print_keeps_the_share_of_every_run_and_matches_its_formula(setting):
+    """thin_print (its numba kernel) keeps firing i of track k exactly when floor((i + 1) f + o) >
+    floor(i f + o): checked against that float64 expression in numpy on a real print with random
+    shares, and over every run of firings of a track that prints throughout, the kept count is
+    the share times the run within one."""
+    from rotoprint.rotary.equalise import _GOLDEN
+
+    head = setting[0]
+    d = np.full((30, 40), 255, np.uint8)
+    pl = Placement(40, 30, PX, PX, inner_radius_mm=60.0)
+    pr = transform_exact(d, head, pl, tilt_deg=20.0, dpi_y=1440.0)
+    rng = np.random.default_rng(3)
+    fr = [rng.uniform(0.0, 1.0, head.nozzles) for _ in pr.swathes]
+    out = thin_print(pr, fr, pass_index=2)
+    for sw, sw2, f in zip(pr.swathes, out.swathes, fr):
+        i = (np.arange(sw.levels.shape[0], dtype=np.float64) + sw.first_firing)[:, None]
+        o = np.mod((np.arange(head.nozzles) + 7919 * 2) * _GOLDEN, 1.0)[None, :]
+        keep = np.floor((i + 1) * f[None, :] + o) > np.floor(i * f[None, :] + o)
+        assert np.array_equal(sw2.levels, np.where(keep, sw.levels, 0)) and sw2.levels.dtype == np.uint8
+        on = sw.levels > 0
+        full = [k for k in np.flatnonzero(on.sum(axis=0) > 40)
+                if on[np.flatnonzero(on[:, k])[0]:np.flatnonzero(on[:, k])[-1] + 1, k].all()]  # printing without a break
+        assert len(full) > 0
+        for k in full[:20]:
+            b = np.flatnonzero(on[:, k])
+            c = np.concatenate([[0], np.cumsum(sw2.levels[b[0]:b[-1] + 1, k] > 0)])
+            for run in (7, 31):
+                got = c[run:] - c[:-run]
+                assert np.all(np.abs(got - f[k] * run) <= 1.0 + 1e-9)
