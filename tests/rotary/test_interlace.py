@@ -204,9 +204,10 @@ def test_transform_passes_cli_and_simulate_union(run_cli, tmp_path):
     p = tmp_path / "d.png"
     write_png(p, make_design(1200)[300:360, 300:360])
     out = tmp_path / "pr.png"
-    code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
-                           "--passes", "auto", "--out", out)
+    code, said, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
+                              "--passes", "auto", "--out", out)
     assert code == 0, err
+    assert "equalised by thinning, printed at 1440 dpi" in " ".join((said + err).split())
     man = json.loads((tmp_path / "pr-passes.json").read_text())
     pp = man["pass_plan"]
     assert man["format"] == "rotoprint-rotary-passes" and pp["passes"] == len(man["files"]) == 4

@@ -87,7 +87,9 @@ def transform_command(
             console.print(
                 f"exact, {pp['passes']} interlaced pass(es), offsets {', '.join(f'{o * 1000:.1f}' for o in pp['offsets_mm'])} um: "
                 f"largest track gap {pp['largest_gap_mm'] * 1000:.1f} um (one pass: {pp['single_pass_largest_gap_mm'] * 1000:.1f} um), "
-                f"clock {pp['dpi_y']:.0f} dpi ({pp['along_track_mm'] * 1000:.1f} um along the track) for {pp['footprint_um']:.1f} um footprints"
+                f"clock {pp['dpi_y']:.0f} dpi ({pp['along_track_mm'] * 1000:.1f} um along the track) for {pp['footprint_um']:.1f} um footprints; "
+                + (f"equalised by {manifest['equalise']}, printed at {manifest['dpi_y']:.0f} dpi" if manifest["equalise"]
+                   else "plain (every track keeps every drop)")
             )
             for f in manifest["files"]:
                 console.print(f"  {f}")
