@@ -4,11 +4,11 @@ spread factor 2 (49.6 um footprints), deposit model on the interior.
 
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX]
 
-Rows: one pass at the head's native clock (today's print); the planned interlaced passes at the
-planned clock (angular phases and swathe overlap, and beside them the same passes without
-either: radial offsets only); the same with 5 seeded dead nozzles; the planned passes equalised (also with the 5
-dead nozzles: their tracks are left out of the union the shares are equalised over, so the live tracks of
-the other passes beside them keep more drops). The issue's
+Rows: one pass at the head's native clock (the print without interlace); the planned interlaced
+passes as printed by default (equalised: ``PassOptions()``, the shares of ``track_fractions`` at 2 x the
+plan's clock, the dead-track cover on), with 5 seeded dead nozzles; beside them the plain print
+(``equalise=False``: every track keeps every drop at the plan's clock), with and without the dead nozzles;
+then angular phases and swathe overlap (equalised, and plain with and without the dead nozzles). The issue's
 baseline (60 um discs judged at design-pixel centres, `disc_uncovered_fraction`) is printed
 beside the one-pass row. A second table gives the cost floor: the time of one pass's firing
 images (the exact transform at the planned clock and the pass's pivot offset) over the same
@@ -16,18 +16,19 @@ transform at the native clock (today's print of a layer), best of 3, and the sam
 slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
 
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
-                                                  [--dead-only]
+                                                  [--default-only] [--dead-only | --live-only] [--no-sensitivity | --sensitivity-only]
 
-``--equalised-only``: only the equalised rows (equalised; with the 5 dead nozzles; with phases and
-overlap), then the cost table. ``--dead-only``: only the rows with the 5 dead nozzles (of those
-the other options keep).
+``--equalised-only``: only the equalised rows (the default; with the 5 dead nozzles; with phases and
+overlap), then the cost table. ``--default-only``: only the default print's two rows (without and
+with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / without the 5 dead
+nozzles (of those the other options keep).
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
 before it sets, ``LevelOptions.from_head``: set time 1 s (the preset's nominal; the convolutions on the coarse grid, ``levelled.coarse_factor``), the preset's nominal 10 mPa s, 30 mN/m, h0 the
 10th percentile of the as-landed wet interior film) beside the as-landed figures; a third table
 is the sensitivity at the first tilt given after 0 (default 20), default plan: set time 0.1 / 1 /
 10 s with h0 at the 10th percentile, and at 1 s h0 at the 1st and 50th. ``--quick``: only the
-default and the 5-dead-nozzle plans (no one-pass, phases or equalised rows);
+default and the plain print, each with and without the 5 dead nozzles (no one-pass or phases rows);
 ``--no-sensitivity`` / ``--sensitivity-only``: without / only the third table.
 """
 
@@ -46,7 +47,8 @@ from rotoprint.errors import GeometryError
 from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
 from rotoprint.rotary.deposit import DepositOptions, LevelOptions, deposit_print
 from rotoprint.rotary.files import read_print
-from rotoprint.rotary.interlace import PassOptions, pass_overlap_mm, phase_angles, plan_passes, read_passes
+from rotoprint.rotary.interlace import (COVER_SHARE, EQUALISE_CLOCK_FACTOR, PassOptions, ReachFloor, pass_overlap_mm, phase_angles,
+                                       plan_passes, read_passes, thin_print, track_fractions)
 from rotoprint.pipeline.prints import transform_passes
 from rotoprint.rotary.options import RotarySetup
 from rotoprint.rotary.testimage import test_design
@@ -64,7 +66,7 @@ def film_row(label, tilt, passes, gap_um, dpi, f, secs, extra=""):
 def sensitivity_table(prs, d, head, tilt) -> None:
     """Levelled thinnest / mean of one film against the set time and the h0 rule."""
     print()
-    print(f"Sensitivity of the levelled film, tilt {tilt:g}, planned passes (10 mPa s, 30 mN/m):")
+    print(f"Sensitivity of the levelled film, tilt {tilt:g}, planned passes as printed by default (equalised; 10 mPa s, 30 mN/m):")
     print()
     print("| set time s | h0 rule | h0 um | levelling length um | levelled thinnest / mean | levelled 1 mm bins max dev % | "
           "below half the as-landed mean % | volume error | s |")
@@ -98,15 +100,31 @@ def cost_table(d, pl, head, tilts) -> None:
     from rotoprint.rotary.direct import slice_rotary
     from rotoprint.io.mesh import load_mesh
 
-    mesh_path = Path(__file__).resolve().parents[2] / "shared" / "data" / "meshes"
+    # /work/shared beside the checkout (the main checkout or a worktree one level deeper)
+    mesh_path = next((q / "shared" / "data" / "meshes" for q in Path(__file__).resolve().parents[1:4]
+                      if (q / "shared" / "data" / "meshes").is_dir()), Path("shared/data/meshes"))
     meshes = [m for m in (mesh_path / "sphere_openscad.stl",) if m.is_file()]
     mesh = load_mesh(meshes[0]) if meshes else None
     r_in, r_out = pl.radial_range_mm()
     print()
     print("| tilt deg | passes | planned clock dpi | transform (maps + images), native s | one pass, planned s | ratio | "
-          f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "equalised clock dpi | one pass equalised (transform + shares + thin_print) s | ratio | "
+          f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio | equalised clock s | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for tilt in tilts:
+        # the default print: equalised, no phases or overlap; one pass's images at EQUALISE_CLOCK_FACTOR x the plan's
+        # clock, plus the shares of every pass (computed once per layer, all counted here) and the pass's thinning
+        sp_e = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
+        pp_e = plan_passes(head, sp_e, footprint_um=49.6)
+        dpi_e = pp_e.dpi_y * EQUALISE_CLOCK_FACTOR
+
+        def equalised_pass():
+            fr = track_fractions(head, sp_e, pp_e.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp_e.dpi_y), footprint_um=49.6,
+                                 reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
+            pr = transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1])
+            thin_print(pr, fr[-1], pass_index=len(fr) - 1)
+
+        te = _best(equalised_pass)
         ov = pass_overlap_mm(head)
         sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out, overlap_mm=ov)
         pp = plan_passes(head, sp, footprint_um=49.6, phases=True)
@@ -115,13 +133,14 @@ def cost_table(d, pl, head, tilts) -> None:
         t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt))
         t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off,
                                            mount_angle_deg=ang, swathe_overlap_mm=ov))
-        row = f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.2f} | {t1:.2f} | {t1 / t0:.2f} |"
+        row = f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.2f} | {t1:.2f} | {t1 / t0:.2f} | {dpi_e:.0f} | {te:.2f} | {te / t0:.2f} |"
         if mesh is not None:
             h = float(mesh.bounds[1][2] - mesh.bounds[0][2])
             kw = dict(layer_height_mm=h / 3, tilt_deg=tilt, inner_radius_mm=60.0)
             s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1))
             s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1))
-            row += f" {s0:.2f} | {s1:.2f} | {s1 / s0:.2f} |"
+            s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1]).layer(1))
+            row += f" {s0:.2f} | {s1:.2f} | {s1 / s0:.2f} | {s2:.2f} | {s2 / s0:.2f} |"
         print(row, flush=True)
 
 
@@ -171,18 +190,22 @@ def main() -> None:
             print(film_row("one pass, native clock", tilt, 1, g1 * 1000, head0.dpi_y, f, time.perf_counter() - t,
                            f" issue's baseline (60 um discs at pixel centres): {100 * base:.1f} % |"), flush=True)
         dead_head = head0.model_copy(update={"dead_nozzles": dead})
-        for label, head, eq, inter in (("planned passes (radial offsets only, the default)", head0, False, False),
-                                       ("planned passes, angular phases + edge overlap", head0, False, True),
-                                       ("planned passes, 5 dead nozzles", dead_head, False, False),
-                                       ("planned passes, 5 dead nozzles, phases + overlap", dead_head, False, True),
-                                       ("planned passes, equalised", head0, True, False),
-                                       ("planned passes, 5 dead nozzles, equalised", dead_head, True, False),
-                                       ("planned passes, equalised, phases + overlap", head0, True, True)):
+        for label, head, eq, inter in (("planned passes (the default: equalised)", head0, True, False),
+                                       ("planned passes, 5 dead nozzles (the default: equalised)", dead_head, True, False),
+                                       ("planned passes, plain (--no-equalise)", head0, False, False),
+                                       ("planned passes, plain, 5 dead nozzles", dead_head, False, False),
+                                       ("planned passes, equalised, phases + overlap", head0, True, True),
+                                       ("planned passes, plain, angular phases + edge overlap", head0, False, True),
+                                       ("planned passes, plain, 5 dead nozzles, phases + overlap", dead_head, False, True)):
             if "--equalised-only" in sys.argv and not eq:
+                continue
+            if "--default-only" in sys.argv and (inter or not eq):
                 continue
             if "--dead-only" in sys.argv and head is head0:
                 continue
-            if quick and (inter or eq):
+            if "--live-only" in sys.argv and head is not head0:
+                continue
+            if quick and inter:
                 continue
             for passes in ("auto", "6"):
                 t = time.perf_counter()
@@ -196,7 +219,7 @@ def main() -> None:
                     continue
                 f = deposit_print(prs, d, dead_nozzles=head.dead_nozzles,
                                   options=DepositOptions(level=level and replace(level, coats=len(prs)))).films[0]
-                if tilt == sens_tilt and head is head0 and not eq and not inter:
+                if tilt == sens_tilt and head is head0 and eq and not inter:
                     sens_prs = prs
                 pp = m["pass_plan"]
                 print(film_row(label, tilt, pp["passes"], pp["largest_gap_mm"] * 1000, m["dpi_y"], f, time.perf_counter() - t), flush=True)

@@ -1,5 +1,5 @@
 """Where the levelled film is thinnest: its thinnest / mean against the distance from the design's
-edge (the test design, tilt 20, planned passes, the preset's levelling at 0.1 and 1 s).
+edge (the test design, tilt 20, planned passes, the plain print (equalise=False) as in docs/rotary.md, the preset's levelling at 0.1 and 1 s).
 
     PYTHONPATH=src python bench/film_level_edges.py [SIZE_PX]      # default 300
 """
@@ -20,7 +20,7 @@ head=load_device("omnidot760").head
 n=int(sys.argv[1]) if len(sys.argv) > 1 else 300; d=test_design(n); px=25.4/360
 pl=Placement(n,n,px,px,inner_radius_mm=60.0)
 with tempfile.TemporaryDirectory() as td:
-    transform_passes(d, head, pl, Path(td)/"p.png", PassOptions(RotarySetup(tilt_deg=20.0), passes="auto"))
+    transform_passes(d, head, pl, Path(td)/"p.png", PassOptions(RotarySetup(tilt_deg=20.0), passes="auto", equalise=False))
     prs=[read_print(q)[0] for q in read_passes(Path(td)/"p-passes.json")]
 for st in (0.1, 1.0):
     dep=deposit_print(prs, d, keep_map=True, options=DepositOptions(level=LevelOptions.from_head(head, set_time_s=st, coats=len(prs))))

@@ -45,6 +45,7 @@ WARMED: dict[str, tuple[str, ...]] = {
     "rotoprint.rotary._exact_kernels": ("_coords_nb", "_bilinear_nb", "_track_windows_nb", "_window_bounds_nb", "_windows_fill_nb", "_windows_fill_gather_nb", "_binary_levels_nb"),
     "rotoprint.rotary._halftone_kernels": ("diffuse_jit",),
     "rotoprint.rotary._levelling_kernels": ("restrict_wet_jit", "prolong_combine_jit", "film_stats_jit"),
+    "rotoprint.rotary._thin_kernels": ("thin_levels_jit",),
     "rotoprint.slicing._kernels": ("bucket_crossings", "union_labels"),
 }
 

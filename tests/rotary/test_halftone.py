@@ -54,7 +54,7 @@ def test_grey_head_film_is_flat_over_a_3_to_1_span(tmp_path):
     assert lv.min() >= 1 and lv.max() == 8 and 2 < lv.mean() < 7
     man = json.loads((tmp_path / "g-passes.json").read_text())
     plain = transform_passes(d, grey.model_copy(update={"grey_levels": 1}), pl, tmp_path / "b.png",
-                             PassOptions(RotarySetup(tilt_deg=0.0), passes=man["pass_plan"]["passes"], balance=False))
+                             PassOptions(RotarySetup(tilt_deg=0.0), passes=man["pass_plan"]["passes"], equalise=False))
     fb = deposit_print([read_print(q)[0] for q in read_passes(tmp_path / "b-passes.json")], d).films[0]
     assert fb.radial_spread > 0.3 and plain["equalise"] is None
 

@@ -204,12 +204,14 @@ def test_transform_passes_cli_and_simulate_union(run_cli, tmp_path):
     p = tmp_path / "d.png"
     write_png(p, make_design(1200)[300:360, 300:360])
     out = tmp_path / "pr.png"
-    code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
-                           "--passes", "auto", "--out", out)
+    code, said, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
+                              "--passes", "auto", "--out", out)
     assert code == 0, err
+    assert "equalised by thinning, printed at 1440 dpi" in " ".join((said + err).split())
     man = json.loads((tmp_path / "pr-passes.json").read_text())
     pp = man["pass_plan"]
     assert man["format"] == "rotoprint-rotary-passes" and pp["passes"] == len(man["files"]) == 4
+    assert man["equalise"] == "thinning" and man["dpi_y"] == 2 * pp["dpi_y"]  # equalised by default, at twice the plan's clock
     sides = [json.loads((tmp_path / f).read_text()) for f in man["files"]]
     for q, s in enumerate(sides):
         sw = s["swathes"][0]
@@ -223,12 +225,22 @@ def test_transform_passes_cli_and_simulate_union(run_cli, tmp_path):
     code, o1, err = run_cli("simulate", tmp_path / "pr-p1.png", "--out", tmp_path / "ov.png", "--json")
     assert code == 0, err
     assert json.loads(o1)["deposit"]["uncovered_fraction"] > 0.2  # one pass of the four at the fine clock
-    # equalised: the same plan, thinned tracks, a finer clock
+    # --equalise is the default; --no-equalise: the plain print, the same plan at the plan's clock, every drop kept
     code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
                            "--passes", "4", "--equalise", "--out", tmp_path / "eq.png", "-q")
     assert code == 0, err
-    assert json.loads((tmp_path / "eq-passes.json").read_text())["equalise"] == "thinning"
-    for bad, msg in ((("--passes", "0"), "passes"), (("--passes", "x"), "passes"), (("--equalise",), "needs --passes"),
+    eq = json.loads((tmp_path / "eq-passes.json").read_text())
+    assert eq["equalise"] == "thinning" and eq["pass_plan"] == pp and eq["dpi_y"] == man["dpi_y"]
+    code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
+                           "--passes", "4", "--no-equalise", "--out", tmp_path / "pl.png", "-q")
+    assert code == 0, err
+    plain = json.loads((tmp_path / "pl-passes.json").read_text())
+    assert plain["equalise"] is None and plain["pass_plan"]["offsets_mm"] == pp["offsets_mm"] and plain["dpi_y"] == pp["dpi_y"]
+    drops = [sum(s["drops"] for s in json.loads((tmp_path / f).read_text())["swathes"]) for f in plain["files"]]
+    n_eq = sum(sum(s["drops"] for s in sd["swathes"]) for sd in sides)
+    assert sum(drops) < n_eq < 2 * sum(drops)  # the equalised print: twice the firings, some of them thinned out
+    for bad, msg in ((("--passes", "0"), "passes"), (("--passes", "x"), "passes"), (("--equalise",), "--equalise needs --passes"),
+                     (("--no-equalise",), "--no-equalise needs --passes"),
                      (("--passes", "2", "--method", "paper"), "exact")):
         code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--out", tmp_path / "b.png", *bad)
         assert code == 2 and msg in err, err
@@ -338,7 +350,7 @@ def test_pass_options_and_density_shares(head, tmp_path):
     d = np.full((20, 20), 255, np.uint8)
     pl = Placement(20, 20, PX, PX, inner_radius_mm=60.0)
     m1 = transform_passes(d, "omnidot760", pl, tmp_path / "a.png", PassOptions(RotarySetup(tilt_deg=0.0), passes=2, even_lines=False))
-    m2 = transform_passes(d, head, pl, tmp_path / "b.png", PassOptions(RotarySetup(tilt_deg=0.0), passes=2, balance=True))
+    m2 = transform_passes(d, head, pl, tmp_path / "b.png", PassOptions(RotarySetup(tilt_deg=0.0), passes=2, equalise=False, balance=True))
     assert m1["device"] == "omnidot760" and m2["device"] == "" and m2["balance"] is True and m1["balance"] is False
     assert len(read_passes(tmp_path / "a-passes.json")) == 2 and m1["pass_plan"] == m2["pass_plan"]
 
@@ -434,7 +446,7 @@ def test_interlaced_passes_record_phases_and_even_a_small_film(head, tmp_path):
         out = tmp_path / f"i{int(inter)}" / "p.png"
         out.parent.mkdir()
         m = transform_passes(d, head, pl, out, PassOptions(RotarySetup(tilt_deg=20.0, mount_angle_deg=10.0), phases=inter, edge_overlap=inter,
-                                                           even_lines=False))
+                                                           even_lines=False, equalise=False))
         sides = read_passes(out.with_name("p-passes.json"))
         prs = [read_print(s)[0] for s in sides]
         pp = m["pass_plan"]
@@ -561,7 +573,7 @@ def test_even_lines_give_every_one_pixel_line_of_a_tilted_head_more_even_ink(hea
     pl = Placement(w, 14, PX, PX, inner_radius_mm=60.0)
     lines, blocks, mans = {}, {}, {}
     for even in (False, True):
-        _, prs, man = pass_prints(d, head, pl, PassOptions(RotarySetup(tilt_deg=20.0), passes=4, even_lines=even))
+        _, prs, man = pass_prints(d, head, pl, PassOptions(RotarySetup(tilt_deg=20.0), passes=4, even_lines=even, equalise=False))
         dep = deposit_print(prs, d, keep_map=True)
         f = dep.films[0]
         assert f.uncovered_fraction == 0.0 and abs(f.volume_error_fraction) < 1e-9
@@ -581,7 +593,32 @@ def test_even_lines_give_every_one_pixel_line_of_a_tilted_head_more_even_ink(hea
     # at tilt 0 the rows interleave evenly: the print is the one without the even lines
     small = np.full((6, 40), 255, np.uint8)
     pl0 = Placement(40, 6, PX, PX, inner_radius_mm=60.0)
-    outs = [pass_prints(small, head, pl0, PassOptions(RotarySetup(tilt_deg=0.0), passes=3, even_lines=ev)) for ev in (True, False)]
+    outs = [pass_prints(small, head, pl0, PassOptions(RotarySetup(tilt_deg=0.0), passes=3, even_lines=ev, equalise=False)) for ev in (True, False)]
     assert outs[0][2]["even_lines"] is None and outs[0][2]["pass_plan"] == outs[1][2]["pass_plan"]
     for a, b in zip(outs[0][1], outs[1][1]):
         assert all(np.array_equal(x.levels, y.levels) for x, y in zip(a.swathes, b.swathes))
+
+
+def test_default_passes_are_equalised_and_level_to_half_the_mean(head):
+    """The planner's default print is the equalised one: on a 49 mm band at tilt 70 its film,
+    levelled per coat, is closed, keeps the volume and has its thinnest point above half the mean
+    (measured 0.76); the plain print (``equalise=False``, every track keeps every drop) stays
+    reachable and its ``1/r`` film is much less even (measured 0.49)."""
+    from rotoprint.rotary.deposit import DepositOptions, LevelOptions
+    from rotoprint.rotary.interlace import PassOptions, pass_prints
+
+    d = np.full((12, 700), 255, np.uint8)
+    pl = Placement(700, 12, PX, PX, inner_radius_mm=60.0)
+    assert PassOptions(RotarySetup(tilt_deg=70.0)).equalise is True
+    films, mans = {}, {}
+    for eq in (True, False):
+        _, prs, man = pass_prints(d, head, pl, PassOptions(RotarySetup(tilt_deg=70.0), equalise=eq))
+        lev = LevelOptions.from_head(head, coats=len(prs))
+        films[eq] = deposit_print(prs, d, options=DepositOptions(level=lev)).films[0]
+        mans[eq] = man
+    assert mans[True]["equalise"] == "thinning" and mans[False]["equalise"] is None
+    assert mans[True]["dpi_y"] == 2 * mans[False]["dpi_y"] and mans[True]["pass_plan"] == mans[False]["pass_plan"]
+    for f in films.values():
+        assert f.uncovered_fraction == 0.0 and abs(f.levelled.volume_error_fraction) < 1e-9
+    assert films[True].levelled.thinnest_to_mean >= 0.5
+    assert films[True].levelled.thinnest_to_mean > films[False].levelled.thinnest_to_mean + 0.15

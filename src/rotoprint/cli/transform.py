@@ -32,7 +32,8 @@ def transform_command(
     invert: Annotated[bool, typer.Option("--invert", help="Dark pixels are ink (e.g. black shapes on white).")] = False,
     passes: Annotated[str, typer.Option("--passes", help="Interlaced passes: N, or 'auto' (the planner's choice, at most 4); "
                                         "N > 1 writes PRINT-p1.png ... and PRINT-passes.json.")] = "1",
-    equalise: Annotated[bool, typer.Option("--equalise", help="With --passes: thin dense tracks so every radius gets the same volume per area.")] = False,
+    equalise: Annotated[bool | None, typer.Option("--equalise/--no-equalise", help="With --passes: thin dense tracks so every radius gets the same volume per area "
+                                                  "(the default); --no-equalise: the plain print, every track keeps every drop.")] = None,
     json_out: JsonOpt = False,
     quiet: QuietOpt = False,
     force: ForceOpt = False,
@@ -77,7 +78,7 @@ def transform_command(
         from ..rotary.interlace import PassOptions
         from ..rotary.options import RotarySetup
 
-        popts = PassOptions(setup=RotarySetup(**kw), passes=passes, equalise=equalise)
+        popts = PassOptions(setup=RotarySetup(**kw), passes=passes, equalise=equalise is not False)
         manifest = transform_passes(design, dev, pl, out, popts, design_info=info, force=force, inputs=inputs)
         if json_out:
             print_json(manifest)
@@ -86,13 +87,15 @@ def transform_command(
             console.print(
                 f"exact, {pp['passes']} interlaced pass(es), offsets {', '.join(f'{o * 1000:.1f}' for o in pp['offsets_mm'])} um: "
                 f"largest track gap {pp['largest_gap_mm'] * 1000:.1f} um (one pass: {pp['single_pass_largest_gap_mm'] * 1000:.1f} um), "
-                f"clock {pp['dpi_y']:.0f} dpi ({pp['along_track_mm'] * 1000:.1f} um along the track) for {pp['footprint_um']:.1f} um footprints"
+                f"clock {pp['dpi_y']:.0f} dpi ({pp['along_track_mm'] * 1000:.1f} um along the track) for {pp['footprint_um']:.1f} um footprints; "
+                + (f"equalised by {manifest['equalise']}, printed at {manifest['dpi_y']:.0f} dpi" if manifest["equalise"]
+                   else "plain (every track keeps every drop)")
             )
             for f in manifest["files"]:
                 console.print(f"  {f}")
         return
-    if equalise:
-        raise ConfigError("--equalise needs --passes (N or auto)")
+    if equalise is not None:
+        raise ConfigError(f"--{'' if equalise else 'no-'}equalise needs --passes (N or auto)")
     if method == "exact":
         from ..rotary.exact import transform_exact
 

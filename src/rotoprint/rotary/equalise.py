@@ -436,13 +436,14 @@ def thin_print(pr, fractions: Sequence[np.ndarray], *, pass_index: int = 0):
     ``f`` of the firings over any run."""
     import dataclasses
 
+    from ._thin_kernels import thin_levels_jit
+
     out = []
     for sw, f in zip(pr.swathes, fractions):
-        n_f = sw.levels.shape[0]
-        i = (np.arange(n_f, dtype=np.float64) + sw.first_firing)[:, None]
         k = np.arange(sw.levels.shape[1])
-        o = np.mod((k + 7919 * pass_index) * _GOLDEN, 1.0)[None, :]
-        ff = np.asarray(f, np.float64)[None, :]
-        keep = np.floor((i + 1) * ff + o) > np.floor(i * ff + o)
-        out.append(dataclasses.replace(sw, levels=np.where(keep, sw.levels, 0).astype(np.uint8)))
+        o = np.mod((k + 7919 * pass_index) * _GOLDEN, 1.0)
+        lev = np.ascontiguousarray(sw.levels, dtype=np.uint8)
+        kept = np.empty_like(lev)
+        thin_levels_jit(lev, int(sw.first_firing), np.ascontiguousarray(f, dtype=np.float64), o, kept)  # numpy: floor((i+1) f + o) > floor(i f + o)
+        out.append(dataclasses.replace(sw, levels=kept))
     return dataclasses.replace(pr, swathes=tuple(out))

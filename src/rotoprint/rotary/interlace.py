@@ -50,10 +50,10 @@ neighbouring tracks range from almost 0 to almost two row pitches (``docs/rotary
   (:func:`~rotoprint.rotary.equalise.even_line_shares`), so that every line one design pixel wide gets
   about the same ink (the levelled film is thinnest in such lines).
 
-Phases and edge overlap are opt-in (:class:`PassOptions`). Measured on the test design
-(``docs/rotary.md``): the interior closes at every tilt; the thinnest point stays below half the mean
-at tilted settings (``1/r`` within a swathe, one angular clock per swathe, sets the local mean; the
-phases move the pinholes between the passes' drops, with no steady gain).
+Equalised by default (``equalise``; ``equalise=False``: the plain print, every track keeps every drop);
+phases and edge overlap are opt-in (:class:`PassOptions`). Measured on the test design (``docs/rotary.md``):
+the interior closes at every tilt; levelled per coat the equalised print's thinnest point is at least
+half the mean at every tilt, also with 5 dead nozzles (the plain print's at tilts 0 and 45 only).
 """
 
 from __future__ import annotations
@@ -727,7 +727,7 @@ class PassOptions:
     equalise : bool
         The same volume per area at every radius: by drop size on a grey-level head
         (:func:`~rotoprint.rotary.halftone.halftone_print`), else by keeping a share of each
-        track's drops (:func:`track_fractions`, :func:`thin_print`).
+        track's drops (:func:`track_fractions`, :func:`thin_print`). On by default; False: the plain print.
     balance : bool
         Without ``equalise``: every track keeps the share of its drops of
         :func:`density_shares` (the same drops per mm on every track, the clock unchanged).
@@ -750,8 +750,8 @@ class PassOptions:
         the same ink, and the swathes are planned with an overlap of :data:`EVEN_OVERLAP_PERIODS`
         row periods and a seam of :data:`EVEN_SEAM_PERIODS` (both swathes print the seam's
         tracks; the excess is left out). Only at a tilt whose rows do not interleave evenly
-        (:func:`tilt_scan`; at tilt 0 the print is as without). On by default: measured on the
-        test design (levelled per coat, ``docs/rotary.md``).
+        (:func:`tilt_scan`; at tilt 0 the print is as without). Off by default (and only with
+        ``equalise=False``): measured on the test design (levelled per coat, ``docs/rotary.md``).
     spread_dead : bool
         With dead nozzles (and more than one pass): the passes' offsets may span
         :data:`DEAD_SPREAD_PERIODS` row periods, with the swathes planned with that overlap
@@ -774,7 +774,7 @@ class PassOptions:
     setup: RotarySetup
     passes: str | int = "auto"
     footprint_um: float | None = None
-    equalise: bool = False
+    equalise: bool = True
     balance: bool = False
     phases: bool = False
     edge_overlap: bool = False
