@@ -9,6 +9,7 @@ STAMP := $(VENV)/.installed
 $(STAMP): pyproject.toml src/rotoprint/_native.c
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
+	@echo "installing rotoprint, its C extension and its dependencies into $(VENV) (pip -q: quiet until done, 0.5-2 min)"
 	$(BIN)/python -m pip install -q -e '.[test,bench]'
 	@# numba caches its kernels in __pycache__ beside the sources: compile them now, in two
 	@# processes, one line per kernel, instead of during the first demo / check / slice

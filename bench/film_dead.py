@@ -30,6 +30,8 @@ import time
 
 import numpy as np
 
+from _film_cells import thinnest_apart, union_gap_um
+
 from rotoprint import load_device
 from rotoprint.rotary import Placement, plan_swathes
 from rotoprint.rotary.deposit import DepositOptions, LevelOptions, deposit_print
@@ -200,16 +202,8 @@ def main() -> None:
             dips.sort()
             print("  dead tracks, levelled ring dip (ring / +-1 mm mean): "
                   + ", ".join(f"{v:.3f} @ {r:.2f} mm (n{k} p{q} s{j})" for v, r, k, q, j in dips[:8]))
-        order = np.argsort(lv)
-        shown: list[float] = []
-        for i in order:
-            if len(shown) >= worst:
-                break
-            if any(abs(rad[i] - s) < 0.1 for s in shown):
-                continue
-            shown.append(float(rad[i]))
-            g_i = np.searchsorted(union, rad[i])
-            gap = (union[g_i] - union[g_i - 1]) * 1000 if 0 < g_i < union.size else float("nan")
+        for i in thinnest_apart(lv, rad, worst, 0.1):
+            gap = union_gap_um(union, rad[i])
             ri = ring[i]
             near = sorted(dt, key=lambda x: abs(x[0] - rad[i]))[:3]
             print(f"    r {rad[i]:8.3f} mm ({cells['x'][i]:.2f}, {cells['y'][i]:.2f}), {1000 * edge_mm[i]:4.0f} um from the edge "

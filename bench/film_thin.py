@@ -28,6 +28,8 @@ import time
 
 import numpy as np
 
+from _film_cells import thinnest_apart, union_gap_um
+
 from rotoprint import load_device
 from rotoprint.rotary import Placement, plan_swathes
 from rotoprint.rotary.deposit import deposit_print
@@ -132,16 +134,8 @@ def main() -> None:
         print(f"  below half: beside a dead track {100 * cat_dead.sum() / n_thin:.0f} %, at a seam {100 * cat_seam.sum() / n_thin:.0f} %, "
               f"swathe's last 2 mm {100 * cat_end.sum() / n_thin:.0f} %, elsewhere {100 * cat_other.sum() / n_thin:.0f} % "
               f"(seams at {[round(s, 2) for s in seams]}, band ends {[round(e, 2) for e in ends]})")
-        order = np.argsort(t)
-        shown: list[float] = []
-        for i in order:
-            if len(shown) >= worst:
-                break
-            if any(abs(rad[i] - s) < 0.05 for s in shown):
-                continue
-            shown.append(float(rad[i]))
-            g_i = np.searchsorted(union, rad[i])
-            gap = (union[g_i] - union[g_i - 1]) * 1000 if 0 < g_i < union.size else float("nan")
+        for i in thinnest_apart(t, rad, worst, 0.05):
+            gap = union_gap_um(union, rad[i])
             print(f"    r {rad[i]:8.3f} mm: {t[i] / mean:.3f} of the mean, {loc[i]:.3f} of its ring (ring {rm[i] / mean:.3f}); "
                   f"union gap {gap:.1f} um; seam {1000 * float(nearest(np.array(seams), rad[i:i + 1])[0]):.0f} um; "
                   f"dead track {1000 * float(nearest(dead_r, rad[i:i + 1])[0]):.0f} um")

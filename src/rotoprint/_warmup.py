@@ -192,6 +192,12 @@ def run_commands(cmds: list[list[str]]) -> int:
     return 0
 
 
+#: Seconds without a compile line after which the warm-up says it is still at work (one kernel
+#: can compile for a minute on a loaded 2-core machine, and its line is printed when it starts).
+HEARTBEAT_S = 30.0
+_last_line = [time.perf_counter()]
+
+
 def _run_group(cmds: list[list[str]], env: dict, lock_dir: str) -> tuple[subprocess.Popen, threading.Thread]:
     """Run ``cmds`` in one process; pass on only its compile lines (and, on failure, the rest)."""
     code = (f"import sys; from rotoprint._warmup import share_compiles, run_commands; share_compiles({lock_dir!r}); "
@@ -204,6 +210,7 @@ def _run_group(cmds: list[list[str]], env: dict, lock_dir: str) -> tuple[subproc
         for line in proc.stderr:
             if line.startswith(("compiling jit kernel", "compiled ")):
                 print("  " + line.rstrip(), flush=True)
+                _last_line[0] = time.perf_counter()
             else:
                 other.append(line)
 
@@ -221,6 +228,12 @@ def main() -> int:
         locks = Path(tmp) / "locks"
         locks.mkdir()
         runs = [_run_group(g, env, str(locks)) for g in _commands(Path(tmp))]
+        _last_line[0] = time.perf_counter()
+        while any(p.poll() is None for p, _ in runs):
+            time.sleep(0.5)
+            if time.perf_counter() - _last_line[0] >= HEARTBEAT_S:
+                print(f"  ... still compiling and running the warm-up's commands ({time.perf_counter() - t0:.0f} s so far)", flush=True)
+                _last_line[0] = time.perf_counter()
         codes = [p.wait() for p, _ in runs]
         for _, t in runs:
             t.join()

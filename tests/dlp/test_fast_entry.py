@@ -199,24 +199,29 @@ def test_help_is_typers(run_cli):
 
 
 # ----------------------------------------------------------------------- no heavy imports
+def _assert_dlp_imports_none_of(part, out, args, modules):
+    """``rotoprint dlp PART -d prusa-sl1s --layer-height 0.5 -o OUT ARGS`` in a fresh interpreter
+    (the C extension on): it exits 0 and has imported no top-level package of ``modules``."""
+    code = (
+        "import sys\n"
+        "from rotoprint.cli.entry import main\n"
+        f"rc = main(['dlp', {str(part)!r}, '-d', 'prusa-sl1s', '--layer-height', '0.5', '-o', {str(out)!r}] + {list(args)!r})\n"
+        f"print(rc, sorted({{m.split('.')[0] for m in sys.modules}} & {set(modules)!r}))\n"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env={"PATH": "/usr/bin:/bin", "ROTOPRINT_NATIVE": "1"})
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split("\n")[0] == "0 []", p.stdout + p.stderr
+
+
 @pytest.mark.parametrize("quiet,mode", [(True, "coverage"), (False, "coverage"), (True, "binary"), (True, "smooth")])
 def test_fast_path_imports_no_typer_rich_pydantic_numba(tmp_path, part, quiet, mode):
     from rotoprint._accel import native
 
     if native is None:
         pytest.skip("rotoprint._native is not built: the masks' kernels are numba's")
-    code = (
-        "import sys\n"
-        "from rotoprint.cli.entry import main\n"
-        f"rc = main(['dlp', {str(part)!r}, '-d', 'prusa-sl1s', '--layer-height', '0.5', '-o', {str(tmp_path / 'j.sl1s')!r},"
-        f" '--mode', {mode!r}] + (['--quiet'] if {quiet} else []))\n"
-        "heavy = sorted({m.split('.')[0] for m in sys.modules} & {'typer', 'click', 'rich', 'pydantic', 'pydantic_core', 'numba'})\n"
-        "print(rc, heavy)\n"
-    )
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
-                       env={"PATH": "/usr/bin:/bin", "ROTOPRINT_NATIVE": "1"})
-    assert p.returncode == 0, p.stderr
-    assert p.stdout.split("\n")[0] == "0 []", p.stdout + p.stderr
+    args = ["--mode", mode] + (["--quiet"] if quiet else [])
+    _assert_dlp_imports_none_of(part, tmp_path / "j.sl1s", args, {"typer", "click", "rich", "pydantic", "pydantic_core", "numba"})
     assert (tmp_path / "j.sl1s").is_file()
 
 
@@ -230,17 +235,8 @@ def test_short_coverage_job_skips_openssl_tempfile_and_thread_pools(tmp_path, pa
 
     if native is None or _builtin_sha256 is None:
         pytest.skip("needs rotoprint._native and Python's built-in SHA-256")
-    code = (
-        "import sys\n"
-        "from rotoprint.cli.entry import main\n"
-        f"rc = main(['dlp', {str(part)!r}, '-d', 'prusa-sl1s', '--layer-height', '0.5', '-o', {str(tmp_path / 'j.sl1s')!r},"
-        " '--mode', 'coverage', '--quiet'])\n"
-        "print(rc, sorted({m.split('.')[0] for m in sys.modules} & {'_hashlib', 'hashlib', 'tempfile', 'random', 'concurrent'}))\n"
-    )
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
-                       env={"PATH": "/usr/bin:/bin", "ROTOPRINT_NATIVE": "1"})
-    assert p.returncode == 0, p.stderr
-    assert p.stdout.split("\n")[0] == "0 []", p.stdout + p.stderr
+    _assert_dlp_imports_none_of(part, tmp_path / "j.sl1s", ["--mode", "coverage", "--quiet"],
+                                {"_hashlib", "hashlib", "tempfile", "random", "concurrent"})
 
 
 def test_numpy_core_preloaded_off_the_main_thread():

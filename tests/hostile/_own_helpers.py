@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 
@@ -33,3 +36,13 @@ def one_line_error(code: int, err: str, *fragments: str) -> str:
 def strays(root: Path) -> list[str]:
     """Paths a run may leave behind by mistake: ``*.partial``, ``*.old``, ``*.part``, ``*.lock``."""
     return sorted(p for p in tree(root) if p.endswith((".partial", ".old", ".part", ".lock")))
+
+
+def killed_run(cwd: Path, stage: str, *args: str, **env: str) -> None:
+    """``rotoprint ARGS`` in a subprocess (in ``cwd``, ``env`` added) that SIGKILLs itself at the
+    kill point ``stage`` (:func:`rotoprint.io.atomic.kill_point`); asserts it was killed there."""
+    full_env = {**os.environ, "ROTOPRINT_TEST_KILL_AT": stage, **env}
+    code = "import sys; from rotoprint.cli.main import main; sys.exit(main(sys.argv[1:]))"
+    p = subprocess.run([sys.executable, "-c", code, *map(str, args)], cwd=cwd, env=full_env, capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == -signal.SIGKILL, (p.returncode, p.stderr)

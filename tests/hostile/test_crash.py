@@ -9,14 +9,11 @@ in-process. Parts are tiny (a 2 mm box in 4 layers) so each case takes a few sec
 from __future__ import annotations
 
 import os
-import signal
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-from _own_helpers import strays, tree
+from _own_helpers import killed_run, strays, tree
 from rotoprint.examples import write_binary_stl
 from rotoprint.io.ownership import folder_not_ours
 from rotoprint.testing import box_triangles
@@ -27,11 +24,7 @@ EPOCH = "1700000000"
 
 
 def _killed_run(cwd: Path, stage: str, *args: str) -> None:
-    env = {**os.environ, "ROTOPRINT_TEST_KILL_AT": stage, "SOURCE_DATE_EPOCH": EPOCH}
-    code = "import sys; from rotoprint.cli.main import main; sys.exit(main(sys.argv[1:]))"
-    p = subprocess.run([sys.executable, "-c", code, *map(str, args)], cwd=cwd, env=env, capture_output=True, text=True,
-                       timeout=120)
-    assert p.returncode == -signal.SIGKILL, (p.returncode, p.stderr)
+    killed_run(cwd, stage, *args, SOURCE_DATE_EPOCH=EPOCH)
 
 
 @pytest.fixture(scope="module")

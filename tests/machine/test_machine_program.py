@@ -456,20 +456,30 @@ def test_a_bad_image_record_is_one_line_naming_the_image_and_the_field(program_t
     the image and the field, exit 2, no output. These were tracebacks (a direction or angle that
     is not a number, a missing radius, a band of one value, a bad swathe or pass index) or were
     taken silently (a zero dpi, a negative nozzle count, row offsets that are not the swathe's)."""
+    def edit(prog):
+        prog["layers"][0]["images"][0][key] = value
+
+    err = _replay_of_edited_program_refused(program_text, run_cli, tmp_path, edit, said)
+    if key not in ("placement", "head"):
+        rec = json.loads(program_text[1])["layers"][0]["images"][0]
+        assert f"layer 0 image {rec['file']}: field {key}" in err
+
+
+def _replay_of_edited_program_refused(program_text, run_cli, tmp_path, edit, said) -> str:
+    """``replay`` of a copy of the program with ``edit(prog)`` applied to its JSON: exit 2, one
+    short line containing ``said`` and naming program.json, no output written. Returns stderr."""
     src, text = program_text
     folder = tmp_path / "m"
     shutil.copytree(src, folder)
     prog = json.loads(text)
-    rec = prog["layers"][0]["images"][0]
-    rec[key] = value
+    edit(prog)
     (folder / "program.json").write_text(json.dumps(prog))
     code, out, err = run_cli("replay", folder / "program.json", "--out", tmp_path / "o.png")
     assert code == 2, (code, err[-500:])
     assert said in err, err
     assert err.strip().count("\n") == 0 and "Traceback" not in err and len(err) < 400
     assert "program.json" in err and not (tmp_path / "o.png").exists()
-    if key not in ("placement", "head"):
-        assert f"layer 0 image {rec['file']}: field {key}" in err
+    return err
 
 
 def _set_placement(key, value):
@@ -499,14 +509,4 @@ def test_a_bad_placement_or_design_grid_is_one_line_naming_the_program_and_field
     """Were: a placement of no pixels or a NaN pitch refused without naming the program, one of
     another size refused only by the simulation ("the print was made for ..."), a design grid
     of -3 rows or a zero pitch taken silently."""
-    src, text = program_text
-    folder = tmp_path / "m"
-    shutil.copytree(src, folder)
-    prog = json.loads(text)
-    edit(prog)
-    (folder / "program.json").write_text(json.dumps(prog))
-    code, out, err = run_cli("replay", folder / "program.json", "--out", tmp_path / "o.png")
-    assert code == 2, (code, err[-500:])
-    assert said in err, err
-    assert err.strip().count("\n") == 0 and "Traceback" not in err and len(err) < 400
-    assert "program.json" in err and not (tmp_path / "o.png").exists()
+    _replay_of_edited_program_refused(program_text, run_cli, tmp_path, edit, said)

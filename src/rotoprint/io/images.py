@@ -37,6 +37,8 @@ def open_image(data: bytes, path: str | Path, what: str = "image") -> Iterator[I
     from PIL import Image  # Pillow is imported by the readers, not by a job's start-up
 
     limit = Image.MAX_IMAGE_PIXELS
+    if not data:
+        raise ImageError(f"{what} file is empty", path=path)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", Image.DecompressionBombWarning)
@@ -46,6 +48,9 @@ def open_image(data: bytes, path: str | Path, what: str = "image") -> Iterator[I
         size = m.group(1) if m else "too many"
         raise ImageError(f"{what} has {size} pixels, more than the {limit} pixel limit against decompression bombs "
                          f"(PIL.Image.MAX_IMAGE_PIXELS)", path=path) from None
+    except Image.UnidentifiedImageError:  # its text names the BytesIO object, not the file
+        raise ImageError(f"not a readable {what}: not in an image format Pillow reads (PNG, TIFF, BMP, ...), "
+                         "or truncated", path=path) from None
     except (OSError, SyntaxError, ValueError) as exc:
         raise ImageError(f"not a readable {what}: {exc}", path=path) from None
     with im:

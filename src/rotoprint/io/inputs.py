@@ -211,11 +211,15 @@ def parse_json(text: str | bytes, path: str | Path, *, what: str,
                error: Callable[..., Exception] = InputFileError) -> object:
     """``json.loads`` with its failures (syntax, nesting too deep for the parser) as one
     ``error(message, path=...)``."""
+    if not text.strip():
+        raise error(f"{what} is empty", path=Path(path))
     try:
         return json.loads(text)
     except RecursionError:
         raise error(f"{what} is nested too deeply to be read", path=Path(path)) from None
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError as exc:  # bytes given: the codec's text names no file
+        raise error(f"{what} is not UTF-8 text (byte {exc.start})", path=Path(path)) from None
+    except json.JSONDecodeError as exc:
         raise error(f"{what} is not valid JSON: {exc}", path=Path(path)) from None
 
 

@@ -128,24 +128,12 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     lo_f = EQUALISE_FLOOR if floor is None else float(floor)
     if not 0 < lo_f <= 1:
         raise ConfigError(f"floor must be in (0, 1], got {floor!r}")
-    from .exact import swathe_clock
 
     live = np.ones(head.nozzles, bool)
     dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
     live[list(dead)] = False
     a_mm = 0.5e-3 * (DepositOptions().full_footprint_um(head) if footprint_um is None else float(footprint_um))
-    psi = math.radians(plan.mount_angle_deg)
-    e = np.array([math.cos(psi), math.sin(psi)])
-    rs, ws, where = [], [], []
-    for q, o in enumerate(offsets_mm):
-        for j, sw in enumerate(plan.swathes):
-            dphi, _ = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
-            xy = nozzle_layout(head, plan.mount(j)).xy_mm + float(o) * e
-            r = np.hypot(xy[:, 0], xy[:, 1])
-            k = np.flatnonzero(pass_enabled(plan, j, r) & live)
-            rs.append(r[k])
-            ws.append(1.0 / (r[k] * dphi))
-            where.append((q, j, k))
+    rs, ws, where = _printing_tracks(plan, head, offsets_mm, live, dpi_y, ref_radius_mm)
     r = np.concatenate(rs)
     w = np.concatenate(ws)
     order = np.argsort(r, kind="stable")
@@ -340,8 +328,6 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, pass_plan, setup: Rotar
     kept : (int, int)
         Tracks kept, and tracks of the union before.
     """
-    from .exact import swathe_clock
-
     if not (math.isfinite(line_mm) and line_mm > 0):
         raise ConfigError(f"line width must be > 0 mm, got {line_mm!r}")
     st = setup or RotarySetup(tilt_deg=plan.tilt_deg)
@@ -349,18 +335,7 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, pass_plan, setup: Rotar
     offsets_mm = pass_plan.offsets_mm
     live = np.ones(head.nozzles, bool)
     live[list(head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles))] = False
-    psi = math.radians(plan.mount_angle_deg)
-    e = np.array([math.cos(psi), math.sin(psi)])
-    rs, ns, where = [], [], []
-    for q, o in enumerate(offsets_mm):
-        for j in range(len(plan.swathes)):
-            dphi, _ = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=st.ref_radius_mm)
-            xy = nozzle_layout(head, plan.mount(j)).xy_mm + float(o) * e
-            r = np.hypot(xy[:, 0], xy[:, 1])
-            k = np.flatnonzero(pass_enabled(plan, j, r) & live)
-            rs.append(r[k])
-            ns.append(1.0 / (r[k] * dphi))
-            where.append((q, j, k))
+    rs, ns, where = _printing_tracks(plan, head, offsets_mm, live, dpi_y, st.ref_radius_mm)
     out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
     r_all = np.concatenate(rs)
     if r_all.size < 3:
@@ -378,6 +353,30 @@ def even_line_shares(head: InkjetHead, plan: SwathePlan, pass_plan, setup: Rotar
         out[q][j][k] = k_all[pos:pos + k.size]
         pos += k.size
     return out, (int(keep.sum()), int(keep.size))
+
+
+def _printing_tracks(plan: SwathePlan, head: InkjetHead, offsets_mm, live: np.ndarray, dpi_y: float,
+                     ref_radius_mm) -> tuple[list, list, list]:
+    """The tracks the passes print: per pass ``q`` (offset ``offsets_mm[q]`` along the mount
+    direction) and swathe ``j``, the live nozzles ``k`` (int64 indices; ``live`` (N,) bool) that
+    ``pass_enabled`` lets print, their radii (mm) and drops per mm of track ``1 / (r dphi)`` at
+    the swathe's clock. Returns the lists ``(radii, drops_per_mm, [(q, j, k), ...])``, one item
+    per (pass, swathe)."""
+    from .exact import swathe_clock
+
+    psi = math.radians(plan.mount_angle_deg)
+    e = np.array([math.cos(psi), math.sin(psi)])
+    rs, ns, where = [], [], []
+    for q, o in enumerate(offsets_mm):
+        for j in range(len(plan.swathes)):
+            dphi, _ = swathe_clock(plan, j, dpi_y=dpi_y, ref_radius_mm=ref_radius_mm)
+            xy = nozzle_layout(head, plan.mount(j)).xy_mm + float(o) * e
+            r = np.hypot(xy[:, 0], xy[:, 1])
+            k = np.flatnonzero(pass_enabled(plan, j, r) & live)
+            rs.append(r[k])
+            ns.append(1.0 / (r[k] * dphi))
+            where.append((q, j, k))
+    return rs, ns, where
 
 
 def _leave_out(r: np.ndarray, n: np.ndarray, lo: float, hi: float, line_mm: float, a_mm: float, cell2: float) -> np.ndarray:

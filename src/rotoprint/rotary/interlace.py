@@ -750,8 +750,8 @@ class PassOptions:
         the same ink, and the swathes are planned with an overlap of :data:`EVEN_OVERLAP_PERIODS`
         row periods and a seam of :data:`EVEN_SEAM_PERIODS` (both swathes print the seam's
         tracks; the excess is left out). Only at a tilt whose rows do not interleave evenly
-        (:func:`tilt_scan`; at tilt 0 the print is as without). Off by default (and only with
-        ``equalise=False``): measured on the test design (levelled per coat, ``docs/rotary.md``).
+        (:func:`tilt_scan`; at tilt 0 the print is as without). Off by default, only with ``equalise=False``:
+        it lifts tilt 20 but lowers tilt 45 (levelled per coat, ``docs/rotary.md``, "Even lines").
     spread_dead : bool
         With dead nozzles (and more than one pass): the passes' offsets may span
         :data:`DEAD_SPREAD_PERIODS` row periods, with the swathes planned with that overlap

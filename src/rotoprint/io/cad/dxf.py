@@ -85,6 +85,20 @@ def _explode(msp, depth=0):
             yield e
 
 
+def _dxf_problem(exc: Exception) -> str:
+    """ezdxf's reason in words of the file: without the class name it may start with
+    (``DXFStructureError: missing ENDSEC tag.``) and without the path it may repeat."""
+    text = " ".join(str(exc).split()).rstrip(".")
+    if type(exc) is OSError and text.endswith("is not a DXF file"):
+        return "no DXF header (empty, or another kind of file)"
+    for prefix in (type(exc).__name__ + ":", "DXFStructureError:", "DXFError:"):
+        if text.startswith(prefix):
+            text = text[len(prefix):].strip()
+    if isinstance(exc, UnicodeDecodeError):
+        return f"not text in its declared encoding (byte {exc.start})"
+    return text or "its structure is broken (truncated?)"
+
+
 def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None) -> PlanarLayer:
     """Read a DXF file's model space into its exact region.
 
@@ -113,7 +127,7 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
     try:
         doc = ezdxf.readfile(p)
     except (ezdxf.DXFError, OSError, UnicodeDecodeError, ValueError) as exc:
-        raise CadError(f"not a readable DXF file: {exc}", path=p) from None
+        raise CadError(f"not a readable DXF file: {_dxf_problem(exc)}", path=p) from None
     if units is not None:
         scale = length_unit_mm(units, path=p)
     else:
