@@ -45,6 +45,8 @@ def sha256(data=b"", *, expect_bytes: int | None = None):
     -------
     hash object
     """
+    if expect_bytes is None and not data and _builtin_sha256 is not None:
+        return _Stream()  # a stream of unknown length: decided by what it is fed
     n = (memoryview(data).nbytes if data else 0) if expect_bytes is None else int(expect_bytes)
     if _builtin_sha256 is not None and n <= BUILTIN_MAX_BYTES and _spent[0] + n <= BUILTIN_BUDGET_BYTES:
         _spent[0] += n
@@ -52,3 +54,44 @@ def sha256(data=b"", *, expect_bytes: int | None = None):
     import hashlib
 
     return hashlib.sha256(data)
+
+
+class _Stream:
+    """A hash object for a stream of unknown length: Python's own SHA-256 while the stream stays
+    within :data:`BUILTIN_MAX_BYTES` and the budget (the bytes fed are kept until then, at most
+    that many), else :mod:`hashlib`'s, fed what came so far, for the rest."""
+
+    __slots__ = ("_h", "_kept", "_openssl", "_counted")
+
+    def __init__(self) -> None:
+        self._h = _builtin_sha256()
+        self._kept = bytearray()
+        self._openssl = False
+        self._counted = False
+
+    def update(self, data) -> None:
+        if not self._openssl:
+            b = memoryview(data).cast("B")
+            if len(self._kept) + b.nbytes <= min(BUILTIN_MAX_BYTES, BUILTIN_BUDGET_BYTES - _spent[0]):
+                self._kept += b
+                self._h.update(b)
+                return
+            import hashlib
+
+            self._h = hashlib.sha256(self._kept)
+            self._kept = bytearray()
+            self._openssl = True
+        self._h.update(data)
+
+    def _settle(self) -> None:
+        if not self._openssl and not self._counted:
+            _spent[0] += len(self._kept)  # the builtin's bytes count against the budget once
+            self._counted = True
+
+    def digest(self) -> bytes:
+        self._settle()
+        return self._h.digest()
+
+    def hexdigest(self) -> str:
+        self._settle()
+        return self._h.hexdigest()
