@@ -82,7 +82,13 @@ def model_bins(head, pl: Placement, man: dict, tilt: float, d_um: float, nbins: 
     from rotoprint.rotary.interlace import COVER_SHARE
 
     st = RotarySetup(tilt_deg=tilt, dpi_y=man["dpi_y"] / (EQUALISE_CLOCK_FACTOR if eq else 1))
-    fr = track_fractions(head, sp, offs, st, footprint_um=d_um, reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR)) if eq else None
+    cover = bool(eq and head.dead_nozzles and len(offs) > 1)  # as pass_prints: shares with all live, dead drops moved
+    fr = track_fractions(head, sp, offs, st, footprint_um=d_um, reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR),
+                         dead_nozzles=() if cover else None, reserve_for=head.dead_nozzles if cover else None) if eq else None
+    if cover:
+        from rotoprint.rotary.deadcover import cover_dead_tracks
+
+        fr, _ = cover_dead_tracks(head, sp, offs, st, shares=fr, footprint_um=d_um)
     e = np.array([1.0, 0.0])
     rs, ws = [], []
     live = np.ones(head.nozzles, bool)

@@ -67,7 +67,7 @@ EQUALISE_ITERATIONS = 60
 
 def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
                     footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None, floor: float | None = None,
-                    reach: ReachFloor | None = None) -> list[list[np.ndarray]]:
+                    reach: ReachFloor | None = None, reserve_for: Sequence[int] | None = None) -> list[list[np.ndarray]]:
     """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
 
     Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
@@ -151,16 +151,43 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     order = np.argsort(r, kind="stable")
     r_s, w_s = r[order], w[order]
     reach_mm = None if reach is None else 1e-3 * float(reach.reach_um)
-    f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
-                          clock_factor=2 if reach is None else int(reach.clock_factor))
-    f_all = np.empty_like(f)
-    f_all[order] = f
-    out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
-    pos = 0
-    for q, j, k in where:
-        out[q][j][k] = f_all[pos:pos + k.size]
-        pos += k.size
+
+    def shares(scale: float) -> list[list[np.ndarray]]:
+        f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
+                              clock_factor=2 if reach is None else int(reach.clock_factor), target_scale=scale)
+        f_all = np.empty_like(f)
+        f_all[order] = f
+        out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
+        pos = 0
+        for q, j, k in where:
+            out[q][j][k] = f_all[pos:pos + k.size]
+            pos += k.size
+        return out
+
+    out = shares(1.0)
+    covered = tuple(int(k) for k in (reserve_for or ()) if live[int(k)])
+    if not covered:
+        return out
+    # room for the covered dead tracks' drops: the largest target scale (in DEAD_RESERVE_STEP
+    # steps, down to 1 - DEAD_RESERVE_MAX) with which the cover finds room for all but
+    # DEAD_RESERVE_LOSS of them (the sparse tracks that set the target keep every drop: no room)
+    from .deadcover import cover_dead_tracks
+
+    dead_head = head.model_copy(update={"dead_nozzles": covered})
+    for i in range(int(round(DEAD_RESERVE_MAX / DEAD_RESERVE_STEP)) + 1):
+        if i:
+            out = shares(1.0 - i * DEAD_RESERVE_STEP)
+        _, rep = cover_dead_tracks(dead_head, plan, offsets_mm, st, shares=out)
+        if rep["lost_fraction"] <= DEAD_RESERVE_LOSS:
+            break
     return out
+
+
+#: :func:`track_fractions` with ``reserve_for``: the share of the dead tracks' drops the cover may
+#: leave without room, the step of the target's scale and its largest cut.
+DEAD_RESERVE_LOSS = 0.02
+DEAD_RESERVE_STEP = 0.01
+DEAD_RESERVE_MAX = 0.08
 
 
 
@@ -177,7 +204,7 @@ _EQ_WINDOW_MM = 0.5
 
 def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
                       lo_f: float, target_percentile: float, *, reach_mm: float | None = None,
-                      clock_factor: int = 2) -> np.ndarray:
+                      clock_factor: int = 2, target_scale: float = 1.0) -> np.ndarray:
     """Shares ``(M,)`` of sorted tracks ``r_s`` (mm) with drops per mm ``w_s`` so that their radial
     profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`)."""
     import scipy.sparse as sps
@@ -216,7 +243,7 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
     if not mid.any():
         mid[:] = True
     pct = float(target_percentile)
-    target = float(np.percentile(smooth[mid], pct))
+    target = float(np.percentile(smooth[mid], pct)) * float(target_scale)
     f = np.ones(r_s.size)
     hi_f = np.ones(r_s.size)
     drop_tracks = reach_mm is not None
@@ -237,6 +264,7 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
         return np.minimum(out, hi_f)
 
     s_k = np.clip(np.floor((r_s - g0) / step).astype(np.int64), 0, n_g - 1)
+    raise_k = (r_s >= lo_t + _EQ_WINDOW_MM / 2) & (r_s <= hi_t - _EQ_WINDOW_MM / 2)
 
     printed = (grid >= float(r_s[0])) & (grid <= float(r_s[-1]))
     c_n = np.concatenate([[0], np.cumsum(printed)])
@@ -256,8 +284,14 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
             f = np.clip(f * (target / np.maximum(seen, 1e-300)), lo_k, hi_f)
         # the footprint-scale updates leave sparse stretches (tracks keeping every drop beside
         # thinned peaks) below the target on the mm scale: scale the shares by the mm-scale level
+        # (down everywhere; up, where the level is below the target, only a window in from the
+        # band's ends and where no track is left out within a window: beside a left-out track's
+        # gap a raise overshoots on the mm scale)
+        c_out = np.concatenate([[0], np.cumsum(np.bincount(s_k[hi_f <= 0], minlength=n_g))])
+        up = raise_k & ((c_out[b_i] - c_out[a_i])[s_k] == 0)
         for _ in range(EQUALISE_ITERATIONS // 3):
-            f = np.clip(f * np.minimum(1.0, target / np.maximum(level_of(f)[s_k], 1e-300)), lo_k, hi_f)
+            g = target / np.maximum(level_of(f)[s_k], 1e-300)
+            f = np.clip(f * np.where(up, g, np.minimum(1.0, g)), lo_k, hi_f)
         return f
 
     f = settle(f)
