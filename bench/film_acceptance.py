@@ -15,11 +15,11 @@ images (the exact transform at the planned clock and the pass's pivot offset) ov
 transform at the native clock (today's print of a layer), best of 3, and the same for direct
 slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
 
-    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
+    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--no-phases] [--quick] [--no-level]
                                                   [--dead-only]
 
 ``--equalised-only``: only the equalised rows (equalised; with the 5 dead nozzles; with phases and
-overlap), then the cost table. ``--dead-only``: only the rows with the 5 dead nozzles (of those
+overlap), then the cost table. ``--no-phases``: without the rows with angular phases and edge overlap. ``--dead-only``: only the rows with the 5 dead nozzles (of those
 the other options keep).
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
@@ -183,6 +183,8 @@ def main() -> None:
             if "--dead-only" in sys.argv and head is head0:
                 continue
             if quick and (inter or eq):
+                continue
+            if "--no-phases" in sys.argv and inter:
                 continue
             for passes in ("auto", "6"):
                 t = time.perf_counter()

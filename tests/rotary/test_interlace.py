@@ -475,13 +475,15 @@ def _cap_share_below(x):
     return (x * s ** 3 / 4 + 3.0 / 8.0 * (x * s + np.arcsin(x))) / (3.0 * np.pi / 8.0) + 0.5
 
 
-@pytest.mark.parametrize("tilt, within", [(20.0, 0.015), (45.0, 0.015), (70.0, 0.015)])
-def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within):
+@pytest.mark.parametrize("tilt, within, raise_sparse", [(45.0, 0.03, False), (70.0, 0.04, False), (20.0, 0.015, True),
+                                                        (45.0, 0.015, True), (70.0, 0.015, True)])
+def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within, raise_sparse):
     """A tilted head's radial track density varies along it (at 45 deg by a third, at 70 deg by
     about 2x where the tracks crowd), on top of 1/r: the shares of track_fractions, with the
     floors set by the lattice reach as pass_prints uses them, give every 1 mm radial bin the same
-    drops per mm of radius to 1.5 % (measured 0.4 / 0.7 / 0.8 % at 20 / 45 / 70 deg; 3.2 % at 70
-    before the mm-scale step also raised the sparse stretches; spread over the bins by each footprint's radial profile), and
+    drops per mm of radius to 3 % (4 % at 70 deg, measured 3.2 %: the sparse stretches at a
+    swathe's end stay below the level); with ``raise_sparse`` (the mm-scale step also raises them)
+    to 1.5 % (measured 0.4 / 0.7 / 0.8 % at 20 / 45 / 70 deg); spread over the bins by each footprint's radial profile), and
     keep every track within its floor; tracks left out entirely leave no gap wider than the
     union's largest."""
     from rotoprint.rotary.exact import swathe_clock
@@ -493,7 +495,7 @@ def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within):
     sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=60.0, outer_radius_mm=100.0)
     pp = plan_passes(head, sp, footprint_um=49.6)
     fr = track_fractions(head, sp, pp.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp.dpi_y), footprint_um=49.6,
-                         reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
+                         reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR), raise_sparse=raise_sparse)
     rs, ws, fs = [], [], []
     for q, o in enumerate(pp.offsets_mm):
         for j in range(len(sp.swathes)):
@@ -535,8 +537,8 @@ def test_equalised_dead_cover_keeps_1mm_bins_with_a_reserve(head, tilt):
     drops to live tracks within 0.15 mm; where the sparse tracks that set the target keep every
     drop there is no room. ``reserve_for`` cuts the target until the cover finds room for all but
     DEAD_RESERVE_LOSS (or by DEAD_RESERVE_MAX at most): fewer drops lost, the 1 mm bins of the
-    band 62-99 mm within 3.5 % of their mean (measured 2.8 / 1.0 % at 0 / 45 deg; without the
-    reserve 4.9 / 3.7 %), every live share within [0, 1], the dead tracks' own 0, and the volume
+    band 62-99 mm within 3 % of their mean (measured 2.3 / 0.6 % at 0 / 45 deg; without the
+    reserve 4.5 / 3.3 %), every live share within [0, 1], the dead tracks' own 0, and the volume
     per mm the cover moved plus lost equal to the dead tracks' demand."""
     from rotoprint.rotary.deadcover import cover_dead_tracks
     from rotoprint.rotary.equalise import DEAD_RESERVE_LOSS, DEAD_RESERVE_MAX, EQUALISE_CLOCK_FACTOR, ReachFloor, track_fractions
@@ -571,7 +573,7 @@ def test_equalised_dead_cover_keeps_1mm_bins_with_a_reserve(head, tilt):
         per_bin = ((f * w)[:, None] * np.diff(below, axis=1)).sum(axis=0)
         got[reserve is not None] = (np.abs(per_bin / per_bin.mean() - 1.0).max(), rep["lost_fraction"], per_bin.mean())
     (dev0, lost0, mean0), (dev1, lost1, mean1) = got[False], got[True]
-    assert dev1 <= 0.035 and dev1 < dev0, (dev0, dev1)
+    assert dev1 <= 0.03 and dev1 < dev0, (dev0, dev1)
     assert lost1 < lost0 and (lost1 <= DEAD_RESERVE_LOSS or mean1 <= (1.0 - DEAD_RESERVE_MAX + 0.01) * mean0)
     assert mean1 >= (1.0 - DEAD_RESERVE_MAX - 0.01) * mean0
 

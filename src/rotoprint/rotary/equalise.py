@@ -63,11 +63,15 @@ EQUALISE_CLOCK_FACTOR = 2
 EQUALISE_MIN_SHARE = 0.25
 #: Multiplicative updates of :func:`track_fractions`.
 EQUALISE_ITERATIONS = 60
+#: Default of :func:`track_fractions`' ``raise_sparse``: off (full design: the as-landed 1 mm bins
+#: better at 20-70 deg, the levelled thinnest worse; docs/rotary.md, "Sparse stretches raised").
+EQUALISE_RAISE = False
 
 
 def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
                     footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None, floor: float | None = None,
-                    reach: ReachFloor | None = None, reserve_for: Sequence[int] | None = None) -> list[list[np.ndarray]]:
+                    reach: ReachFloor | None = None, reserve_for: Sequence[int] | None = None,
+                    raise_sparse: bool | None = None) -> list[list[np.ndarray]]:
     """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
 
     Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
@@ -154,7 +158,8 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
 
     def shares(scale: float) -> list[list[np.ndarray]]:
         f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
-                              clock_factor=2 if reach is None else int(reach.clock_factor), target_scale=scale)
+                              clock_factor=2 if reach is None else int(reach.clock_factor), target_scale=scale,
+                              raise_sparse=EQUALISE_RAISE if raise_sparse is None else bool(raise_sparse))
         f_all = np.empty_like(f)
         f_all[order] = f
         out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
@@ -204,7 +209,7 @@ _EQ_WINDOW_MM = 0.5
 
 def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
                       lo_f: float, target_percentile: float, *, reach_mm: float | None = None,
-                      clock_factor: int = 2, target_scale: float = 1.0) -> np.ndarray:
+                      clock_factor: int = 2, target_scale: float = 1.0, raise_sparse: bool = False) -> np.ndarray:
     """Shares ``(M,)`` of sorted tracks ``r_s`` (mm) with drops per mm ``w_s`` so that their radial
     profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`)."""
     import scipy.sparse as sps
@@ -264,7 +269,7 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
         return np.minimum(out, hi_f)
 
     s_k = np.clip(np.floor((r_s - g0) / step).astype(np.int64), 0, n_g - 1)
-    raise_k = (r_s >= lo_t + _EQ_WINDOW_MM / 2) & (r_s <= hi_t - _EQ_WINDOW_MM / 2)
+    raise_k = bool(raise_sparse) & (r_s >= lo_t + _EQ_WINDOW_MM / 2) & (r_s <= hi_t - _EQ_WINDOW_MM / 2)
 
     printed = (grid >= float(r_s[0])) & (grid <= float(r_s[-1]))
     c_n = np.concatenate([[0], np.cumsum(printed)])
