@@ -15,11 +15,12 @@ images (the exact transform at the planned clock and the pass's pivot offset) ov
 transform at the native clock (today's print of a layer), best of 3, and the same for direct
 slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
 
-    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--no-phases] [--quick] [--no-level]
+    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--no-phases] [--raise-sparse] [--quick] [--no-level]
                                                   [--dead-only]
 
 ``--equalised-only``: only the equalised rows (equalised; with the 5 dead nozzles; with phases and
-overlap), then the cost table. ``--no-phases``: without the rows with angular phases and edge overlap. ``--dead-only``: only the rows with the 5 dead nozzles (of those
+overlap), then the cost table. ``--no-phases``: without the rows with angular phases and edge overlap. ``--raise-sparse``: the
+equalisation with ``track_fractions(raise_sparse=True)``. ``--dead-only``: only the rows with the 5 dead nozzles (of those
 the other options keep).
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
@@ -142,6 +143,10 @@ def main() -> None:
         cost_table(d, pl, head0, tilts)
         return
     quick, level_on = "--quick" in sys.argv, "--no-level" not in sys.argv
+    if "--raise-sparse" in sys.argv:  # the equalisation's opt-in raise of sparse stretches
+        import rotoprint.rotary.equalise as _eq
+
+        _eq.EQUALISE_RAISE = True
     sens_only, sens = "--sensitivity-only" in sys.argv, "--no-sensitivity" not in sys.argv
     if sens_only:
         tilt = next((t for t in tilts if t != 0.0), tilts[0])
