@@ -20,7 +20,7 @@ slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs nati
 
 ``--equalised-only``: only the equalised rows (equalised; with the 5 dead nozzles; with phases and
 overlap), then the cost table. ``--no-phases``: without the rows with angular phases and edge overlap. ``--raise-sparse``: the
-equalisation with ``track_fractions(raise_sparse=True)``. ``--dead-only``: only the rows with the 5 dead nozzles (of those
+equalisation with ``equalise.EQUALISE_RAISE = True``. ``--dead-only``: only the rows with the 5 dead nozzles (of those
 the other options keep).
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension

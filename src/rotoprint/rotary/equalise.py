@@ -21,7 +21,7 @@ from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
 
-__all__ = ["EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "EVEN_LINE_PERCENTILE", "ReachFloor",
+__all__ = ["CoveredDead", "EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "EVEN_LINE_PERCENTILE", "ReachFloor",
            "track_fractions", "even_line_shares", "thin_print"]
 
 
@@ -63,15 +63,37 @@ EQUALISE_CLOCK_FACTOR = 2
 EQUALISE_MIN_SHARE = 0.25
 #: Multiplicative updates of :func:`track_fractions`.
 EQUALISE_ITERATIONS = 60
-#: Default of :func:`track_fractions`' ``raise_sparse``: off (full design: the as-landed 1 mm bins
-#: better at 20-70 deg, the levelled thinnest worse; docs/rotary.md, "Sparse stretches raised").
+#: Whether :func:`track_fractions`' mm-scale step also raises sparse stretches: off (full design:
+#: the as-landed 1 mm bins better at 20-70 deg, the levelled thinnest worse; ``docs/rotary.md``).
 EQUALISE_RAISE = False
 
 
+@dataclass(frozen=True)
+class CoveredDead:
+    """Dead nozzles that :func:`track_fractions` prints as live, keeping room for the dead-track
+    cover (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`) to give their drops to live tracks.
+
+    Parameters
+    ----------
+    nozzles : tuple of int
+        Nozzle indices (>= 0).
+    """
+
+    nozzles: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        try:
+            ks = tuple(int(k) for k in self.nozzles)
+        except (TypeError, ValueError):
+            raise ConfigError(f"covered dead nozzles must be whole numbers, got {self.nozzles!r}") from None
+        if any(k < 0 for k in ks):
+            raise ConfigError(f"covered dead nozzles must be >= 0, got {self.nozzles!r}")
+        object.__setattr__(self, "nozzles", ks)
+
+
 def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
-                    footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None, floor: float | None = None,
-                    reach: ReachFloor | None = None, reserve_for: Sequence[int] | None = None,
-                    raise_sparse: bool | None = None) -> list[list[np.ndarray]]:
+                    footprint_um: float | None = None, dead_nozzles: Sequence[int] | CoveredDead | None = None,
+                    floor: float | None = None, reach: ReachFloor | None = None) -> list[list[np.ndarray]]:
     """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
 
     Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
@@ -86,9 +108,10 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     :data:`EQUALISE_TARGET_PERCENTILE` percentile (0: the lowest) of the unthinned profile's
     running mean over :data:`_EQ_WINDOW_MM`, over the band where every pass prints: sparse
     tracks keep every drop, crowded ones share theirs; then a few updates by the running mean
-    itself lower the mm-scale level where it is still above ``T*`` (with ``raise_sparse``, also
-    raise it where it is below, a window in from the band's ends and where no track is left out
-    within a window).
+    itself lower the mm-scale level where it is still above ``T*`` (with :data:`EQUALISE_RAISE`,
+    also raise it where it is below, a window in from the band's ends and where no track is left
+    out within a window: a 30 px band's 1 mm bins 1.8 / 1.9 / 1.9 / 1.5 % at tilts 0 / 20 / 45 /
+    70, off 1.3 / 2.7 / 1.5 / 3.7; off by default, ``docs/rotary.md``).
 
     Floors: every track keeps at least ``floor`` (default :data:`EQUALISE_FLOOR`; e.g. ``1 /
     grey_levels`` for halftoning). With ``reach`` (:class:`ReachFloor`: the drop lattice's reach
@@ -113,21 +136,19 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     setup : RotarySetup, optional
         Its clock (``dpi_y``, default the head's) and ``ref_radius_mm``; only the ratio of the
         swathes' clocks matters (the shares do not change with the clock).
-    footprint_um, dead_nozzles, floor
+    footprint_um, floor
         As above.
+    dead_nozzles : sequence of int or CoveredDead, optional
+        Nozzles left out of the union (default the head's). :class:`CoveredDead`: these dead
+        nozzles are printed as live in the shares, and their drops will be given to the live
+        tracks by :func:`~rotoprint.rotary.deadcover.cover_dead_tracks`: ``T*`` is cut in steps
+        of :data:`DEAD_RESERVE_STEP` (at most :data:`DEAD_RESERVE_MAX`) until the cover finds
+        room for all but :data:`DEAD_RESERVE_LOSS` of their drops (the sparse tracks that set
+        ``T*`` keep every drop: beside them there is no room). Full design, tilt 0, 5 dead
+        nozzles: 1 mm bins 4.4 -> 1.1 % as landed (``docs/rotary.md``).
     reach : ReachFloor, optional
         ``reach_um`` and ``clock_factor`` of the floors above (None: one floor for every track,
         no track left out).
-    reserve_for : sequence of int, optional
-        Dead nozzles (printed as live in these shares, ``dead_nozzles=()``) whose drops
-        :func:`~rotoprint.rotary.deadcover.cover_dead_tracks` will give to the live tracks: ``T*``
-        is cut in steps of :data:`DEAD_RESERVE_STEP` (at most :data:`DEAD_RESERVE_MAX`) until the
-        cover finds room for all but :data:`DEAD_RESERVE_LOSS` of their drops (the sparse tracks
-        that set ``T*`` keep every drop: beside them there is no room). Full design, tilt 0, 5 dead
-        nozzles: 1 mm bins 4.4 -> 1.1 % as landed (``docs/rotary.md``).
-    raise_sparse : bool, optional
-        Default :data:`EQUALISE_RAISE` (off): see above; a 30 px band's 1 mm bins 1.8 / 1.9 /
-        1.9 / 1.5 % at tilts 0 / 20 / 45 / 70 (off: 1.3 / 2.7 / 1.5 / 3.7).
 
     Returns
     -------
@@ -147,7 +168,8 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     from .exact import swathe_clock
 
     live = np.ones(head.nozzles, bool)
-    dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
+    covered: tuple[int, ...] = dead_nozzles.nozzles if isinstance(dead_nozzles, CoveredDead) else ()
+    dead = () if covered else head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
     live[list(dead)] = False
     a_mm = 0.5e-3 * (DepositOptions().full_footprint_um(head) if footprint_um is None else float(footprint_um))
     psi = math.radians(plan.mount_angle_deg)
@@ -171,7 +193,7 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     def shares(scale: float) -> list[list[np.ndarray]]:
         f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
                               clock_factor=2 if reach is None else int(reach.clock_factor), target_scale=scale,
-                              raise_sparse=EQUALISE_RAISE if raise_sparse is None else bool(raise_sparse))
+                              raise_sparse=EQUALISE_RAISE)
         f_all = np.empty_like(f)
         f_all[order] = f
         out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
@@ -182,7 +204,6 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
         return out
 
     out = shares(1.0)
-    covered = tuple(int(k) for k in (reserve_for or ()) if live[int(k)])
     if not covered:
         return out
     # room for the covered dead tracks' drops: the largest target scale (in DEAD_RESERVE_STEP
@@ -200,7 +221,7 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     return out
 
 
-#: :func:`track_fractions` with ``reserve_for``: the share of the dead tracks' drops the cover may
+#: :func:`track_fractions` with ``dead_nozzles=CoveredDead(...)``: the share of the dead tracks' drops the cover may
 #: leave without room, the step of the target's scale and its largest cut.
 DEAD_RESERVE_LOSS = 0.02
 DEAD_RESERVE_STEP = 0.01
