@@ -10,8 +10,9 @@ The design is a band ``ROWS`` px high (default 30) of the 1200 px test design's 
 divided by the bin's area of the band (the band's pixels subdivided 8 x 8). Printed per tilt:
 the largest deviation of the bins from their mean (bins with at least a tenth of the median
 area, as the deposit model counts them), the bins themselves in groups of 5 mm, and, per bin,
-the model's prediction (the planner's shares times each track's drops per mm, summed over the
-tracks in the bin, over the bin's width) so that a planner error and a realisation error
+the model's prediction (the planner's shares, after the dead-track cover where ``pass_prints``
+applies it, times each track's drops per mm, summed over the tracks in the bin, over the bin's
+width; only bins the band fills) so that a planner error and a realisation error
 (thinning pattern, band edges) can be told apart. Seconds per tilt, not minutes.
 """
 
@@ -146,7 +147,10 @@ def main() -> None:
             vol += radial_bins(np.hypot(dr.x_mm, dr.y_mm), dr.level.astype(np.float64), 0.5e-3 * d_um, area.size)
         dev, rel, keep = spread(vol, area)
         mod = model_bins(head, pl, man, tilt, d_um, area.size, eq)
-        mdev, mrel, _ = spread(mod * np.median(area[keep]), np.where(keep, area, 0.0))  # per mm of radius -> per area
+        # per mm of radius -> per area; only bins the band fills (the model has no band edges: in a
+        # partly filled end bin it would read the band's shape, not the planner's shares)
+        full = keep & (area >= 0.9 * np.median(area[keep]))
+        mdev, mrel, _ = spread(mod * np.median(area[keep]), np.where(full, area, 0.0))
         pp = man["pass_plan"]
         print(f"tilt {tilt:g}: passes {pp['passes']} clock {man['dpi_y']:.0f} dpi, 1 mm bins max dev {100 * dev:.1f} % "
               f"(the planner's model: {100 * mdev:.1f} %; {time.perf_counter() - t0:.1f} s)", flush=True)
@@ -155,7 +159,7 @@ def main() -> None:
             sel = [i for i in range(g0, g0 + 5) if i < rel.size and keep[i]]
             if sel:
                 print(f"  {g0:4d}-{g0 + 4:<4d} " + " ".join(f"{rel[i]:.3f}" for i in sel)
-                      + "   model " + " ".join(f"{mrel[i]:.3f}" for i in sel))
+                      + "   model " + " ".join(f"{mrel[i]:.3f}" if full[i] else "  -  " for i in sel))
 
 
 if __name__ == "__main__":
