@@ -16,12 +16,14 @@ transform at the native clock (today's print of a layer), best of 3, and the sam
 slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
 
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
-                                                  [--default-only] [--dead-only | --live-only] [--no-sensitivity | --sensitivity-only]
+                                                  [--default-only] [--dead-only | --live-only] [--no-phases] [--raise-sparse]
+                                                  [--no-sensitivity | --sensitivity-only]
 
 ``--equalised-only``: only the equalised rows (the default; with the 5 dead nozzles; with phases and
 overlap), then the cost table. ``--default-only``: only the default print's two rows (without and
 with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / without the 5 dead
-nozzles (of those the other options keep).
+nozzles (of those the other options keep). ``--no-phases``: without the rows with angular phases and
+edge overlap. ``--raise-sparse``: the equalisation with ``equalise.EQUALISE_RAISE = True``.
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
 before it sets, ``LevelOptions.from_head``: set time 1 s (the preset's nominal; the convolutions on the coarse grid, ``levelled.coarse_factor``), the preset's nominal 10 mPa s, 30 mN/m, h0 the
@@ -161,6 +163,10 @@ def main() -> None:
         cost_table(d, pl, head0, tilts)
         return
     quick, level_on = "--quick" in sys.argv, "--no-level" not in sys.argv
+    if "--raise-sparse" in sys.argv:  # the equalisation's opt-in raise of sparse stretches
+        import rotoprint.rotary.equalise as _eq
+
+        _eq.EQUALISE_RAISE = True
     sens_only, sens = "--sensitivity-only" in sys.argv, "--no-sensitivity" not in sys.argv
     if sens_only:
         tilt = next((t for t in tilts if t != 0.0), tilts[0])
@@ -206,6 +212,8 @@ def main() -> None:
             if "--live-only" in sys.argv and head is not head0:
                 continue
             if quick and inter:
+                continue
+            if "--no-phases" in sys.argv and inter:
                 continue
             for passes in ("auto", "6"):
                 t = time.perf_counter()

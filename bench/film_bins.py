@@ -10,8 +10,9 @@ The design is a band ``ROWS`` px high (default 30) of the 1200 px test design's 
 divided by the bin's area of the band (the band's pixels subdivided 8 x 8). Printed per tilt:
 the largest deviation of the bins from their mean (bins with at least a tenth of the median
 area, as the deposit model counts them), the bins themselves in groups of 5 mm, and, per bin,
-the model's prediction (the planner's shares times each track's drops per mm, summed over the
-tracks in the bin, over the bin's width) so that a planner error and a realisation error
+the model's prediction (the planner's shares, after the dead-track cover where ``pass_prints``
+applies it, times each track's drops per mm, summed over the tracks in the bin, over the bin's
+width; only bins the band fills) so that a planner error and a realisation error
 (thinning pattern, band edges) can be told apart. Seconds per tilt, not minutes.
 """
 
@@ -78,11 +79,17 @@ def model_bins(head, pl: Placement, man: dict, tilt: float, d_um: float, nbins: 
     sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out,
                       overlap_mm=man["pass_plan"]["swathe_overlap_mm"])
     offs = man["pass_plan"]["offsets_mm"]
-    from rotoprint.rotary.equalise import EQUALISE_CLOCK_FACTOR, ReachFloor
+    from rotoprint.rotary.equalise import EQUALISE_CLOCK_FACTOR, CoveredDead, ReachFloor
     from rotoprint.rotary.interlace import COVER_SHARE
 
     st = RotarySetup(tilt_deg=tilt, dpi_y=man["dpi_y"] / (EQUALISE_CLOCK_FACTOR if eq else 1))
-    fr = track_fractions(head, sp, offs, st, footprint_um=d_um, reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR)) if eq else None
+    cover = bool(eq and head.dead_nozzles and len(offs) > 1)  # as pass_prints: shares with all live, dead drops moved
+    fr = track_fractions(head, sp, offs, st, footprint_um=d_um, reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR),
+                         dead_nozzles=CoveredDead(head.dead_nozzles) if cover else None) if eq else None
+    if cover:
+        from rotoprint.rotary.deadcover import cover_dead_tracks
+
+        fr, _ = cover_dead_tracks(head, sp, offs, st, shares=fr, footprint_um=d_um)
     e = np.array([1.0, 0.0])
     rs, ws = [], []
     live = np.ones(head.nozzles, bool)
@@ -140,7 +147,10 @@ def main() -> None:
             vol += radial_bins(np.hypot(dr.x_mm, dr.y_mm), dr.level.astype(np.float64), 0.5e-3 * d_um, area.size)
         dev, rel, keep = spread(vol, area)
         mod = model_bins(head, pl, man, tilt, d_um, area.size, eq)
-        mdev, mrel, _ = spread(mod * np.median(area[keep]), np.where(keep, area, 0.0))  # per mm of radius -> per area
+        # per mm of radius -> per area; only bins the band fills (the model has no band edges: in a
+        # partly filled end bin it would read the band's shape, not the planner's shares)
+        full = keep & (area >= 0.9 * np.median(area[keep]))
+        mdev, mrel, _ = spread(mod * np.median(area[keep]), np.where(full, area, 0.0))
         pp = man["pass_plan"]
         print(f"tilt {tilt:g}: passes {pp['passes']} clock {man['dpi_y']:.0f} dpi, 1 mm bins max dev {100 * dev:.1f} % "
               f"(the planner's model: {100 * mdev:.1f} %; {time.perf_counter() - t0:.1f} s)", flush=True)
@@ -149,7 +159,7 @@ def main() -> None:
             sel = [i for i in range(g0, g0 + 5) if i < rel.size and keep[i]]
             if sel:
                 print(f"  {g0:4d}-{g0 + 4:<4d} " + " ".join(f"{rel[i]:.3f}" for i in sel)
-                      + "   model " + " ".join(f"{mrel[i]:.3f}" for i in sel))
+                      + "   model " + " ".join(f"{mrel[i]:.3f}" if full[i] else "  -  " for i in sel))
 
 
 if __name__ == "__main__":

@@ -487,13 +487,15 @@ def _cap_share_below(x):
     return (x * s ** 3 / 4 + 3.0 / 8.0 * (x * s + np.arcsin(x))) / (3.0 * np.pi / 8.0) + 0.5
 
 
-@pytest.mark.parametrize("tilt, within", [(45.0, 0.03), (70.0, 0.04)])
-def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within):
+@pytest.mark.parametrize("tilt, within, raise_sparse", [(45.0, 0.03, False), (70.0, 0.04, False), (20.0, 0.015, True),
+                                                        (45.0, 0.015, True), (70.0, 0.015, True)])
+def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within, raise_sparse, monkeypatch):
     """A tilted head's radial track density varies along it (at 45 deg by a third, at 70 deg by
     about 2x where the tracks crowd), on top of 1/r: the shares of track_fractions, with the
     floors set by the lattice reach as pass_prints uses them, give every 1 mm radial bin the same
-    drops per mm of radius to 3 % (4 % at 70 deg, measured 3.2 %: the stretches where tracks are
-    sparse stay below the level; spread over the bins by each footprint's radial profile), and
+    drops per mm of radius to 3 % (4 % at 70 deg, measured 3.2 %: the sparse stretches at a
+    swathe's end stay below the level); with EQUALISE_RAISE (the mm-scale step also raises them)
+    to 1.5 % (measured 0.4 / 0.7 / 0.8 % at 20 / 45 / 70 deg); spread over the bins by each footprint's radial profile), and
     keep every track within its floor; tracks left out entirely leave no gap wider than the
     union's largest."""
     from rotoprint.rotary.exact import swathe_clock
@@ -504,6 +506,9 @@ def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within):
 
     sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=60.0, outer_radius_mm=100.0)
     pp = plan_passes(head, sp, footprint_um=49.6)
+    import rotoprint.rotary.equalise as eq
+
+    monkeypatch.setattr(eq, "EQUALISE_RAISE", raise_sparse)
     fr = track_fractions(head, sp, pp.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp.dpi_y), footprint_um=49.6,
                          reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
     rs, ws, fs = [], [], []
@@ -539,6 +544,56 @@ def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within):
                          for q, o in enumerate(pp.offsets_mm) for j in range(len(sp.swathes))])
     per_plain = ((fp * w)[:, None] * np.diff(below, axis=1)).sum(axis=0)
     assert np.abs(per_plain / per_plain.mean() - 1.0).max() > 2 * within, np.abs(per_plain / per_plain.mean() - 1.0).max()
+
+
+@pytest.mark.parametrize("tilt", [0.0, 45.0])
+def test_equalised_dead_cover_keeps_1mm_bins_with_a_reserve(head, tilt):
+    """With 5 dead nozzles the shares are equalised with them as live and the cover gives their
+    drops to live tracks within 0.15 mm; where the sparse tracks that set the target keep every
+    drop there is no room. ``dead_nozzles=CoveredDead(...)`` cuts the target until the cover finds room for all but
+    DEAD_RESERVE_LOSS (or by DEAD_RESERVE_MAX at most): fewer drops lost, the 1 mm bins of the
+    band 62-99 mm within 3 % of their mean (measured 2.3 / 0.6 % at 0 / 45 deg; without the
+    reserve 4.5 / 3.3 %), every live share within [0, 1], the dead tracks' own 0, and the volume
+    per mm the cover moved plus lost equal to the dead tracks' demand."""
+    from rotoprint.rotary.deadcover import cover_dead_tracks
+    from rotoprint.rotary.equalise import (DEAD_RESERVE_LOSS, DEAD_RESERVE_MAX, EQUALISE_CLOCK_FACTOR, CoveredDead, ReachFloor,
+                                           track_fractions)
+    from rotoprint.rotary.exact import swathe_clock
+    from rotoprint.rotary.head import nozzle_layout
+    from rotoprint.rotary.interlace import COVER_SHARE
+    from rotoprint.rotary.swathes import pass_enabled
+
+    sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=60.0, outer_radius_mm=100.0)
+    rng = np.random.default_rng(14)
+    dead = tuple(sorted(int(k) for k in rng.choice(np.flatnonzero(sp.swathes[0].enabled), 5, replace=False)))
+    dh = head.model_copy(update={"dead_nozzles": dead})
+    pp = plan_passes(dh, sp, footprint_um=49.6)
+    st = RotarySetup(tilt_deg=tilt, dpi_y=pp.dpi_y)
+    edges = np.arange(62.0, 99.0)
+    got = {}
+    for reserve in (None, dead):
+        fr = track_fractions(dh, sp, pp.offsets_mm, st, footprint_um=49.6, dead_nozzles=CoveredDead(reserve) if reserve else (),
+                             reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
+        cov, rep = cover_dead_tracks(dh, sp, pp.offsets_mm, st, shares=fr)
+        assert rep["moved"] + rep["lost"] == pytest.approx(rep["demand"], rel=1e-9)
+        rs, ws, fs = [], [], []
+        for q, o in enumerate(pp.offsets_mm):
+            for j in range(len(sp.swathes)):
+                dphi, _ = swathe_clock(sp, j, dpi_y=pp.dpi_y, ref_radius_mm=None)
+                r = np.hypot(*(nozzle_layout(dh, sp.mount(j)).xy_mm + o * np.array([1.0, 0.0])).T)
+                k = pass_enabled(sp, j, r)
+                assert (cov[q][j][list(dead)] == 0).all() and cov[q][j].min() >= 0 and cov[q][j].max() <= 1 + 1e-12
+                rs.append(r[k]), ws.append(1.0 / (r[k] * dphi)), fs.append(cov[q][j][k])
+        r, w, f = np.concatenate(rs), np.concatenate(ws), np.concatenate(fs)
+        below = _cap_share_below((edges[None, :] - r[:, None]) / 0.0248)
+        per_bin = ((f * w)[:, None] * np.diff(below, axis=1)).sum(axis=0)
+        got[reserve is not None] = (np.abs(per_bin / per_bin.mean() - 1.0).max(), rep["lost_fraction"], per_bin.mean())
+    (dev0, lost0, mean0), (dev1, lost1, mean1) = got[False], got[True]
+    assert dev1 <= 0.03 and dev1 < dev0, (dev0, dev1)
+    assert lost1 < lost0 and (lost1 <= DEAD_RESERVE_LOSS or mean1 <= (1.0 - DEAD_RESERVE_MAX + 0.01) * mean0)
+    assert mean1 >= (1.0 - DEAD_RESERVE_MAX - 0.01) * mean0
+    with pytest.raises(ConfigError, match="covered dead"):
+        CoveredDead((-1,))
 
 
 def test_swathe_seam_prints_both_sides_and_is_bounded_by_the_overlap(head):

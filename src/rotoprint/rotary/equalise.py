@@ -21,7 +21,7 @@ from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
 
-__all__ = ["EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "EVEN_LINE_PERCENTILE", "ReachFloor",
+__all__ = ["CoveredDead", "EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "EVEN_LINE_PERCENTILE", "ReachFloor",
            "track_fractions", "even_line_shares", "thin_print"]
 
 
@@ -63,11 +63,37 @@ EQUALISE_CLOCK_FACTOR = 2
 EQUALISE_MIN_SHARE = 0.25
 #: Multiplicative updates of :func:`track_fractions`.
 EQUALISE_ITERATIONS = 60
+#: Whether :func:`track_fractions`' mm-scale step also raises sparse stretches: off (full design:
+#: the as-landed 1 mm bins better at 20-70 deg, the levelled thinnest worse; ``docs/rotary.md``).
+EQUALISE_RAISE = False
+
+
+@dataclass(frozen=True)
+class CoveredDead:
+    """Dead nozzles that :func:`track_fractions` prints as live, keeping room for the dead-track
+    cover (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`) to give their drops to live tracks.
+
+    Parameters
+    ----------
+    nozzles : tuple of int
+        Nozzle indices (>= 0).
+    """
+
+    nozzles: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        try:
+            ks = tuple(int(k) for k in self.nozzles)
+        except (TypeError, ValueError):
+            raise ConfigError(f"covered dead nozzles must be whole numbers, got {self.nozzles!r}") from None
+        if any(k < 0 for k in ks):
+            raise ConfigError(f"covered dead nozzles must be >= 0, got {self.nozzles!r}")
+        object.__setattr__(self, "nozzles", ks)
 
 
 def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
-                    footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None, floor: float | None = None,
-                    reach: ReachFloor | None = None) -> list[list[np.ndarray]]:
+                    footprint_um: float | None = None, dead_nozzles: Sequence[int] | CoveredDead | None = None,
+                    floor: float | None = None, reach: ReachFloor | None = None) -> list[list[np.ndarray]]:
     """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
 
     Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
@@ -82,7 +108,10 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     :data:`EQUALISE_TARGET_PERCENTILE` percentile (0: the lowest) of the unthinned profile's
     running mean over :data:`_EQ_WINDOW_MM`, over the band where every pass prints: sparse
     tracks keep every drop, crowded ones share theirs; then a few updates by the running mean
-    itself lower the mm-scale level where it is still above ``T*``.
+    itself lower the mm-scale level where it is still above ``T*`` (with :data:`EQUALISE_RAISE`,
+    also raise it where it is below, a window in from the band's ends and where no track is left
+    out within a window: a 30 px band's 1 mm bins 1.8 / 1.9 / 1.9 / 1.5 % at tilts 0 / 20 / 45 /
+    70, off 1.3 / 2.7 / 1.5 / 3.7; off by default, ``docs/rotary.md``).
 
     Floors: every track keeps at least ``floor`` (default :data:`EQUALISE_FLOOR`; e.g. ``1 /
     grey_levels`` for halftoning). With ``reach`` (:class:`ReachFloor`: the drop lattice's reach
@@ -107,8 +136,16 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     setup : RotarySetup, optional
         Its clock (``dpi_y``, default the head's) and ``ref_radius_mm``; only the ratio of the
         swathes' clocks matters (the shares do not change with the clock).
-    footprint_um, dead_nozzles, floor
+    footprint_um, floor
         As above.
+    dead_nozzles : sequence of int or CoveredDead, optional
+        Nozzles left out of the union (default the head's). :class:`CoveredDead`: these dead
+        nozzles are printed as live in the shares, and their drops will be given to the live
+        tracks by :func:`~rotoprint.rotary.deadcover.cover_dead_tracks`: ``T*`` is cut in steps
+        of :data:`DEAD_RESERVE_STEP` (at most :data:`DEAD_RESERVE_MAX`) until the cover finds
+        room for all but :data:`DEAD_RESERVE_LOSS` of their drops (the sparse tracks that set
+        ``T*`` keep every drop: beside them there is no room). Full design, tilt 0, 5 dead
+        nozzles: 1 mm bins 4.4 -> 1.1 % as landed (``docs/rotary.md``).
     reach : ReachFloor, optional
         ``reach_um`` and ``clock_factor`` of the floors above (None: one floor for every track,
         no track left out).
@@ -130,7 +167,8 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
         raise ConfigError(f"floor must be in (0, 1], got {floor!r}")
 
     live = np.ones(head.nozzles, bool)
-    dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
+    covered: tuple[int, ...] = dead_nozzles.nozzles if isinstance(dead_nozzles, CoveredDead) else ()
+    dead = () if covered else head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
     live[list(dead)] = False
     a_mm = 0.5e-3 * (DepositOptions().full_footprint_um(head) if footprint_um is None else float(footprint_um))
     rs, ws, where = _printing_tracks(plan, head, offsets_mm, live, dpi_y, ref_radius_mm)
@@ -139,16 +177,43 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     order = np.argsort(r, kind="stable")
     r_s, w_s = r[order], w[order]
     reach_mm = None if reach is None else 1e-3 * float(reach.reach_um)
-    f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
-                          clock_factor=2 if reach is None else int(reach.clock_factor))
-    f_all = np.empty_like(f)
-    f_all[order] = f
-    out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
-    pos = 0
-    for q, j, k in where:
-        out[q][j][k] = f_all[pos:pos + k.size]
-        pos += k.size
+
+    def shares(scale: float) -> list[list[np.ndarray]]:
+        f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
+                              clock_factor=2 if reach is None else int(reach.clock_factor), target_scale=scale,
+                              raise_sparse=EQUALISE_RAISE)
+        f_all = np.empty_like(f)
+        f_all[order] = f
+        out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
+        pos = 0
+        for q, j, k in where:
+            out[q][j][k] = f_all[pos:pos + k.size]
+            pos += k.size
+        return out
+
+    out = shares(1.0)
+    if not covered:
+        return out
+    # room for the covered dead tracks' drops: the largest target scale (in DEAD_RESERVE_STEP
+    # steps, down to 1 - DEAD_RESERVE_MAX) with which the cover finds room for all but
+    # DEAD_RESERVE_LOSS of them (the sparse tracks that set the target keep every drop: no room)
+    from .deadcover import cover_dead_tracks
+
+    dead_head = head.model_copy(update={"dead_nozzles": covered})
+    for i in range(int(round(DEAD_RESERVE_MAX / DEAD_RESERVE_STEP)) + 1):
+        if i:
+            out = shares(1.0 - i * DEAD_RESERVE_STEP)
+        _, rep = cover_dead_tracks(dead_head, plan, offsets_mm, st, shares=out)
+        if rep["lost_fraction"] <= DEAD_RESERVE_LOSS:
+            break
     return out
+
+
+#: :func:`track_fractions` with ``dead_nozzles=CoveredDead(...)``: the share of the dead tracks' drops the cover may
+#: leave without room, the step of the target's scale and its largest cut.
+DEAD_RESERVE_LOSS = 0.02
+DEAD_RESERVE_STEP = 0.01
+DEAD_RESERVE_MAX = 0.08
 
 
 
@@ -165,7 +230,7 @@ _EQ_WINDOW_MM = 0.5
 
 def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
                       lo_f: float, target_percentile: float, *, reach_mm: float | None = None,
-                      clock_factor: int = 2) -> np.ndarray:
+                      clock_factor: int = 2, target_scale: float = 1.0, raise_sparse: bool = False) -> np.ndarray:
     """Shares ``(M,)`` of sorted tracks ``r_s`` (mm) with drops per mm ``w_s`` so that their radial
     profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`)."""
     import scipy.sparse as sps
@@ -204,7 +269,7 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
     if not mid.any():
         mid[:] = True
     pct = float(target_percentile)
-    target = float(np.percentile(smooth[mid], pct))
+    target = float(np.percentile(smooth[mid], pct)) * float(target_scale)
     f = np.ones(r_s.size)
     hi_f = np.ones(r_s.size)
     drop_tracks = reach_mm is not None
@@ -225,6 +290,7 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
         return np.minimum(out, hi_f)
 
     s_k = np.clip(np.floor((r_s - g0) / step).astype(np.int64), 0, n_g - 1)
+    raise_k = bool(raise_sparse) & (r_s >= lo_t + _EQ_WINDOW_MM / 2) & (r_s <= hi_t - _EQ_WINDOW_MM / 2)
 
     printed = (grid >= float(r_s[0])) & (grid <= float(r_s[-1]))
     c_n = np.concatenate([[0], np.cumsum(printed)])
@@ -244,8 +310,14 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
             f = np.clip(f * (target / np.maximum(seen, 1e-300)), lo_k, hi_f)
         # the footprint-scale updates leave sparse stretches (tracks keeping every drop beside
         # thinned peaks) below the target on the mm scale: scale the shares by the mm-scale level
+        # (down everywhere; up, where the level is below the target, only a window in from the
+        # band's ends and where no track is left out within a window: beside a left-out track's
+        # gap a raise overshoots on the mm scale)
+        c_out = np.concatenate([[0], np.cumsum(np.bincount(s_k[hi_f <= 0], minlength=n_g))])
+        up = raise_k & ((c_out[b_i] - c_out[a_i])[s_k] == 0)
         for _ in range(EQUALISE_ITERATIONS // 3):
-            f = np.clip(f * np.minimum(1.0, target / np.maximum(level_of(f)[s_k], 1e-300)), lo_k, hi_f)
+            g = target / np.maximum(level_of(f)[s_k], 1e-300)
+            f = np.clip(f * np.where(up, g, np.minimum(1.0, g)), lo_k, hi_f)
         return f
 
     f = settle(f)
