@@ -56,7 +56,9 @@ def test_an_inexact_clock_moves_the_drops_by_what_the_program_says(small):
     for im in imgs:
         r = by[(im.material, im.ink, im.interlace)]
         want = _expected_displacement_um(prog, im, rec_of)
-        assert 0.01 < want < 1.0  # sub-micrometre, but not nothing: the ratio x180/33667 and whole counts
+        # sub-micrometre, but not nothing (float noise at 60 mm is ~1e-8 um): the clock's ratio and whole
+        # counts; 0.004 um since the build's passes print at the equalised clock (2 x the plan's)
+        assert 1e-3 < want < 1.0
         assert r["max_drop_displacement_um"] == pytest.approx(want, rel=1e-6)
         assert r["swathe_clocks"][0]["max_drop_displacement_um"] == pytest.approx(want, rel=1e-6)
     assert machine["clock"]["angles"] == "machine" and nominal["clock"]["angles"] == "nominal"
