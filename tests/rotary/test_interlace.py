@@ -549,12 +549,15 @@ def test_equalised_shares_flatten_1mm_bins_of_a_tilted_head(head, tilt, within, 
 @pytest.mark.parametrize("tilt", [0.0, 45.0])
 def test_equalised_dead_cover_keeps_1mm_bins_with_a_reserve(head, tilt):
     """With 5 dead nozzles the shares are equalised with them as live and the cover gives their
-    drops to live tracks within 0.15 mm; where the sparse tracks that set the target keep every
-    drop there is no room. ``dead_nozzles=CoveredDead(...)`` cuts the target until the cover finds room for all but
-    DEAD_RESERVE_LOSS (or by DEAD_RESERVE_MAX at most): fewer drops lost, the 1 mm bins of the
-    band 62-99 mm within 3 % of their mean (measured 2.3 / 0.6 % at 0 / 45 deg; without the
-    reserve 4.5 / 3.3 %), every live share within [0, 1], the dead tracks' own 0, and the volume
-    per mm the cover moved plus lost equal to the dead tracks' demand."""
+    drops to live tracks; where the sparse tracks that set the target keep every drop there is no
+    room. ``dead_nozzles=CoveredDead(...)`` cuts the target until the cover finds room for all but
+    DEAD_RESERVE_LOSS (or by DEAD_RESERVE_MAX at most). With the cover's 0.3 mm window and its
+    common scale (``DeadCoverOptions.scale_shares``) the cover already finds that room here, so
+    the cut is not taken (the same shares; with the 0.15 mm window and no scale it took the bins
+    from 4.5 / 3.3 % to 2.3 / 0.6 %): the 1 mm bins of the band 62-99 mm within 3 % of their mean
+    either way (measured 1.9 / 0.8 % at 0 / 45 deg), no more drops lost than without, every live
+    share within [0, 1], the dead tracks' own 0, and the volume per mm the cover moved plus lost
+    equal to the dead tracks' demand."""
     from rotoprint.rotary.deadcover import cover_dead_tracks
     from rotoprint.rotary.equalise import (DEAD_RESERVE_LOSS, DEAD_RESERVE_MAX, EQUALISE_CLOCK_FACTOR, CoveredDead, ReachFloor,
                                            track_fractions)
@@ -589,8 +592,8 @@ def test_equalised_dead_cover_keeps_1mm_bins_with_a_reserve(head, tilt):
         per_bin = ((f * w)[:, None] * np.diff(below, axis=1)).sum(axis=0)
         got[reserve is not None] = (np.abs(per_bin / per_bin.mean() - 1.0).max(), rep["lost_fraction"], per_bin.mean())
     (dev0, lost0, mean0), (dev1, lost1, mean1) = got[False], got[True]
-    assert dev1 <= 0.03 and dev1 < dev0, (dev0, dev1)
-    assert lost1 < lost0 and (lost1 <= DEAD_RESERVE_LOSS or mean1 <= (1.0 - DEAD_RESERVE_MAX + 0.01) * mean0)
+    assert dev0 <= 0.03 and dev1 <= 0.03 and dev1 <= dev0 + 1e-12, (dev0, dev1)
+    assert lost1 <= lost0 + 1e-12 and (lost1 <= DEAD_RESERVE_LOSS or mean1 <= (1.0 - DEAD_RESERVE_MAX + 0.01) * mean0)
     assert mean1 >= (1.0 - DEAD_RESERVE_MAX - 0.01) * mean0
     with pytest.raises(ConfigError, match="covered dead"):
         CoveredDead((-1,))
