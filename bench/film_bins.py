@@ -79,13 +79,13 @@ def model_bins(head, pl: Placement, man: dict, tilt: float, d_um: float, nbins: 
     sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out,
                       overlap_mm=man["pass_plan"]["swathe_overlap_mm"])
     offs = man["pass_plan"]["offsets_mm"]
-    from rotoprint.rotary.equalise import EQUALISE_CLOCK_FACTOR, CoveredDead, ReachFloor
+    from rotoprint.rotary.equalise import EQUALISE_CLOCK_FACTOR, ReachFloor
     from rotoprint.rotary.interlace import COVER_SHARE
 
     st = RotarySetup(tilt_deg=tilt, dpi_y=man["dpi_y"] / (EQUALISE_CLOCK_FACTOR if eq else 1))
     cover = bool(eq and head.dead_nozzles and len(offs) > 1)  # as pass_prints: shares with all live, dead drops moved
     fr = track_fractions(head, sp, offs, st, footprint_um=d_um, reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR),
-                         dead_nozzles=CoveredDead(head.dead_nozzles) if cover else None) if eq else None
+                         dead_nozzles=() if cover else None) if eq else None
     if cover:
         from rotoprint.rotary.deadcover import cover_dead_tracks
 

@@ -21,7 +21,7 @@ from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
 
-__all__ = ["CoveredDead", "EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "EVEN_LINE_PERCENTILE", "ReachFloor",
+__all__ = ["EQUALISE_FLOOR", "EQUALISE_CLOCK_FACTOR", "EQUALISE_MIN_SHARE", "GREY_FLOOR", "EVEN_LINE_PERCENTILE", "ReachFloor",
            "track_fractions", "even_line_shares", "thin_print"]
 
 
@@ -68,31 +68,8 @@ EQUALISE_ITERATIONS = 60
 EQUALISE_RAISE = False
 
 
-@dataclass(frozen=True)
-class CoveredDead:
-    """Dead nozzles that :func:`track_fractions` prints as live, keeping room for the dead-track
-    cover (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`) to give their drops to live tracks.
-
-    Parameters
-    ----------
-    nozzles : tuple of int
-        Nozzle indices (>= 0).
-    """
-
-    nozzles: tuple[int, ...]
-
-    def __post_init__(self) -> None:
-        try:
-            ks = tuple(int(k) for k in self.nozzles)
-        except (TypeError, ValueError):
-            raise ConfigError(f"covered dead nozzles must be whole numbers, got {self.nozzles!r}") from None
-        if any(k < 0 for k in ks):
-            raise ConfigError(f"covered dead nozzles must be >= 0, got {self.nozzles!r}")
-        object.__setattr__(self, "nozzles", ks)
-
-
 def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
-                    footprint_um: float | None = None, dead_nozzles: Sequence[int] | CoveredDead | None = None,
+                    footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None,
                     floor: float | None = None, reach: ReachFloor | None = None) -> list[list[np.ndarray]]:
     """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
 
@@ -138,14 +115,11 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
         swathes' clocks matters (the shares do not change with the clock).
     footprint_um, floor
         As above.
-    dead_nozzles : sequence of int or CoveredDead, optional
-        Nozzles left out of the union (default the head's). :class:`CoveredDead`: these dead
-        nozzles are printed as live in the shares, and their drops will be given to the live
-        tracks by :func:`~rotoprint.rotary.deadcover.cover_dead_tracks`: ``T*`` is cut in steps
-        of :data:`DEAD_RESERVE_STEP` (at most :data:`DEAD_RESERVE_MAX`) until the cover finds
-        room for all but :data:`DEAD_RESERVE_LOSS` of their drops (the sparse tracks that set
-        ``T*`` keep every drop: beside them there is no room). Full design, tilt 0, 5 dead
-        nozzles: 1 mm bins 4.4 -> 1.1 % as landed (``docs/rotary.md``).
+    dead_nozzles : sequence of int, optional
+        Nozzles left out of the union (default the head's; ``()``: every nozzle as live, the
+        dead-track cover then gives the dead ones' drops to live tracks,
+        :func:`~rotoprint.rotary.deadcover.cover_dead_tracks`, which scales the shares where
+        it finds no room: :attr:`~rotoprint.rotary.deadcover.DeadCoverOptions.scale_shares`).
     reach : ReachFloor, optional
         ``reach_um`` and ``clock_factor`` of the floors above (None: one floor for every track,
         no track left out).
@@ -167,8 +141,7 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
         raise ConfigError(f"floor must be in (0, 1], got {floor!r}")
 
     live = np.ones(head.nozzles, bool)
-    covered: tuple[int, ...] = dead_nozzles.nozzles if isinstance(dead_nozzles, CoveredDead) else ()
-    dead = () if covered else head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
+    dead = head.dead_nozzles if dead_nozzles is None else tuple(dead_nozzles)
     live[list(dead)] = False
     a_mm = 0.5e-3 * (DepositOptions().full_footprint_um(head) if footprint_um is None else float(footprint_um))
     rs, ws, where = _printing_tracks(plan, head, offsets_mm, live, dpi_y, ref_radius_mm)
@@ -178,43 +151,16 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     r_s, w_s = r[order], w[order]
     reach_mm = None if reach is None else 1e-3 * float(reach.reach_um)
 
-    def shares(scale: float) -> list[list[np.ndarray]]:
-        f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
-                              clock_factor=2 if reach is None else int(reach.clock_factor), target_scale=scale,
-                              raise_sparse=EQUALISE_RAISE)
-        f_all = np.empty_like(f)
-        f_all[order] = f
-        out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
-        pos = 0
-        for q, j, k in where:
-            out[q][j][k] = f_all[pos:pos + k.size]
-            pos += k.size
-        return out
-
-    out = shares(1.0)
-    if not covered:
-        return out
-    # room for the covered dead tracks' drops: the largest target scale (in DEAD_RESERVE_STEP
-    # steps, down to 1 - DEAD_RESERVE_MAX) with which the cover finds room for all but
-    # DEAD_RESERVE_LOSS of them (the sparse tracks that set the target keep every drop: no room)
-    from .deadcover import cover_dead_tracks
-
-    dead_head = head.model_copy(update={"dead_nozzles": covered})
-    for i in range(int(round(DEAD_RESERVE_MAX / DEAD_RESERVE_STEP)) + 1):
-        if i:
-            out = shares(1.0 - i * DEAD_RESERVE_STEP)
-        _, rep = cover_dead_tracks(dead_head, plan, offsets_mm, st, shares=out)
-        if rep["lost_fraction"] <= DEAD_RESERVE_LOSS:
-            break
+    f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
+                          clock_factor=2 if reach is None else int(reach.clock_factor), raise_sparse=EQUALISE_RAISE)
+    f_all = np.empty_like(f)
+    f_all[order] = f
+    out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
+    pos = 0
+    for q, j, k in where:
+        out[q][j][k] = f_all[pos:pos + k.size]
+        pos += k.size
     return out
-
-
-#: :func:`track_fractions` with ``dead_nozzles=CoveredDead(...)``: the share of the dead tracks' drops the cover may
-#: leave without room, the step of the target's scale and its largest cut.
-DEAD_RESERVE_LOSS = 0.02
-DEAD_RESERVE_STEP = 0.01
-DEAD_RESERVE_MAX = 0.08
-
 
 
 #: Rounds of leaving whole tracks out (:func:`track_fractions` with ``reach``) and the
@@ -230,7 +176,7 @@ _EQ_WINDOW_MM = 0.5
 
 def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
                       lo_f: float, target_percentile: float, *, reach_mm: float | None = None,
-                      clock_factor: int = 2, target_scale: float = 1.0, raise_sparse: bool = False) -> np.ndarray:
+                      clock_factor: int = 2, raise_sparse: bool = False) -> np.ndarray:
     """Shares ``(M,)`` of sorted tracks ``r_s`` (mm) with drops per mm ``w_s`` so that their radial
     profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`)."""
     import scipy.sparse as sps
@@ -269,7 +215,7 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
     if not mid.any():
         mid[:] = True
     pct = float(target_percentile)
-    target = float(np.percentile(smooth[mid], pct)) * float(target_scale)
+    target = float(np.percentile(smooth[mid], pct))
     f = np.ones(r_s.size)
     hi_f = np.ones(r_s.size)
     drop_tracks = reach_mm is not None

@@ -73,7 +73,7 @@ from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
 # the equalisation lives in its own module; its names stay importable from here
 from .equalise import (EQUALISE_CLOCK_FACTOR, EQUALISE_FLOOR, EQUALISE_ITERATIONS, EQUALISE_MIN_SHARE,  # noqa: F401
-                       EQUALISE_TARGET_PERCENTILE, GREY_FLOOR, CoveredDead, ReachFloor, even_line_shares, thin_print, track_fractions)
+                       EQUALISE_TARGET_PERCENTILE, GREY_FLOOR, ReachFloor, even_line_shares, thin_print, track_fractions)
 
 __all__ = ["EVEN_RATIO", "COVER_SHARE", "MAX_PASSES", "MAX_CLOCK_FACTOR", "DEAD_SPREAD_PERIODS", "DEAD_GAP_TOLERANCE", "EVEN_OVERLAP_PERIODS", "EVEN_SEAM_PERIODS", "PassOptions", "density_shares", "TiltRow", "tilt_scan", "best_tilt", "PassPlan", "union_radii", "plan_passes", "interlace_phases", "phase_angles", "pass_overlap_mm", "pass_prints", "pass_files", "parse_passes", "read_passes"]
 
@@ -924,7 +924,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         cover_all = bool(options.dead_cover and head.dead_nozzles and pp.passes > 1)  # shares with all live, room kept for the cover below
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
                                 reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR),
-                                dead_nozzles=CoveredDead(head.dead_nozzles) if cover_all else None)
+                                dead_nozzles=() if cover_all else None)
         clock = clock * EQUALISE_CLOCK_FACTOR
     elif options.balance:
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
