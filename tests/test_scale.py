@@ -48,7 +48,7 @@ def test_identical_bytes_1_and_2_workers(job, tmp_path):
 def test_identical_bytes_on_a_dask_local_cluster(job, tmp_path):
     import distributed  # a test dependency: a broken install must fail, not skip
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:  # any free port: two workers start clusters at once
         d = tmp_path / "dask"
         _write(job, d, scheduler=cluster.scheduler_address)
     a = tmp_path / "one"
@@ -156,7 +156,7 @@ def test_sl1_identical_bytes_1_2_workers_and_dask(run_cli, torus_stl, tmp_path, 
         code, _, err = run_cli(*base, "-o", outs[name], *extra)
         assert code == 0, err
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:  # any free port: two workers start clusters at once
         (tmp_path / "dask").mkdir()
         outs["dask"] = tmp_path / "dask" / "job.sl1"
         code, _, err = run_cli(*base, "-o", outs["dask"], "--scheduler", cluster.scheduler_address)
