@@ -239,11 +239,13 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
     """The film of a few layers per material into ``tmp/overlays`` and their ``overlays``
     entries: the headline is the deposit model (:func:`rotoprint.rotary.deposit.deposit_film`)
     of the layer's planned drops, every interlaced pass of every ink weighted by how often it
-    prints (``deposit``: the first ink's film, ``inks``: each ink's, ``reagent_pairs``), the
+    prints, measured on the film grid (the design grid divided into deposit cells) against the
+    design rasterised at the cells' centres (``deposit``: the first ink's film, ``inks``: each
+    ink's, ``reagent_pairs``), the
     secondary the simulator's cell model of the first ink's pass 0 (``iou``,
     ``uncovered_fraction``: pixels of the design whose nearest site of that pass's lattice
     fired; each pass's lattice tiles the design by itself)."""
-    from ..rotary.deposit import DepositOptions, InkDrops, LevelOptions, deposit_film, ink_drops
+    from ..rotary.deposit import DepositOptions, InkDrops, LevelOptions, deposit_film, film_grid, ink_drops
     from ..rotary.simulate import place_drops, render_overlay, simulate
 
     pick = _simulate_layers(present, job.spec.process.simulate_layers)
@@ -277,8 +279,11 @@ def stage_simulate(job, plan, present: dict[str, list[int]], tmp: Path, step: St
             # each cycle's coat (one pass, repeats) sets before the next lands: h0 is one coat's
             coats = [max(1.0, float(sum(w for _, w in weighted[ink]))) for ink in inks]
             lv = tuple(replace(lev, coats=c) for lev, c in zip(levels, coats))
-            dep = deposit_film(ref, weighted[inks[0]][0][0].placement, head, sets,
-                               pairs=[(0, 1)] if len(sets) == 2 else [], options=DepositOptions(level=lv))
+            opts = DepositOptions(level=lv)
+            pl = weighted[inks[0]][0][0].placement
+            # the design exact to a deposit cell: rasterised at the film grid's cell centres
+            ref_cells = plan.reference_image(mname, sections, grid=film_grid(pl, head, opts))
+            dep = deposit_film(ref_cells, pl, head, sets, pairs=[(0, 1)] if len(sets) == 2 else [], options=opts)
             films = {ink: {k: v for k, v in f.to_json().items() if k != "radial_bins"} for ink, f in zip(inks, dep.films)}
             name = f"overlays/layer_{i:05d}-{mname}.png"
             (tmp / name).write_bytes(_png_rgb(render_overlay(sim, scale=2)))

@@ -430,9 +430,13 @@ class BuildPlan:
         for i in range(len(self)):
             yield self.layer(i)
 
-    def reference_image(self, material: str, sections: dict[str, Segments], *, oversample: int = 1) -> np.ndarray:
-        """``(H, W) bool``: the material's region (overlaps resolved) on the assembly's grid."""
-        grid = self.design_grid(oversample=oversample)
+    def reference_image(self, material: str, sections: dict[str, Segments], *, oversample: int = 1,
+                        grid: Placement | None = None) -> np.ndarray:
+        """``(H, W) bool``: the material's region (overlaps resolved) at the pixel centres of the
+        assembly's grid (``oversample`` divides its pitch), or of ``grid``, a grid over the same
+        rectangle (e.g. the deposit model's film grid, :func:`rotoprint.rotary.deposit.film_grid`
+        of :meth:`design_grid`)."""
+        grid = self.design_grid(oversample=oversample) if grid is None else grid
         out = np.zeros((grid.height_px, grid.width_px), bool)
         for part in self.job.spec.parts:
             if part.material != material or not len(sections[part.name]):
@@ -484,10 +488,15 @@ def measured_drop_density(plan: BuildPlan, material: str, band: tuple[float, flo
     """The true drops per mm^2 of one pass of each of the material's inks, per radial bin.
 
     The material's first layer with a cross-section is printed on every interlaced pass of
-    each ink's head (the planned, thinned images); every drop (a level ``L`` of ``G`` counts
-    ``L / G`` of a full drop) is counted at its track's radius, and the design area of the
-    material (its pixels on the design grid) in the same 1 mm radial bins; drops over area,
-    divided by the passes, is one pass's density.
+    each ink's head (the planned, thinned images) and its drops landed
+    (:func:`~rotoprint.rotary.simulate.place_drops`). Only the design's *interior* counts: the
+    material's region rasterised on the deposit model's film grid
+    (:func:`~rotoprint.rotary.deposit.film_grid` of the design grid) less the boundary band of
+    the deposit figures (half a footprint plus half a cell), so tracks that graze an edge do
+    not weigh in. Every drop landing in an interior cell (a level ``L`` of ``G`` counts ``L /
+    G`` of a full drop) is counted at its landing radius, the interior's area (its cells, each
+    at its centre's radius) in the same 1 mm radial bins; drops over area, divided by the
+    passes, is one pass's density.
 
     Parameters
     ----------
@@ -499,14 +508,18 @@ def measured_drop_density(plan: BuildPlan, material: str, band: tuple[float, flo
     Returns
     -------
     r_mm : (B,) float64
-        Centres of the bins that hold at least :data:`DENSITY_BIN_MIN_SHARE` of the median
-        bin's area.
+        Centres of the bins whose interior holds at least :data:`DENSITY_BIN_MIN_SHARE` of the
+        median bin's.
     density : dict of str to (B,) float64
         Drops per mm^2 of one pass, per ink.
     source : dict
-        ``layer``, ``bin_mm``, ``drops`` (per ink, all passes) and ``area_mm2`` (design area of
-        that layer), for ``plan.json``.
+        ``layer``, ``bin_mm``, ``bins``, ``drops`` (per ink, all passes, in the interior),
+        ``area_mm2`` (that layer's interior area), ``cell_um`` (the film grid's cells) and the
+        ``rule``, for ``plan.json``.
     """
+    from ..rotary.deposit import DepositOptions, film_grid, interior_mask
+    from ..rotary.simulate import place_drops
+
     parts = [p.name for p in plan.job.spec.parts if p.material == material]
     layer, secs = None, None
     for i in range(len(plan)):
@@ -519,37 +532,43 @@ def measured_drop_density(plan: BuildPlan, material: str, band: tuple[float, flo
     edges = lo + DENSITY_BIN_MM * np.arange(nb + 1)
     if layer is None:
         return np.zeros(0), {ink.name: np.zeros(0) for ink in plan.job.materials[material].inks}, {"layer": None}
-    from .conductance import pixel_centres_model
-
+    head = plan.device.head
     grid = plan.design_grid()
-    ref = plan.reference_image(material, secs)
-    x, y = pixel_centres_model(grid, plan.placement)
-    xl, yl = plan.placement.model_to_local(x, y)
-    rr = np.hypot(xl[None, :], yl[:, None])[ref]
-    area = np.histogram(rr, bins=edges)[0] * (grid.pitch_x_mm * grid.pitch_y_mm)
+    fine = film_grid(grid, head)
+    nx, ny = fine.width_px // grid.width_px, fine.height_px // grid.height_px
+    gx_um, gy_um = fine.pitch_x_mm * 1e3, fine.pitch_y_mm * 1e3
+    inner = interior_mask(plan.reference_image(material, secs, grid=fine), gx_um, gy_um,
+                          0.5 * DepositOptions().full_footprint_um(head) + 0.5 * min(gx_um, gy_um))
+    ii, jj = np.nonzero(inner)
+    x, y = fine.to_platform(jj + 0.5, ii + 0.5)
+    area = np.histogram(np.hypot(x, y), bins=edges)[0] * (fine.pitch_x_mm * fine.pitch_y_mm)
     keep = area > 0
     if keep.any():
         keep &= area >= DENSITY_BIN_MIN_SHARE * float(np.median(area[keep]))
     dens, drops = {}, {}
-    g = plan.device.head.grey_levels
+    g = head.grey_levels
     for ink in plan.job.materials[material].inks:
         h = plan.head(ink.name)
         counts = np.zeros(nb)
         total = 0.0
         for q in range(h.passes):
-            pr = plan.material_print(material, h, secs, layer, pass_index=q)
-            for sw, ts in zip(pr.swathes, h.pass_lattices[q].tracks):
-                per_col = sw.levels.sum(axis=0, dtype=np.float64) / g
-                counts += np.histogram(ts.r_mm, bins=edges, weights=per_col[ts.nozzle])[0]
-                total += float(per_col.sum())
+            d = place_drops(plan.material_print(material, h, secs, layer, pass_index=q))
+            ci = np.floor(d.col * nx).astype(np.int64)
+            ri = np.floor(d.row * ny).astype(np.int64)
+            ok = (ci >= 0) & (ci < fine.width_px) & (ri >= 0) & (ri < fine.height_px)
+            ok[ok] = inner[ri[ok], ci[ok]]
+            w = np.asarray(d.level, np.float64)[ok] / g
+            counts += np.histogram(np.hypot(d.x_mm[ok], d.y_mm[ok]), bins=edges, weights=w)[0]
+            total += float(w.sum())
         with np.errstate(invalid="ignore", divide="ignore"):
             dens[ink.name] = (counts / h.passes / area)[keep]
         drops[ink.name] = total
     centres = 0.5 * (edges[:-1] + edges[1:])
     return centres[keep], dens, {"layer": layer, "bin_mm": DENSITY_BIN_MM, "bins": int(keep.sum()), "drops": drops,
-                                 "area_mm2": float(area.sum()),
-                                 "rule": "drops of every interlaced pass of the material's first layer per track radius, "
-                                         "over its design area per radial bin, divided by the passes"}
+                                 "area_mm2": float(area.sum()), "cell_um": [gx_um, gy_um],
+                                 "rule": "drops of every interlaced pass of the material's first layer landing in its "
+                                         "interior (the design on the film grid less half a footprint), per landing "
+                                         "radius, over the interior's area per radial bin, divided by the passes"}
 
 
 def _estimate(plan: BuildPlan, mat: Material, band: tuple[float, float], v_pl: float, layer_um: float) -> MaterialEstimate:
@@ -601,10 +620,13 @@ def _estimate(plan: BuildPlan, mat: Material, band: tuple[float, float], v_pl: f
         warn.append(f"{name}: {cycles} cycle(s) per layer print only {cycles} of the {n_inter} interlaced passes: "
                     "the film has the gaps of fewer passes")
     if t_max > (1 + THICKNESS_SPREAD_WARN) * t_min:
-        why = ("the drops per area measured in its first layer, per 1 mm radial bin" if job.spec.printer.equalise else
-               "1/r drop density of one angular clock; set printer.equalise = true")
-        warn.append(f"{name}: the thickness per cycle varies by {100 * (t_max / t_min - 1):.0f} % over radii "
-                    f"{band[0]:.1f}-{band[1]:.1f} mm ({why})")
+        r_thin, r_thick = float(r[int(np.argmin(t_cyc))]), float(r[int(np.argmax(t_cyc))])
+        todo = ("the equalised drops per area of its first layer's interior still vary: more interlaced passes "
+                "(printer.passes) or a finer clock (printer.clock.dpi_y) average the thinning out"
+                if job.spec.printer.equalise else "1/r drop density of one angular clock: set printer.equalise = true")
+        warn.append(f"{name}: the thickness per cycle varies by {100 * (t_max / t_min - 1):.1f} % over radii "
+                    f"{band[0]:.1f}-{band[1]:.1f} mm, thinnest in the 1 mm bin at {r_thin:.1f} mm, thickest at "
+                    f"{r_thick:.1f} mm; the cycles are planned for the thinnest ({todo})")
     for ink in mat.inks:
         if ink.warning:
             warn.append(f"{name}: {ink.warning}")

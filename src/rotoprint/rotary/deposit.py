@@ -12,7 +12,8 @@ of the design pixel). Each drop's cap is normalised on the grid so that its volu
 exactly: the film holds the planned volume up to rounding (and up to drops falling beyond the
 grid, reported).
 
-Figures (:class:`FilmReport`), all on the design's mask (pixels the design asks to print):
+Figures (:class:`FilmReport`), all on the design's mask (pixels the design asks to print, or,
+exact to a cell, the design rasterised on the film grid: :func:`film_grid`):
 
 - *interior*: design cells whose centre is at least half a footprint (``D / 2`` of the largest
   drop) plus half a cell from the nearest cell centre outside the design: the design less a
@@ -57,6 +58,9 @@ __all__ = [
     "footprint_diameter_um",
     "cap_height_um",
     "ink_drops",
+    "film_cells",
+    "film_grid",
+    "interior_mask",
     "deposit_film",
     "deposit_print",
 ]
@@ -430,6 +434,56 @@ def _drop_shapes(volume_pl: np.ndarray, head: InkjetHead, opts: DepositOptions) 
     return a, rs, h
 
 
+def film_cells(placement: Placement, head: InkjetHead, options: DepositOptions | None = None) -> tuple[int, int]:
+    """``(nx, ny)``: the deposit grid's cells per design pixel across columns and rows, the
+    fewest that keep a cell within ``D / cells_per_footprint`` (``D``: the full drop's
+    footprint, :meth:`DepositOptions.full_footprint_um`).
+
+    Examples
+    --------
+    >>> from rotoprint import load_device
+    >>> film_cells(Placement(4, 4, 0.0704, 0.0176, inner_radius_mm=60.0), load_device("omnidot760").head)
+    (8, 2)
+    """
+    opts = options or DepositOptions()
+    d_um = opts.full_footprint_um(head)
+    return (max(1, math.ceil(placement.pitch_x_mm * 1e3 * opts.cells_per_footprint / d_um)),
+            max(1, math.ceil(placement.pitch_y_mm * 1e3 * opts.cells_per_footprint / d_um)))
+
+
+def film_grid(placement: Placement, head: InkjetHead, options: DepositOptions | None = None) -> Placement:
+    """The film grid over the design: every pixel of ``placement`` divided into
+    :func:`film_cells` cells (``W * nx`` by ``H * ny`` cells, the same rectangle), the grid a
+    design mask exact to a deposit cell is rasterised on (see :func:`deposit_film`)."""
+    nx, ny = film_cells(placement, head, options)
+    return Placement(placement.width_px * nx, placement.height_px * ny, placement.pitch_x_mm / nx, placement.pitch_y_mm / ny,
+                     inner_radius_mm=placement.inner_radius_mm, angle_deg=placement.angle_deg)
+
+
+def interior_mask(mask: np.ndarray, pitch_x_um: float, pitch_y_um: float, distance_um: float) -> np.ndarray:
+    """``(H, W) bool``: cells of ``mask`` ``(H, W) bool`` whose centre is at least
+    ``distance_um`` from the nearest cell centre outside it (beyond the array is outside), on
+    cells of ``pitch_x_um`` x ``pitch_y_um``: the rule of the deposit model's interior
+    (``distance_um``: half a footprint plus half a cell).
+
+    Examples
+    --------
+    >>> m = np.zeros((1, 9), bool); m[0, 1:8] = True
+    >>> interior_mask(np.repeat(m, 9, axis=0), 1.0, 1.0, 2.0)[4].astype(int).tolist()
+    [0, 0, 1, 1, 1, 1, 1, 0, 0]
+    """
+    m = np.asarray(mask, bool)
+    if m.ndim != 2:
+        raise ImageError(f"interior_mask needs a 2-D mask, got shape {m.shape}")
+    if not (pitch_x_um > 0 and pitch_y_um > 0 and distance_um >= 0):
+        raise ConfigError("interior_mask needs pitches > 0 and a distance >= 0 um")
+    padded = np.zeros((m.shape[0] + 2, m.shape[1] + 2), bool)
+    padded[1:-1, 1:-1] = m
+    out = np.empty((m.shape[0], m.shape[1] + 2), bool)
+    _k.interior_rows_jit(padded, 1, m.shape[0] + 1, float(distance_um), float(pitch_x_um), float(pitch_y_um), out)
+    return out[:, 1:-1]
+
+
 def deposit_film(
     design_mask: np.ndarray,
     placement: Placement,
@@ -445,8 +499,11 @@ def deposit_film(
 
     Parameters
     ----------
-    design_mask : (H, W) bool
-        Pixels the design asks to print, on ``placement``'s grid.
+    design_mask : (H, W) or (H * ny, W * nx) bool
+        Pixels the design asks to print, on ``placement``'s grid (each cell takes its pixel's
+        value), or cells of the film grid (:func:`film_grid`: ``nx, ny`` from
+        :func:`film_cells`), e.g. the design rasterised at the cells' centres: a mask exact to a
+        cell instead of a pixel.
     placement : Placement
         The design's grid in the platform frame (for the radial bins and the cell size).
     head : InkjetHead
@@ -491,8 +548,11 @@ def deposit_film(
     opts = options or DepositOptions()
     mask = np.asarray(design_mask, bool)
     h_px, w_px = placement.height_px, placement.width_px
-    if mask.shape != (h_px, w_px):
-        raise ImageError(f"design mask is {mask.shape[1]} x {mask.shape[0]} px, the placement is {w_px} x {h_px} px")
+    nx, ny = film_cells(placement, head, opts)
+    on_cells = (nx, ny) != (1, 1) and mask.shape == (h_px * ny, w_px * nx)  # the mask on the film grid
+    if mask.shape != (h_px, w_px) and not on_cells:
+        raise ImageError(f"design mask is {mask.shape[1]} x {mask.shape[0]} px, the placement is {w_px} x {h_px} px "
+                         f"(its film grid {w_px * nx} x {h_px * ny} cells)")
     if not drop_sets:
         raise ConfigError("deposit_film needs at least one drop set")
     for i, j in pairs:
@@ -501,8 +561,6 @@ def deposit_film(
     d_full = opts.full_footprint_um(head)
     a_nom = d_full / 2.0
     px_um, py_um = placement.pitch_x_mm * 1e3, placement.pitch_y_mm * 1e3
-    nx = max(1, math.ceil(px_um * opts.cells_per_footprint / d_full))
-    ny = max(1, math.ceil(py_um * opts.cells_per_footprint / d_full))
     gx, gy = px_um / nx, py_um / ny
     shapes = [_drop_shapes(s.volume_pl, head, opts) for s in drop_sets]
     a_max = max([a_nom] + [float(sh[0].max()) for sh in shapes if sh[0].size])
@@ -535,9 +593,9 @@ def deposit_film(
         vol = np.asarray(s.volume_pl, np.float64)[order] * UM3_PER_PL
         norm = norms_fn(u, v, a, rs, hh, gx, gy)
         # site inside the design mask?
-        ci = np.floor(np.asarray(s.col, np.float64)).astype(np.int64)
-        ri = np.floor(np.asarray(s.row, np.float64)).astype(np.int64)
-        ok = (ci >= 0) & (ci < w_px) & (ri >= 0) & (ri < h_px)
+        ci = np.floor(np.asarray(s.col, np.float64) * (nx if on_cells else 1)).astype(np.int64)
+        ri = np.floor(np.asarray(s.row, np.float64) * (ny if on_cells else 1)).astype(np.int64)
+        ok = (ci >= 0) & (ci < mask.shape[1]) & (ri >= 0) & (ri < mask.shape[0])
         on = np.zeros(ci.size, bool)
         on[ok] = mask[ri[ok], ci[ok]]
         prepared.append((u, v, vol, a, rs, hh, norm, int(ci.size - on.sum())))
@@ -559,10 +617,16 @@ def deposit_film(
         """Design, interior and band cells of grid rows r0..r1, the interior's (row, col)
         and radial bin (independent of the strips: the distance reaches ``margin``)."""
         e0, e1 = max(0, r0 - margin), min(rows, r1 + margin)
-        gr = np.arange(e0, e1)
-        drow = np.floor((gr + 0.5 - oy) / ny).astype(np.int64)
-        drow_ok = (drow >= 0) & (drow < h_px)
-        dmask = mask[np.clip(drow, 0, h_px - 1)][:, dcol] & drow_ok[:, None] & dcol_ok[None, :]
+        if on_cells:  # the film grid's mask: a window of it, False beyond the design
+            dmask = np.zeros((e1 - e0, cols), bool)
+            m0, m1 = max(e0, oy), min(e1, oy + mask.shape[0])
+            if m1 > m0:
+                dmask[m0 - e0: m1 - e0, ox: ox + mask.shape[1]] = mask[m0 - oy: m1 - oy]
+        else:
+            gr = np.arange(e0, e1)
+            drow = np.floor((gr + 0.5 - oy) / ny).astype(np.int64)
+            drow_ok = (drow >= 0) & (drow < h_px)
+            dmask = mask[np.clip(drow, 0, h_px - 1)][:, dcol] & drow_ok[:, None] & dcol_ok[None, :]
         core = slice(r0 - e0, r1 - e0)
         des = dmask[core]
         if des.any():  # distance_transform_edt(dmask, sampling=(gy, gx))[core] >= thr, without its temporaries
@@ -595,7 +659,7 @@ def deposit_film(
     if len(levels) != len(drop_sets):
         raise ConfigError(f"level: {len(levels)} options for {len(drop_sets)} drop sets")
     levels = [lv if lv is not None and lv.active else None for lv in levels]
-    n_design_cells = int(mask.sum()) * nx * ny
+    n_design_cells = int(mask.sum()) * (1 if on_cells else nx * ny)
     sample_stride = max(1, n_design_cells // 2_000_000)
     samples: list[list[np.ndarray]] = [[] for _ in range(nsets)]
     inter_bits = np.zeros((rows, (cols + 7) // 8), np.uint8) if any(lv is not None for lv in levels) else None
@@ -666,17 +730,7 @@ def deposit_film(
         n_int = ac["interior"]
         mean = ac["tsum"] / n_int if n_int else float("nan")
         tmin = ac["tmin"] if n_int else float("nan")
-        bins = []
-        spread = float("nan")
-        nz = np.flatnonzero(ac["bins_n"])
-        if nz.size:
-            med = float(np.median(ac["bins_n"][nz]))
-            means = ac["bins_sum"][nz] / ac["bins_n"][nz]
-            bins = [(float(b), float(m), float(n * area_mm2)) for b, m, n in zip(nz, means, ac["bins_n"][nz])]
-            keep = ac["bins_n"][nz] >= BIN_MIN_SHARE * med
-            if keep.any():
-                mk = means[keep]
-                spread = float(np.max(np.abs(mk / mk.mean() - 1.0)))
+        bins, spread = _bins_spread(ac["bins_sum"], ac["bins_n"], area_mm2)
         m = len(s)
         films.append(
             FilmReport(
@@ -702,7 +756,7 @@ def deposit_film(
                 mean_um=mean,
                 thinnest_to_mean=tmin / mean if n_int and mean > 0 else float("nan"),
                 radial_spread=spread,
-                radial_bins=tuple(bins),
+                radial_bins=bins,
                 levelled=levelled[si],
             )
         )
