@@ -55,12 +55,9 @@ def test_jit_matches_numpy(head):
     vol = rng.uniform(100, 9000, m)
     h = cap_height_um(vol, a)
     rs = (a * a + h * h) / (2 * h)
-    nj = K.drop_norms_jit(u, v, a, rs, h, 7.0, 9.0)
-    nn = K.drop_norms_numpy(u, v, a, rs, h, 7.0, 9.0)
-    assert np.allclose(nj, nn)
     oj, on = np.zeros((30, 50)), np.zeros((30, 50))
-    K.deposit_strip_jit(u, v, vol, a, rs, h, nj, 7.0, 9.0, 10, oj)
-    K.deposit_strip_numpy(u, v, vol, a, rs, h, nn, 7.0, 9.0, 10, on)
+    K.deposit_strip_jit(u, v, vol, a, rs, h, 7.0, 9.0, 10, oj)
+    K.deposit_strip_numpy(u, v, vol, a, rs, h, 7.0, 9.0, 10, on)
     assert np.allclose(oj, on) and oj.sum() > 0
 
 

@@ -17,7 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["drop_norms_jit", "deposit_strip_jit", "drop_norms_numpy", "deposit_strip_numpy", "interior_rows_jit"]
+__all__ = ["deposit_strip_jit", "deposit_strip_numpy", "interior_rows_jit", "strip_stats_jit", "pair_counts_jit"]
 
 
 @njit(cache=True, nogil=True)
@@ -29,48 +29,44 @@ def _weight(du: float, dv: float, a: float, rs: float, h: float) -> float:
 
 
 @njit(cache=True, nogil=True)
-def drop_norms_jit(u, v, a_um, rs_um, h_um, gx_um, gy_um):
-    """``(M,) float64`` sum of each drop's cap weights over all cell centres of its footprint."""
-    m = u.size
-    out = np.zeros(m, np.float64)
-    for d in range(m):
+def deposit_strip_jit(u, v, vol_um3, a_um, rs_um, h_um, gx_um, gy_um, row0, out):
+    """Add the drops' thickness (um) to ``out`` ``(rows, cols) float64``, whose row 0 is grid
+    row ``row0``; cells outside ``out`` are skipped (their share is another strip's). Each
+    drop's weights are summed over every cell centre of its footprint (its norm, row by row)
+    and kept in a buffer, then the cells inside ``out`` get their share."""
+    rows, cols = out.shape
+    area = gx_um * gy_um
+    buf = np.empty(0, np.float64)
+    for d in range(u.size):
         a = a_um[d]
         c0 = int(math.floor(u[d] - a / gx_um - 0.5))
         c1 = int(math.ceil(u[d] + a / gx_um - 0.5))
         r0 = int(math.floor(v[d] - a / gy_um - 0.5))
         r1 = int(math.ceil(v[d] + a / gy_um - 0.5))
+        nc = c1 - c0 + 1
+        n = (r1 - r0 + 1) * nc
+        if buf.size < n:
+            buf = np.empty(2 * n, np.float64)
         s = 0.0
+        k = 0
         for r in range(r0, r1 + 1):
             dv = (r + 0.5 - v[d]) * gy_um
             for c in range(c0, c1 + 1):
-                s += _weight((c + 0.5 - u[d]) * gx_um, dv, a, rs_um[d], h_um[d])
-        out[d] = s
-    return out
-
-
-@njit(cache=True, nogil=True)
-def deposit_strip_jit(u, v, vol_um3, a_um, rs_um, h_um, norm, gx_um, gy_um, row0, out):
-    """Add the drops' thickness (um) to ``out`` ``(rows, cols) float64``, whose row 0 is grid
-    row ``row0``; cells outside ``out`` are skipped (their share is another strip's)."""
-    rows, cols = out.shape
-    area = gx_um * gy_um
-    for d in range(u.size):
-        a = a_um[d]
-        if norm[d] <= 0.0:  # footprint smaller than a cell: all on the landing cell
+                w = _weight((c + 0.5 - u[d]) * gx_um, dv, a, rs_um[d], h_um[d])
+                buf[k] = w
+                s += w
+                k += 1
+        if s <= 0.0:  # footprint smaller than a cell: all on the landing cell
             r = int(math.floor(v[d])) - row0
             c = int(math.floor(u[d]))
             if 0 <= r < rows and 0 <= c < cols:
                 out[r, c] += vol_um3[d] / area
             continue
-        scale = vol_um3[d] / (area * norm[d])
-        c0 = max(int(math.floor(u[d] - a / gx_um - 0.5)), 0)
-        c1 = min(int(math.ceil(u[d] + a / gx_um - 0.5)), cols - 1)
-        r0 = max(int(math.floor(v[d] - a / gy_um - 0.5)), row0)
-        r1 = min(int(math.ceil(v[d] + a / gy_um - 0.5)), row0 + rows - 1)
-        for r in range(r0, r1 + 1):
-            dv = (r + 0.5 - v[d]) * gy_um
-            for c in range(c0, c1 + 1):
-                w = _weight((c + 0.5 - u[d]) * gx_um, dv, a, rs_um[d], h_um[d])
+        scale = vol_um3[d] / (area * s)
+        for r in range(max(r0, row0), min(r1, row0 + rows - 1) + 1):
+            base = (r - r0) * nc - c0
+            for c in range(max(c0, 0), min(c1, cols - 1) + 1):
+                w = buf[base + c]
                 if w > 0.0:
                     out[r - row0, c] += w * scale
 
@@ -85,27 +81,23 @@ def _weights_numpy(ud, vd, a, rs, h, gx_um, gy_um):
     return r, c, w
 
 
-def drop_norms_numpy(u, v, a_um, rs_um, h_um, gx_um, gy_um):
-    """Reference of :func:`drop_norms_jit` (one drop at a time, for tests)."""
-    return np.array([_weights_numpy(u[d], v[d], a_um[d], rs_um[d], h_um[d], gx_um, gy_um)[2].sum() for d in range(u.size)])
-
-
-def deposit_strip_numpy(u, v, vol_um3, a_um, rs_um, h_um, norm, gx_um, gy_um, row0, out):
+def deposit_strip_numpy(u, v, vol_um3, a_um, rs_um, h_um, gx_um, gy_um, row0, out):
     """Reference of :func:`deposit_strip_jit` (one drop at a time, for tests)."""
     rows, cols = out.shape
     area = gx_um * gy_um
     for d in range(u.size):
-        if norm[d] <= 0.0:
+        r, c, w = _weights_numpy(u[d], v[d], a_um[d], rs_um[d], h_um[d], gx_um, gy_um)
+        norm = w.sum()
+        if norm <= 0.0:
             r, c = int(math.floor(v[d])) - row0, int(math.floor(u[d]))
             if 0 <= r < rows and 0 <= c < cols:
                 out[r, c] += vol_um3[d] / area
             continue
-        r, c, w = _weights_numpy(u[d], v[d], a_um[d], rs_um[d], h_um[d], gx_um, gy_um)
         rr = r - row0
         okr = (rr >= 0) & (rr < rows)
         okc = (c >= 0) & (c < cols)
         if okr.any() and okc.any():
-            out[np.ix_(rr[okr], c[okc])] += w[np.ix_(okr, okc)] * (vol_um3[d] / (area * norm[d]))
+            out[np.ix_(rr[okr], c[okc])] += w[np.ix_(okr, okc)] * (vol_um3[d] / (area * norm))
 
 
 @njit(cache=True, nogil=True)
@@ -159,3 +151,88 @@ def interior_rows_jit(dmask, core0, core1, thr_um, gx_um, gy_um, out):
                     ok = False
                     break
             out[o, c] = ok
+
+
+@njit(cache=True, nogil=True)
+def _add_comp(acc, i, t):
+    """``acc[i] += t`` compensated (Neumaier): ``acc[i + 1]`` keeps what the sum lost."""
+    s = acc[i] + t
+    if abs(acc[i]) >= abs(t):
+        acc[i + 1] += (acc[i] - s) + t
+    else:
+        acc[i + 1] += (t - s) + acc[i]
+    acc[i] = s
+
+
+@njit(cache=True, nogil=True)
+def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bins_n, samples):
+    """Accumulate the figures of film rows ``film`` ``(rows, cols) float64`` (grid rows
+    ``row0..``) in one pass, without temporaries; returns the samples written.
+
+    ``des``, ``inter`` ``(rows, cols) bool``: the design's and the interior's cells (the band
+    is ``des`` less ``inter``). ``acc`` ``(7,) float64``: the sum of every cell, of the design's
+    and of the interior's (each with its compensation, Neumaier: the sums do not depend on how
+    the rows are split), the interior's thinnest. ``cnt`` ``(6,) int64``: design cells, covered
+    design cells, interior cells, uncovered interior cells, band cells, uncovered band cells.
+    ``bins_sum``, ``bins_n`` ``(B,)``: the interior per 1 mm of platform radius (``geo`` as in
+    ``_levelling_kernels.film_stats_jit``: the radius as ``Placement.to_platform`` computes it).
+    With ``stride > 0`` every ``stride``-th covered interior cell of the strip (row-major) is
+    written to ``samples`` (at least ``rows * cols // stride + 1`` long).
+    """
+    rows, cols = film.shape
+    ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
+    r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
+    nb = bins_sum.size
+    k = 0
+    ns = 0
+    for i in range(rows):
+        row = (i + row0 + 0.5 - oy) / ny
+        yl = (hpx / 2.0 - row) * py
+        for j in range(cols):
+            t = film[i, j]
+            _add_comp(acc, 0, t)
+            if not des[i, j]:
+                continue
+            _add_comp(acc, 2, t)
+            cnt[0] += 1
+            if t > 0.0:
+                cnt[1] += 1
+            if not inter[i, j]:
+                cnt[4] += 1
+                if t <= 0.0:
+                    cnt[5] += 1
+                continue
+            cnt[2] += 1
+            if t <= 0.0:
+                cnt[3] += 1
+            elif stride > 0:
+                if k % stride == 0:
+                    samples[ns] = t
+                    ns += 1
+                k += 1
+            _add_comp(acc, 4, t)
+            if t < acc[6]:
+                acc[6] = t
+            col = (j + 0.5 - ox) / nx
+            xl = r_in + col * px
+            b = int(math.floor(math.hypot(ca * xl - sa * yl, sa * xl + ca * yl)))
+            if 0 <= b < nb:
+                bins_sum[b] += t
+                bins_n[b] += 1
+    return ns
+
+
+@njit(cache=True, nogil=True)
+def pair_counts_jit(film_a, film_b, des, out):
+    """``out`` ``(2,) int64`` += the design cells (``des``) film ``a`` covers and ``b`` does
+    not, and those ``b`` covers and ``a`` does not."""
+    rows, cols = des.shape
+    for i in range(rows):
+        for j in range(cols):
+            if des[i, j]:
+                ca = film_a[i, j] > 0.0
+                cb = film_b[i, j] > 0.0
+                if ca and not cb:
+                    out[0] += 1
+                elif cb and not ca:
+                    out[1] += 1

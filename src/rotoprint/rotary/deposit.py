@@ -425,6 +425,8 @@ class Deposit:
 def _drop_shapes(volume_pl: np.ndarray, head: InkjetHead, opts: DepositOptions) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per drop: footprint radius, cap sphere radius, cap height (um)."""
     v = np.asarray(volume_pl, np.float64)
+    if v.size > 1 and v.min() == v.max():  # one volume (a layer's drops, each pass printed as often): one shape
+        return tuple(np.full(v.size, x[0]) for x in _drop_shapes(v[:1], head, opts))
     full = opts.full_footprint_um(head)
     rel = np.cbrt(np.maximum(v, 0.0) / head.drop_volume_pl)
     a = 0.5 * full * rel
@@ -581,7 +583,6 @@ def deposit_film(
             f"the film grid would be {cols} x {rows} cells ({rows * cols / 1e6:.0f} M, cell {gx:.1f} x {gy:.1f} um); "
             f"at most {MAX_GRID_COLS} columns and {MAX_GRID_CELLS / 1e6:.0f} M cells: use a larger footprint or fewer cells_per_footprint"
         )
-    norms_fn = _k.drop_norms_jit if use_jit else _k.drop_norms_numpy
     strip_fn = _k.deposit_strip_jit if use_jit else _k.deposit_strip_numpy
     prepared = []
     for s, (a, rs, hh) in zip(drop_sets, shapes):
@@ -591,14 +592,13 @@ def deposit_film(
         u, v = u[order], v[order]
         a, rs, hh = a[order], rs[order], hh[order]
         vol = np.asarray(s.volume_pl, np.float64)[order] * UM3_PER_PL
-        norm = norms_fn(u, v, a, rs, hh, gx, gy)
         # site inside the design mask?
         ci = np.floor(np.asarray(s.col, np.float64) * (nx if on_cells else 1)).astype(np.int64)
         ri = np.floor(np.asarray(s.row, np.float64) * (ny if on_cells else 1)).astype(np.int64)
         ok = (ci >= 0) & (ci < mask.shape[1]) & (ri >= 0) & (ri < mask.shape[0])
         on = np.zeros(ci.size, bool)
         on[ok] = mask[ri[ok], ci[ok]]
-        prepared.append((u, v, vol, a, rs, hh, norm, int(ci.size - on.sum())))
+        prepared.append((u, v, vol, a, rs, hh, int(ci.size - on.sum())))
     # column -> design column (or -1 outside the design)
     gc = np.arange(cols)
     dcol = np.floor((gc + 0.5 - ox) / nx).astype(np.int64)
@@ -609,13 +609,22 @@ def deposit_film(
     strip_rows = max(1, int(opts.strip_cells) // cols)
     area_mm2 = gx * gy * 1e-6
     nsets = len(drop_sets)
-    acc = [dict(dep=0.0, out_dep=0.0, design=0, interior=0, unc=0, band=0, band_unc=0, tmin=math.inf, tsum=0.0,
-                bins_sum=np.zeros(0), bins_n=np.zeros(0, np.int64), covered_design=0) for _ in range(nsets)]
-    pair_acc = [[0, 0] for _ in pairs]
+    # the radius of a cell (the radial bins): its grid origin, cells per pixel and the placement
+    ang = math.radians(placement.angle_deg)
+    geo = np.array([ox, oy, nx, ny, placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm,
+                    placement.height_px, math.cos(ang), math.sin(ang)], np.float64)
+    n_bins = int(placement.radial_range_mm()[1]) + 2
+    # per film (_k.strip_stats_jit): the sums of every cell, the design's and the interior's with
+    # their compensations and the thinnest; the cells of the design, covered, interior,
+    # uncovered, band, uncovered band; the interior's radial bins
+    sums = [np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, math.inf]) for _ in range(nsets)]
+    counts = [np.zeros(6, np.int64) for _ in range(nsets)]
+    bins_acc = [(np.zeros(n_bins), np.zeros(n_bins, np.int64)) for _ in range(nsets)]
+    pair_acc = [np.zeros(2, np.int64) for _ in pairs]
     full = np.zeros((rows, cols), np.float64) if keep_map else None
     def geometry(r0: int, r1: int):
-        """Design, interior and band cells of grid rows r0..r1, the interior's (row, col)
-        and radial bin (independent of the strips: the distance reaches ``margin``)."""
+        """Design and interior cells of grid rows r0..r1 (independent of the strips: the
+        distance reaches ``margin``)."""
         e0, e1 = max(0, r0 - margin), min(rows, r1 + margin)
         if on_cells:  # the film grid's mask: a window of it, False beyond the design
             dmask = np.zeros((e1 - e0, cols), bool)
@@ -634,24 +643,16 @@ def deposit_film(
             _k.interior_rows_jit(dmask, r0 - e0, r1 - e0, a_nom + 0.5 * g_min, gx, gy, inter)
         else:
             inter = des
-        band = des & ~inter
-        ii, jj = np.nonzero(inter)
-        bidx = None
-        if ii.size:
-            xd = (jj + 0.5 - ox) / nx
-            yd = (ii + r0 + 0.5 - oy) / ny
-            X, Y = placement.to_platform(xd, yd)
-            rad = np.hypot(X, Y)
-            bidx = np.floor(rad).astype(np.int64)
-        return des, inter, band, ii, jj, bidx
+        return des, inter
 
-    def deposit_rows(si: int, r0: int, r1: int) -> np.ndarray:
-        u, v, vol, a, rs, hh, norm, _ = prepared[si]
-        film = np.zeros((r1 - r0, cols), np.float64)
+    def deposit_rows(si: int, r0: int, r1: int, into: np.ndarray | None = None) -> np.ndarray:
+        """Film rows r0..r1 of drop set ``si`` (into ``into``, zeros of that shape, if given)."""
+        u, v, vol, a, rs, hh, _ = prepared[si]
+        film = np.zeros((r1 - r0, cols), np.float64) if into is None else into
         lo = np.searchsorted(v, r0 - a_max / gy - 2.0, side="left")
         hi = np.searchsorted(v, r1 + a_max / gy + 2.0, side="right")
         if hi > lo:
-            strip_fn(u[lo:hi], v[lo:hi], vol[lo:hi], a[lo:hi], rs[lo:hi], hh[lo:hi], norm[lo:hi], gx, gy, r0, film)
+            strip_fn(u[lo:hi], v[lo:hi], vol[lo:hi], a[lo:hi], rs[lo:hi], hh[lo:hi], gx, gy, r0, film)
         return film
 
     level = opts.level
@@ -672,54 +673,37 @@ def deposit_film(
         for si in range(nsets):
             if levels[si] is not None:
                 landed[si] = full if (full is not None and si == 0) else np.zeros((rows, cols), np.float64)
+    sample_buf = np.empty(strip_rows * cols // sample_stride + 1) if n_lev else np.empty(0)
     for r0 in range(0, rows, strip_rows):
         r1 = min(rows, r0 + strip_rows)
-        des, inter, band, ii, jj, bidx = geometry(r0, r1)
+        des, inter = geometry(r0, r1)
         if inter_bits is not None:
             inter_bits[r0:r1] = np.packbits(inter, axis=1)
-        covered = []
+        strip_films = []
         for si in range(nsets):
-            film = deposit_rows(si, r0, r1)
-            if full is not None and si == 0:
+            # deposited in place into the kept map or landed film (zeros), else into a new strip
+            keep = landed.get(si, full if si == 0 else None)
+            film = deposit_rows(si, r0, r1, None if keep is None else keep[r0:r1])
+            if full is not None and si == 0 and keep is not full:
                 full[r0:r1] = film
-            if si in landed and landed[si] is not full:
-                landed[si][r0:r1] = film
-            cov = film > 0
-            covered.append(cov)
-            ac = acc[si]
-            tot = float(film.sum())
-            ac["dep"] += tot
-            ac["out_dep"] += tot - float(film[des].sum())
-            ac["design"] += int(des.sum())
-            ac["covered_design"] += int((cov & des).sum())
-            ac["interior"] += int(ii.size)
-            ac["band"] += int(band.sum())
-            ac["band_unc"] += int((band & ~cov).sum())
-            if ii.size:
-                t = film[ii, jj]
-                if levels[si] is not None:
-                    samples[si].append(t[t > 0][::sample_stride])
-                ac["unc"] += int((t <= 0).sum())
-                ac["tmin"] = min(ac["tmin"], float(t.min()))
-                ac["tsum"] += float(t.sum())
-                nb = int(bidx.max()) + 1
-                if ac["bins_sum"].size < nb:
-                    ac["bins_sum"] = np.pad(ac["bins_sum"], (0, nb - ac["bins_sum"].size))
-                    ac["bins_n"] = np.pad(ac["bins_n"], (0, nb - ac["bins_n"].size))
-                ac["bins_sum"][:nb] += np.bincount(bidx, weights=t, minlength=nb)
-                ac["bins_n"][:nb] += np.bincount(bidx, minlength=nb)
+            stride = sample_stride if levels[si] is not None else 0
+            ns = _k.strip_stats_jit(film, des, inter, r0, geo, stride, sums[si], counts[si], *bins_acc[si],
+                                    sample_buf if stride else np.empty(0))
+            if ns:
+                samples[si].append(sample_buf[:ns].copy())
+            if pairs:
+                strip_films.append(film)
         for pi, (i, j) in enumerate(pairs):
-            ci_, cj_ = covered[i] & des, covered[j] & des
-            pair_acc[pi][0] += int((ci_ & ~cj_).sum())
-            pair_acc[pi][1] += int((cj_ & ~ci_).sum())
+            _k.pair_counts_jit(strip_films[i], strip_films[j], des, pair_acc[pi])
+    acc = [dict(dep=float(sm[0] + sm[1]), out_dep=float((sm[0] + sm[1]) - (sm[2] + sm[3])), design=int(c[0]),
+                covered_design=int(c[1]), interior=int(c[2]), unc=int(c[3]), band=int(c[4]), band_unc=int(c[5]),
+                tsum=float(sm[4] + sm[5]), tmin=float(sm[6]), bins_sum=bs, bins_n=bn)
+           for sm, c, (bs, bn) in zip(sums, counts, bins_acc)]
+
     def landed_rows(si: int, r0: int, r1: int) -> np.ndarray:
         return landed[si][r0:r1] if si in landed else deposit_rows(si, r0, r1)
 
-    # the levelled figures' geometry: the interior (packed above) and each cell's radius
-    ang = math.radians(placement.angle_deg)
-    geo = np.array([ox, oy, nx, ny, placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm,
-                    placement.height_px, math.cos(ang), math.sin(ang)], np.float64)
-    n_bins = int(placement.radial_range_mm()[1]) + 2
+    # the levelled figures' geometry: the interior (packed above) and each cell's radius (geo)
 
     levelled, full_lev = _level_films(levels, samples, acc, rows, cols, gx, gy, area_mm2, strip_rows,
                                       (inter_bits, geo, n_bins), landed_rows, keep_map)
@@ -743,8 +727,8 @@ def deposit_film(
                 volume_error_fraction=dep / planned - 1.0 if planned else 0.0,
                 volume_beyond_grid_pl=max(0.0, planned - dep) if planned and dep < planned * (1 - 1e-9) else 0.0,
                 volume_outside_design_fraction=ac["out_dep"] / ac["dep"] if ac["dep"] else 0.0,
-                drops_outside=prep[7],
-                drops_outside_fraction=prep[7] / m if m else 0.0,
+                drops_outside=prep[6],
+                drops_outside_fraction=prep[6] / m if m else 0.0,
                 design_area_mm2=ac["design"] * area_mm2,
                 interior_area_mm2=n_int * area_mm2,
                 band_area_mm2=ac["band"] * area_mm2,
@@ -761,7 +745,7 @@ def deposit_film(
             )
         )
     pair_out = []
-    for (i, j), (a_nb, b_na) in zip(pairs, pair_acc):
+    for (i, j), (a_nb, b_na) in zip(pairs, (tuple(int(x) for x in p) for p in pair_acc)):
         ca, cb = acc[i]["covered_design"], acc[j]["covered_design"]
         pair_out.append({"a": i, "b": j, "a_not_b_fraction": a_nb / ca if ca else 0.0, "b_not_a_fraction": b_na / cb if cb else 0.0})
     return Deposit(films=tuple(films), pairs=tuple(pair_out), cells_per_pixel=(nx, ny), origin_cells=(ox, oy), thickness=full,
