@@ -77,16 +77,17 @@ def test_cycles_follow_from_the_measured_drops_per_area_rounded_to_the_passes():
     est = plan.estimates["plaster"]
     src = est.density_source
     assert src["layer"] == 0 and "first layer" in src["rule"]
-    # the same density by hand: every drop of every pass over the design area, per pass
+    # the same density by hand: every drop of every pass over the design area, per pass; the
+    # plan counts the drops landing in the interior (the box less half a footprint) over its area
     secs = plan.sections(0)
     g = plan.design_grid()
     area = plan.reference_image("plaster", secs).sum() * g.pitch_x_mm * g.pitch_y_mm
+    assert "interior" in src["rule"] and 0.9 * area < src["area_mm2"] < area
     for ink in ("ammonium_sulphate", "calcium_chloride"):
         h = plan.head(ink)
         drops = sum(int(np.count_nonzero(s.levels)) for q in range(h.passes)
                     for s in plan.material_print("plaster", h, secs, 0, pass_index=q).swathes)
-        assert src["drops"][ink] == drops
-        assert src["area_mm2"] == pytest.approx(area)
+        assert 0.9 * drops < src["drops"][ink] < drops
         d = est.drops_per_mm2[ink]
         assert d.min() <= drops / h.passes / area * 1.02 and d.max() >= drops / h.passes / area * 0.98
     n = plan.heads[0].passes

@@ -517,7 +517,7 @@ def measured_drop_density(plan: BuildPlan, material: str, band: tuple[float, flo
         ``area_mm2`` (that layer's interior area), ``cell_um`` (the film grid's cells) and the
         ``rule``, for ``plan.json``.
     """
-    from ..rotary.deposit import DepositOptions, film_grid, interior_mask
+    from ..rotary.deposit import DepositOptions, film_grid, interior_mask, radial_area_mm2
     from ..rotary.simulate import place_drops
 
     parts = [p.name for p in plan.job.spec.parts if p.material == material]
@@ -539,9 +539,7 @@ def measured_drop_density(plan: BuildPlan, material: str, band: tuple[float, flo
     gx_um, gy_um = fine.pitch_x_mm * 1e3, fine.pitch_y_mm * 1e3
     inner = interior_mask(plan.reference_image(material, secs, grid=fine), gx_um, gy_um,
                           0.5 * DepositOptions().full_footprint_um(head) + 0.5 * min(gx_um, gy_um))
-    ii, jj = np.nonzero(inner)
-    x, y = fine.to_platform(jj + 0.5, ii + 0.5)
-    area = np.histogram(np.hypot(x, y), bins=edges)[0] * (fine.pitch_x_mm * fine.pitch_y_mm)
+    area = radial_area_mm2(inner, fine, edges)
     keep = area > 0
     if keep.any():
         keep &= area >= DENSITY_BIN_MIN_SHARE * float(np.median(area[keep]))

@@ -158,17 +158,21 @@ def render_report(plan, plan_json: dict, *, composites: list[bytes], overlays_di
         w(f"<tr><td>{sw}{_e(m)}</td><td>{_e(ps)}</td><td>{inks}</td><td>{post}</td><td>{est.cycles} (needed {est.cycles_needed})</td>"
           f"<td>{est.passes_per_layer}</td><td>{_fmt(est.per_layer_um[0])} - {_fmt(est.per_layer_um[1])}</td></tr>")
     w("</table>")
-    w("<p style='font-size:13px'>Cycles per layer follow from the true volume per area of the planned drops: every drop "
-      "of every interlaced pass of the material's first layer, per 1 mm radial bin of its design area (not a nominal "
-      "density); with interlaced passes they are a multiple of the passes.</p>")
+    w("<p style='font-size:13px'>Cycles per layer follow from the true volume per area of the planned drops: the drops "
+      "of every interlaced pass of the material's first layer landing in its interior (the design less half a footprint), "
+      "per 1 mm radial bin of the interior's area (not a nominal density); with interlaced passes they are a multiple "
+      "of the passes.</p>")
     cov = plan_json.get("coverage") or {}
     if cov:
         h0 = plan.heads[0]
+        cells = next((o["deposit"]["grid_um"] for o in plan_json.get("overlays", []) if o.get("deposit")), None)
+        on = (f"on the film grid ({cells[0]:.1f} x {cells[1]:.1f} um cells) against the design rasterised at the cells' "
+              "centres" if cells else "on the film grid")
         w("<h3>Film coverage (deposit model)</h3>"
           f"<p style='font-size:13px'>{h0.passes} interlaced pass(es) per layer, radial offsets "
           f"{', '.join(f'{o * 1000:.1f}' for o in h0.pass_offsets_mm)} um, clock {h0.lattice.dpi_y:.0f} dpi "
-          f"({_e(h0.interlace.get('clock', 'job'))}). Each layer's drops of every pass and ink spread to footprints and merged; "
-          "the interior is the design less a band half a footprint wide. The cell model's IoU is secondary.</p>"
+          f"({_e(h0.interlace.get('clock', 'job'))}). Each layer's drops of every pass and ink spread to footprints and merged "
+          f"{on}; the interior is the design less a band half a footprint wide. The cell model's IoU is secondary.</p>"
           "<table id='coverage'><tr><th>material</th><th>layers</th><th>interior uncovered</th><th>band uncovered</th>"
           "<th>thinnest / mean</th><th>thinnest / mean as landed</th><th>cell model IoU</th></tr>")
         for m, c in cov.items():

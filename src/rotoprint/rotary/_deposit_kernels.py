@@ -17,7 +17,8 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["deposit_strip_jit", "deposit_strip_numpy", "interior_rows_jit", "strip_stats_jit", "pair_counts_jit"]
+__all__ = ["deposit_strip_jit", "deposit_strip_numpy", "interior_rows_jit", "strip_stats_jit", "pair_counts_jit",
+           "radial_cell_counts_jit"]
 
 
 @njit(cache=True, nogil=True)
@@ -236,3 +237,22 @@ def pair_counts_jit(film_a, film_b, des, out):
                     out[0] += 1
                 elif cb and not ca:
                     out[1] += 1
+
+
+@njit(cache=True, nogil=True)
+def radial_cell_counts_jit(mask, geo, lo_mm, bin_mm, out):
+    """``out`` ``(B,) int64`` += the True cells of ``mask`` ``(rows, cols) bool`` per radial
+    bin ``floor((r - lo_mm) / bin_mm)`` (bins outside ``0..B-1`` skipped), ``r`` a cell
+    centre's platform radius (``geo`` as in :func:`strip_stats_jit`)."""
+    rows, cols = mask.shape
+    ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
+    r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
+    nb = out.size
+    for i in range(rows):
+        yl = (hpx / 2.0 - (i + 0.5 - oy) / ny) * py
+        for j in range(cols):
+            if mask[i, j]:
+                xl = r_in + (j + 0.5 - ox) / nx * px
+                b = int(math.floor((math.hypot(ca * xl - sa * yl, sa * xl + ca * yl) - lo_mm) / bin_mm))
+                if 0 <= b < nb:
+                    out[b] += 1

@@ -61,6 +61,7 @@ __all__ = [
     "film_cells",
     "film_grid",
     "interior_mask",
+    "radial_area_mm2",
     "deposit_film",
     "deposit_print",
 ]
@@ -486,6 +487,24 @@ def interior_mask(mask: np.ndarray, pitch_x_um: float, pitch_y_um: float, distan
     return out[:, 1:-1]
 
 
+def radial_area_mm2(mask: np.ndarray, grid: Placement, edges_mm: np.ndarray) -> np.ndarray:
+    """``(B,) float64``: the area of ``mask`` ``(H, W) bool`` on ``grid`` (its pixels, each at
+    its centre's platform radius) in the radial bins of equal width ``edges_mm`` ``(B + 1,)``
+    (increasing), mm^2."""
+    m = np.asarray(mask, bool)
+    e = np.asarray(edges_mm, np.float64)
+    if m.shape != (grid.height_px, grid.width_px):
+        raise ImageError(f"mask is {m.shape[1]} x {m.shape[0]} px, the grid {grid.width_px} x {grid.height_px} px")
+    if e.ndim != 1 or e.size < 2 or not np.allclose(np.diff(e), e[1] - e[0]) or not e[1] > e[0]:
+        raise ConfigError("radial_area_mm2 needs at least two increasing, equally spaced bin edges")
+    ang = math.radians(grid.angle_deg)
+    geo = np.array([0.0, 0.0, 1.0, 1.0, grid.inner_radius_mm, grid.pitch_x_mm, grid.pitch_y_mm, grid.height_px,
+                    math.cos(ang), math.sin(ang)], np.float64)
+    out = np.zeros(e.size - 1, np.int64)
+    _k.radial_cell_counts_jit(m, geo, float(e[0]), float(e[1] - e[0]), out)
+    return out * (grid.pitch_x_mm * grid.pitch_y_mm)
+
+
 def deposit_film(
     design_mask: np.ndarray,
     placement: Placement,
@@ -590,8 +609,12 @@ def deposit_film(
         v = np.asarray(s.row, np.float64) * ny + oy
         order = np.argsort(v, kind="stable")
         u, v = u[order], v[order]
-        a, rs, hh = a[order], rs[order], hh[order]
-        vol = np.asarray(s.volume_pl, np.float64)[order] * UM3_PER_PL
+        vol = np.asarray(s.volume_pl, np.float64)
+        if vol.size and vol.min() == vol.max():  # one volume, one shape: nothing to reorder
+            vol = vol * UM3_PER_PL
+        else:
+            a, rs, hh = a[order], rs[order], hh[order]
+            vol = vol[order] * UM3_PER_PL
         # site inside the design mask?
         ci = np.floor(np.asarray(s.col, np.float64) * (nx if on_cells else 1)).astype(np.int64)
         ri = np.floor(np.asarray(s.row, np.float64) * (ny if on_cells else 1)).astype(np.int64)
