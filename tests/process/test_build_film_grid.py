@@ -114,3 +114,21 @@ def test_the_demo_film_is_measured_on_the_film_grid(coil):
         assert f["band_uncovered_fraction"] <= 0.01 and f["volume_outside_design_fraction"] < 0.05
         assert f["thinnest_to_mean"] >= 0.5 and f["levelled"]["thinnest_to_mean"] >= 0.7
         assert f["radial_spread"] < 0.05 and 0.9 < f["levelled"]["mean_um"] / f["mean_um"] < 1.1
+
+
+def test_interior_mask_is_the_distance_rule_strip_by_strip():
+    from scipy.ndimage import distance_transform_edt
+
+    from rotoprint.rotary.deposit import interior_mask
+
+    rng = np.random.default_rng(5)
+    m = np.zeros((300, 120), bool)
+    for _ in range(40):
+        r, c = rng.integers(0, 300), rng.integers(0, 120)
+        m[max(0, r - 20): r + 20, max(0, c - 15): c + 15] = True
+    whole = interior_mask(m, 8.8, 8.82, 30.0, strip_cells=10**9)
+    # the cells' centres at least 30 um from every centre outside (beyond the array is outside)
+    ref = (distance_transform_edt(np.pad(m, 1), sampling=(8.82, 8.8)) >= 30.0)[1:-1, 1:-1]
+    assert np.array_equal(whole, ref) and 0 < whole.sum() < m.sum()
+    for cells in (10_000, 1_000, 200):  # strips of 81, 8 and 1 rows with their halos
+        assert np.array_equal(interior_mask(m, 8.8, 8.82, 30.0, strip_cells=cells), whole), cells

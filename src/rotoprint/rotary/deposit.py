@@ -463,11 +463,13 @@ def film_grid(placement: Placement, head: InkjetHead, options: DepositOptions | 
                      inner_radius_mm=placement.inner_radius_mm, angle_deg=placement.angle_deg)
 
 
-def interior_mask(mask: np.ndarray, pitch_x_um: float, pitch_y_um: float, distance_um: float) -> np.ndarray:
+def interior_mask(mask: np.ndarray, pitch_x_um: float, pitch_y_um: float, distance_um: float, *,
+                  strip_cells: int = 4_000_000) -> np.ndarray:
     """``(H, W) bool``: cells of ``mask`` ``(H, W) bool`` whose centre is at least
     ``distance_um`` from the nearest cell centre outside it (beyond the array is outside), on
     cells of ``pitch_x_um`` x ``pitch_y_um``: the rule of the deposit model's interior
-    (``distance_um``: half a footprint plus half a cell).
+    (``distance_um``: half a footprint plus half a cell). Computed in strips of about
+    ``strip_cells`` cells with halos reaching the distance (the kernel's memory: 4 bytes a cell).
 
     Examples
     --------
@@ -483,7 +485,13 @@ def interior_mask(mask: np.ndarray, pitch_x_um: float, pitch_y_um: float, distan
     padded = np.zeros((m.shape[0] + 2, m.shape[1] + 2), bool)
     padded[1:-1, 1:-1] = m
     out = np.empty((m.shape[0], m.shape[1] + 2), bool)
-    _k.interior_rows_jit(padded, 1, m.shape[0] + 1, float(distance_um), float(pitch_x_um), float(pitch_y_um), out)
+    halo = math.ceil(distance_um / pitch_y_um) + 2
+    step = max(1, int(strip_cells) // (m.shape[1] + 2))
+    for r0 in range(0, m.shape[0], step):  # rows r0..r1 of the mask are rows r0 + 1.. of padded
+        r1 = min(m.shape[0], r0 + step)
+        e0, e1 = max(0, r0 + 1 - halo), min(m.shape[0] + 2, r1 + 1 + halo)
+        _k.interior_rows_jit(padded[e0:e1], r0 + 1 - e0, r1 + 1 - e0, float(distance_um), float(pitch_x_um),
+                             float(pitch_y_um), out[r0:r1])
     return out[:, 1:-1]
 
 
