@@ -136,3 +136,14 @@ def test_auto_judges_dead_nozzle_shares_after_the_cover(head, tilt, monkeypatch)
     best = min((False, True), key=lambda m: got[m][1])
     assert got[True][1] != got[False][1]
     assert _same(auto, got[best][0])
+
+
+def test_auto_keeps_the_raise_off_beside_uncovered_dead_tracks(head, monkeypatch):
+    """Dead tracks left out of the union (no cover to follow): the raise would lift their rings
+    on the mm scale but thin the film beside them, so auto returns the plain shares even where
+    their model bins are above the threshold."""
+    h, sp, pp, st = _setup(head, 70.0, dead=5)
+    off = _shares(h, sp, pp, st, False, monkeypatch)
+    assert eq.model_bin_deviation(h, sp, pp.offsets_mm, off, st, footprint_um=D_UM) > eq.EQUALISE_AUTO_THRESHOLD
+    assert not _same(_shares(h, sp, pp, st, True, monkeypatch), off)
+    assert _same(_shares(h, sp, pp, st, "auto", monkeypatch), off)
