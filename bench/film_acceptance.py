@@ -26,7 +26,7 @@ with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / 
 nozzles (of those the other options keep). ``--no-phases``: without the rows with angular phases and
 edge overlap. ``--raise-sparse``: the equalisation with ``equalise.EQUALISE_RAISE = True``; ``--raise=``
 off / on / auto sets it to False / True / "auto" (the default). ``--edge-restore``: the equalised prints
-with ``PassOptions(edge_restore=EdgeRestore(ZONE_UM, COEFFICIENT))`` (default 50 um, 0.4: thinned-out
+with ``PassOptions(edge_restore=EdgeRestore(ZONE_UM, COEFFICIENT))`` (default 50 um, 0.3: thinned-out
 drops near the design's edges restored, ``rotary/edgecomp.py``).
 
 The last column is a secondary figure, never the acceptance one: the levelled 1 mm bins' largest

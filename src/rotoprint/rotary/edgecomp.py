@@ -29,7 +29,7 @@ __all__ = ["EDGE_ZONE_UM", "EDGE_COEFFICIENT", "EdgeRestore", "edge_distance_um"
 #: Width of the zone inside the design's edge where thinned-out drops are restored, um.
 EDGE_ZONE_UM = 50.0
 #: Relative gain of a thinned track's drops in the zone.
-EDGE_COEFFICIENT = 0.4
+EDGE_COEFFICIENT = 0.3
 _GOLDEN2 = 0.3819660112501051  # 2 - golden ratio: the restore pattern's phase step, apart from the thinning's
 
 
