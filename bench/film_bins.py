@@ -85,7 +85,7 @@ def model_bins(head, pl: Placement, man: dict, tilt: float, d_um: float, nbins: 
     st = RotarySetup(tilt_deg=tilt, dpi_y=man["dpi_y"] / (EQUALISE_CLOCK_FACTOR if eq else 1))
     cover = bool(eq and head.dead_nozzles and len(offs) > 1)  # as pass_prints: shares with all live, dead drops moved
     fr = track_fractions(head, sp, offs, st, footprint_um=d_um, reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR),
-                         dead_nozzles=() if cover else None, covered=cover) if eq else None
+                         dead_nozzles=() if cover else None) if eq else None
     if cover:
         from rotoprint.rotary.deadcover import cover_dead_tracks
 

@@ -121,8 +121,8 @@ def test_auto_takes_the_raise_where_it_flattens_the_bins(head, monkeypatch):
 
 @pytest.mark.parametrize("tilt", [20.0, 45.0])
 def test_auto_judges_dead_nozzle_shares_after_the_cover(head, tilt, monkeypatch):
-    """With 5 dead nozzles pass_prints equalises with them as live and covers them after
-    (``covered=True``): auto's choice is the variant whose model bins are flatter *after* the
+    """With 5 dead nozzles pass_prints equalises with them as live (``dead_nozzles=()``) and
+    covers them after: auto's choice is the variant whose model bins are flatter *after* the
     cover (dead tracks printing nothing), and the one it returns is one of the two variants."""
     h, sp, pp, st = _setup(head, tilt, dead=5)
     monkeypatch.setattr(eq, "EQUALISE_AUTO_THRESHOLD", 0.0)  # always compare both
@@ -132,7 +132,7 @@ def test_auto_judges_dead_nozzle_shares_after_the_cover(head, tilt, monkeypatch)
         cov, _ = cover_dead_tracks(h, sp, pp.offsets_mm, st, shares=fr, footprint_um=D_UM)
         got[mode] = (fr, eq.model_bin_deviation(h, sp, pp.offsets_mm, cov, st, footprint_um=D_UM))
         assert got[mode][1] == pytest.approx(_bins_by_hand(h, sp, pp, cov, h.dead_nozzles), abs=2e-4)
-    auto = _shares(h, sp, pp, st, "auto", monkeypatch, dead_nozzles=(), covered=True)
+    auto = _shares(h, sp, pp, st, "auto", monkeypatch, dead_nozzles=())
     best = min((False, True), key=lambda m: got[m][1])
     assert got[True][1] != got[False][1]
     assert _same(auto, got[best][0])

@@ -74,7 +74,7 @@ EQUALISE_AUTO_THRESHOLD = 0.015
 
 def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float], setup: RotarySetup | None = None, *,
                     footprint_um: float | None = None, dead_nozzles: Sequence[int] | None = None,
-                    floor: float | None = None, reach: ReachFloor | None = None, covered: bool = False) -> list[list[np.ndarray]]:
+                    floor: float | None = None, reach: ReachFloor | None = None) -> list[list[np.ndarray]]:
     """Share of its drops each track keeps so that the film is as even across the radius as the tracks allow.
 
     Track ``k`` (of any swathe and pass) at radius ``r_k`` with clock ``dphi_k`` and kept share
@@ -94,7 +94,7 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     out within a window: a 30 px band's 1 mm bins 1.8 / 1.9 / 1.9 / 1.5 % at tilts 0 / 20 / 45 /
     70, off 1.3 / 2.7 / 1.5 / 3.7; ``"auto"``, the default: without the raise, and where the
     model's 1 mm bins, :func:`model_bin_deviation`, exceed :data:`EQUALISE_AUTO_THRESHOLD`, also
-    with it, the flatter kept; never with dead tracks left out of the union without ``covered``;
+    with it, the flatter kept; never with dead tracks left out of the union (no cover follows);
     ``docs/rotary.md``).
 
     Floors: every track keeps at least ``floor`` (default :data:`EQUALISE_FLOOR`; e.g. ``1 /
@@ -126,14 +126,11 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
         Nozzles left out of the union (default the head's; ``()``: every nozzle as live, the
         dead-track cover then gives the dead ones' drops to live tracks,
         :func:`~rotoprint.rotary.deadcover.cover_dead_tracks`, which scales the shares where
-        it finds no room: :attr:`~rotoprint.rotary.deadcover.DeadCoverOptions.scale_shares`).
+        it finds no room: :attr:`~rotoprint.rotary.deadcover.DeadCoverOptions.scale_shares`;
+        ``"auto"`` then judges each variant's model bins after that cover).
     reach : ReachFloor, optional
         ``reach_um`` and ``clock_factor`` of the floors above (None: one floor for every track,
         no track left out).
-    covered : bool
-        The shares go on to :func:`~rotoprint.rotary.deadcover.cover_dead_tracks` (as in
-        :func:`~rotoprint.rotary.interlace.pass_prints` with the head's dead nozzles and
-        ``dead_nozzles=()``): ``"auto"`` judges each variant's model bins after that cover.
 
     Returns
     -------
@@ -180,12 +177,12 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
 
     if mode != "auto":
         return shares(bool(mode))
-    if dead and not covered:
+    cover = bool(head.dead_nozzles and not dead and len(offsets_mm) > 1)  # () with dead nozzles: the cover follows
+    if dead:
         # dead tracks left out of the union (no cover): the raise fills their rings on the mm
         # scale but thins the film beside them (10 mm band, 3 dead, tilt 0: thinnest / mean 0.10
         # against 0.42 without), so auto keeps it off
         return shares(False)
-    cover = bool(covered and head.dead_nozzles and len(offsets_mm) > 1)
 
     def deviation(fr: list[list[np.ndarray]]) -> float:
         if cover:

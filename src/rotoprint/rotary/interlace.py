@@ -924,7 +924,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         cover_all = bool(options.dead_cover and head.dead_nozzles and pp.passes > 1)  # shares with all live, room kept for the cover below
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
                                 reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR),
-                                dead_nozzles=() if cover_all else None, covered=cover_all)
+                                dead_nozzles=() if cover_all else None)
         clock = clock * EQUALISE_CLOCK_FACTOR
     elif options.balance:
         fracs = density_shares(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock))
