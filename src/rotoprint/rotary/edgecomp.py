@@ -147,13 +147,26 @@ def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarr
         out[ok] = m[i[ok], j[ok]]
         return out
 
-    x, y = pl.to_platform(col, row)
+    col, row = np.asarray(col, np.float64), np.asarray(row, np.float64)
+    # only a printing pixel with an empty one among its 8 neighbours can hold a site within a
+    # pixel of an edge: the rest is not looked at again
+    pad = np.zeros((h + 2, w + 2), bool)
+    pad[1:-1, 1:-1] = m
+    rim = m & ~np.logical_and.reduce([pad[1 + di:h + 1 + di, 1 + dj:w + 1 + dj] for di in (-1, 0, 1) for dj in (-1, 0, 1)])
+    i, j = np.floor(row).astype(np.int64), np.floor(col).astype(np.int64)
+    ok = (i >= 0) & (i < h) & (j >= 0) & (j < w)
+    cand = np.zeros(col.size, bool)
+    cand[ok] = rim[i[ok], j[ok]]
+    idx = np.flatnonzero(cand)
+    x, y = pl.to_platform(col[idx], row[idx])
     rad = np.maximum(np.hypot(x, y), 1e-12)
-    near = np.zeros(np.size(col), bool)
+    hit = np.zeros(idx.size, bool)
     for t in (-1.0, 1.0):
         c2, r2 = pl.to_design(x + t * 1e-3 * zone_um * x / rad, y + t * 1e-3 * zone_um * y / rad)
-        near |= ~inside(c2, r2)
-    return near & inside(np.asarray(col, np.float64), np.asarray(row, np.float64))
+        hit |= ~inside(c2, r2)
+    near = np.zeros(col.size, bool)
+    near[idx[hit]] = True
+    return near
 
 
 def restore_near_edges(full, thinned, design: np.ndarray, shares, *, options: EdgeRestore | None = None, pass_index: int = 0):
