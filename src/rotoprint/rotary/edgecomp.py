@@ -7,7 +7,8 @@ band (the caps' taper). Where a 1 mm radial bin's interior is a thin sliver besi
 (the gaps between the test design's cells), that bin loses 3-6 % levelled while it is flat as
 landed (``docs/rotary.md``, "Equalised 1 mm bins"). :func:`restore_near_edges` gives such
 places back ink: of the drops an equalised pass thinned out (:func:`~rotoprint.rotary.equalise.thin_print`),
-those landing inside the design within :attr:`EdgeRestore.zone_um` of its edge are restored so
+those landing inside the design within :attr:`EdgeRestore.zone_um` of its edge (by default an
+edge met along the platform radius, :attr:`EdgeRestore.radial_only`) are restored so
 that a track keeping the share ``f`` keeps ``min(1, (1 + c) f)`` there (``c`` =
 :attr:`EdgeRestore.coefficient`: the same relative gain at every radius, though the equalisation
 thins the inner tracks more), by an ordered pattern on each track's firing index (as the
@@ -71,7 +72,7 @@ class EdgeRestore:
 
 def edge_distance_um(mask: np.ndarray, col: np.ndarray, row: np.ndarray, pitch_x_mm: float, pitch_y_mm: float,
                      reach_um: float) -> np.ndarray:
-    """Distance (um) of sites inside the design to its edge, capped at ``reach_um``.
+    """Distance (um) of sites inside the design to its edge, looked for up to ``reach_um``.
 
     Parameters
     ----------
