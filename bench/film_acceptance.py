@@ -17,13 +17,21 @@ slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs nati
 
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
                                                   [--default-only] [--dead-only | --live-only] [--no-phases] [--raise-sparse]
+                                                  [--raise=off|on|auto] [--edge-restore[=ZONE_UM,COEFFICIENT]]
                                                   [--no-sensitivity | --sensitivity-only]
 
 ``--equalised-only``: only the equalised rows (the default; with the 5 dead nozzles; with phases and
 overlap), then the cost table. ``--default-only``: only the default print's two rows (without and
 with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / without the 5 dead
 nozzles (of those the other options keep). ``--no-phases``: without the rows with angular phases and
-edge overlap. ``--raise-sparse``: the equalisation with ``equalise.EQUALISE_RAISE = True``.
+edge overlap. ``--raise-sparse``: the equalisation with ``equalise.EQUALISE_RAISE = True``; ``--raise=``
+off / on / auto sets it to False / True / "auto" (the default). ``--edge-restore``: the equalised prints
+with ``PassOptions(edge_restore=EdgeRestore(ZONE_UM, COEFFICIENT))`` (default 50 um, 0.3: thinned-out
+drops near the design's edges restored, ``rotary/edgecomp.py``).
+
+The last column is a secondary figure, never the acceptance one: the levelled 1 mm bins' largest
+deviation counting only bins with at least 1/4 of the median bin's interior area (the deposit
+model's floor is 1/10: a bin whose interior is a sliver beside the design's edges counts there).
 
 Every film row also gives the **levelled** film (the wet film levelling under surface tension
 before it sets, ``LevelOptions.from_head``: set time 1 s (the preset's nominal; the convolutions on the coarse grid, ``levelled.coarse_factor``), the preset's nominal 10 mPa s, 30 mN/m, h0 the
@@ -56,13 +64,29 @@ from rotoprint.rotary.options import RotarySetup
 from rotoprint.rotary.testimage import test_design
 
 
+#: The secondary bin rule of the last column: bins with at least this share of the median bin's interior area.
+SLIVER_FLOOR = 0.25
+
+
+def bins_spread(bins, floor: float = SLIVER_FLOOR) -> float:
+    """Largest ``|bin / mean - 1|`` of ``radial_bins`` ``((r_mm, mean_um, area_mm2), ...)`` counting the
+    bins with at least ``floor`` of the median area (the deposit model's own rule: 1/10)."""
+    if not bins:
+        return float("nan")
+    a = np.array([b[2] for b in bins])
+    m = np.array([b[1] for b in bins])
+    keep = a >= floor * np.median(a)
+    return float(np.max(np.abs(m[keep] / m[keep].mean() - 1.0)))
+
+
 def film_row(label, tilt, passes, gap_um, dpi, f, secs, extra=""):
     lv = f.levelled
     lev = (f" {lv.thinnest_to_mean:.3f} | {100 * lv.radial_spread:.1f} | {lv.h0_um:.1f} | {lv.levelling_length_um:.0f} | "
            f"{lv.volume_error_fraction:+.1e} |") if lv is not None else " - | - | - | - | - |"
+    sliver = f" {100 * bins_spread(lv.radial_bins):.1f} |" if lv is not None else " - |"
     return (f"| {tilt:g} | {label} | {passes} | {gap_um:.1f} | {dpi:.0f} | {100 * f.uncovered_fraction:.3f} | "
             f"{100 * f.band_uncovered_fraction:.2f} | {f.thinnest_to_mean:.3f} | {f.mean_um:.2f} | {100 * f.radial_spread:.1f} | "
-            f"{100 * f.volume_error_fraction:+.1e} | {f.drops} |{lev} {secs:.0f} |{extra}")
+            f"{100 * f.volume_error_fraction:+.1e} | {f.drops} |{lev} {secs:.0f} |{sliver}{extra}")
 
 
 def sensitivity_table(prs, d, head, tilt) -> None:
@@ -163,10 +187,18 @@ def main() -> None:
         cost_table(d, pl, head0, tilts)
         return
     quick, level_on = "--quick" in sys.argv, "--no-level" not in sys.argv
-    if "--raise-sparse" in sys.argv:  # the equalisation's opt-in raise of sparse stretches
-        import rotoprint.rotary.equalise as _eq
+    raise_opt = {"off": False, "on": True, "auto": "auto"}
+    for a in sys.argv[1:]:
+        if a == "--raise-sparse" or a.startswith("--raise="):  # the equalisation's raise of sparse stretches
+            import rotoprint.rotary.equalise as _eq
 
-        _eq.EQUALISE_RAISE = True
+            _eq.EQUALISE_RAISE = True if a == "--raise-sparse" else raise_opt[a.split("=", 1)[1]]
+    edge = None
+    for a in sys.argv[1:]:
+        if a == "--edge-restore" or a.startswith("--edge-restore="):
+            from rotoprint.rotary.edgecomp import EdgeRestore
+
+            edge = EdgeRestore(*(float(x) for x in a.split("=", 1)[1].split(","))) if "=" in a else EdgeRestore()
     sens_only, sens = "--sensitivity-only" in sys.argv, "--no-sensitivity" not in sys.argv
     if sens_only:
         tilt = next((t for t in tilts if t != 0.0), tilts[0])
@@ -181,8 +213,9 @@ def main() -> None:
     sens_prs = None
     print("| tilt deg | print | passes | largest track gap um | clock dpi | uncovered interior % | uncovered band % | "
           "thinnest / mean | mean um | 1 mm bins max dev % | volume error | drops | levelled thinnest / mean | "
-          "levelled 1 mm bins max dev % | h0 um | levelling length um | levelled volume error | s |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "levelled 1 mm bins max dev % | h0 um | levelling length um | levelled volume error | s | "
+          "levelled bins, interior >= 1/4 median (secondary) % |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for tilt in tilts:
         sp = plan_swathes(head0, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
         rng = np.random.default_rng(14)
@@ -220,7 +253,8 @@ def main() -> None:
                 try:
                     with tempfile.TemporaryDirectory() as td:
                         m = transform_passes(d, head, pl, Path(td) / "p.png", PassOptions(RotarySetup(tilt_deg=tilt), passes=passes, equalise=eq,
-                                                                                          phases=inter, edge_overlap=inter))
+                                                                                          phases=inter, edge_overlap=inter,
+                                                                                          edge_restore=edge if eq else None))
                         prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
                 except GeometryError as exc:
                     print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)

@@ -734,15 +734,14 @@ class PassOptions:
         Off by default: measured on the test design it flattens the 1 mm bins (0.2 % at tilt
         0) but opens holes (0.1 % of the interior) where thinned tracks meet.
     phases : bool
-        Angular interlace: each pass prints at its angular phase (:attr:`PassPlan.phases`),
-        as a head with its mount angle shifted by :func:`phase_angles`. Off by default:
-        measured on the test design (``docs/rotary.md``) it moves the thinnest point by
-        +0.01 / +0.08 / -0.29 / -0.01 of the mean at tilts 0 / 20 / 45 / 70 (with
-        ``edge_overlap``), no steady gain.
+        Angular interlace: each pass prints at its angular phase (:attr:`PassPlan.phases`), as a head with its
+        mount angle shifted by :func:`phase_angles`. Off by default: measured on the test design
+        (``docs/rotary.md``) it moves the thinnest point by +0.01 / +0.08 / -0.29 / -0.01 of the mean at tilts 0
+        / 20 / 45 / 70 (with ``edge_overlap``), no steady gain.
     edge_overlap : bool
-        Swathes planned with an overlap of :func:`pass_overlap_mm`, so that every pass prints
-        the design's edges and the seams (less of the boundary band uncovered: 1.80 -> 0.35 %
-        at tilt 0). Off by default (see ``phases``).
+        Swathes planned with an overlap of :func:`pass_overlap_mm`, so that every pass prints the design's edges
+        and the seams (less of the boundary band uncovered: 1.80 -> 0.35 % at tilt 0). Off by default (see
+        ``phases``).
     even_lines : bool
         Without ``equalise`` and ``balance``: whole tracks are left out where the union of the
         passes crowds (:func:`~rotoprint.rotary.equalise.even_line_shares`, the clock and the
@@ -753,22 +752,22 @@ class PassOptions:
         (:func:`tilt_scan`; at tilt 0 the print is as without). Off by default, only with ``equalise=False``:
         it lifts tilt 20 but lowers tilt 45 (levelled per coat, ``docs/rotary.md``, "Even lines").
     spread_dead : bool
-        With dead nozzles (and more than one pass): the passes' offsets may span
-        :data:`DEAD_SPREAD_PERIODS` row periods, with the swathes planned with that overlap
-        (:func:`pass_overlap_mm` ``(dead_spread=True)``, as ``edge_overlap`` does), so that a
-        dead nozzle's missing tracks (one per pass) lie apart. On by default; False plans
-        the offsets within one row period (as before).
+        With dead nozzles (and more than one pass): the passes' offsets may span :data:`DEAD_SPREAD_PERIODS` row
+        periods, with the swathes planned with that overlap (:func:`pass_overlap_mm` ``(dead_spread=True)``, as
+        ``edge_overlap`` does), so that a dead nozzle's missing tracks (one per pass) lie apart. On by default;
+        False plans the offsets within one row period (as before).
     dead_cover : bool
-        With dead nozzles (more than one pass, a binary head) and shares (``equalise``): the
-        shares are equalised with the dead nozzles as live ones, then each dead track's drops
-        go to the nearest live tracks of every pass
-        (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`, realised by :func:`thin_print`).
+        With dead nozzles (more than one pass, a binary head) and shares (``equalise``): the shares are
+        equalised with the dead nozzles as live ones, then each dead track's drops go to the nearest live tracks
+        of every pass (:func:`~rotoprint.rotary.deadcover.cover_dead_tracks`, realised by :func:`thin_print`).
         On by default; the manifest's ``dead_cover`` reports it.
     dead_reserve : bool
         With ``dead_cover`` and no shares (a plain print has no room): live tracks with room keep one common
         share below 1 so the dead tracks' drops fit (:func:`~rotoprint.rotary.deadcover.thin_by_landing`).
         Off by default: on the full test design it opened a pinhole at tilt 0 and lowered the levelled
         thinnest at tilt 20 (0.393 -> 0.360), though it takes out the dead rings (``docs/rotary.md``).
+    edge_restore : EdgeRestore, optional
+        With ``equalise`` (binary head): thinned-out drops near the design's edges restored (:mod:`~rotoprint.rotary.edgecomp`). Off (None) by default.
     """
 
     setup: RotarySetup
@@ -782,6 +781,7 @@ class PassOptions:
     dead_cover: bool = True
     dead_reserve: bool = False
     even_lines: bool = False
+    edge_restore: EdgeRestore | None = None  # noqa: F821 (rotary.edgecomp; the annotation is not evaluated)
 
     def __post_init__(self) -> None:
         parse_passes(self.passes)
@@ -952,7 +952,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
 
             pr = halftone_print(pr, fracs[q])
         elif fracs is not None and not (dead_cover is not None and thin_landing):
-            pr = thin_print(pr, fracs[q], pass_index=q)
+            pr = thin_print(pr, fracs[q], pass_index=q) if options.edge_restore is None else options.edge_restore.thin(pr, fracs[q], design, pass_index=q)
         sw = tuple(dataclasses.replace(s, extra={**s.extra, "pass": q, "passes": pp.passes, "pass_offset_mm": off,
                                                  "pass_phase": float(achieved[q, j]), "pass_phase_angle_deg": angles[q]})
                    for j, s in enumerate(pr.swathes))

@@ -1,0 +1,243 @@
+"""Design-aware edge compensation of an equalised print: a share of the thinned-out drops
+restored near the design's edges.
+
+The wet film levels under surface tension before it sets, pinned at its edge: within about a
+levelling length (~0.1 mm) of an edge, ink flows from the interior into the thinner boundary
+band (the caps' taper). Where a 1 mm radial bin's interior is a thin sliver beside an edge
+(the gaps between the test design's cells), that bin loses 3-6 % levelled while it is flat as
+landed (``docs/rotary.md``, "Equalised 1 mm bins"). :func:`restore_near_edges` gives such
+places back ink: of the drops an equalised pass thinned out (:func:`~rotoprint.rotary.equalise.thin_print`),
+those landing inside the design within :attr:`EdgeRestore.zone_um` of its edge (by default an
+edge met along the platform radius, :attr:`EdgeRestore.radial_only`) are restored so
+that a track keeping the share ``f`` keeps ``min(1, (1 + c) f)`` there (``c`` =
+:attr:`EdgeRestore.coefficient`: the same relative gain at every radius, though the equalisation
+thins the inner tracks more), by an ordered pattern on each track's firing index (as the
+thinning's). Opt-in: :attr:`~rotoprint.rotary.interlace.PassOptions.edge_restore`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ConfigError
+
+__all__ = ["EDGE_ZONE_UM", "EDGE_COEFFICIENT", "EdgeRestore", "edge_distance_um", "radial_edge_near", "restore_near_edges"]
+
+#: Width of the zone inside the design's edge where thinned-out drops are restored, um.
+EDGE_ZONE_UM = 50.0
+#: Relative gain of a thinned track's drops in the zone.
+EDGE_COEFFICIENT = 0.3
+_GOLDEN2 = 0.3819660112501051  # 2 - golden ratio: the restore pattern's phase step, apart from the thinning's
+
+
+@dataclass(frozen=True)
+class EdgeRestore:
+    """Options of :func:`restore_near_edges`.
+
+    Parameters
+    ----------
+    zone_um : float
+        Zone inside the design's edge, um (0 < zone <= 1000).
+    coefficient : float
+        Relative gain ``c`` of a thinned track's drops in the zone, (0, 1]: share ``f`` -> ``min(1, (1 + c) f)``.
+    radial_only : bool
+        Only edges met along the platform radius count (:func:`radial_edge_near`, the default):
+        an edge along the track takes ink from every 1 mm radial bin alike, so compensating it
+        would move the bins apart where the equalised shares differ. False: every edge
+        (:func:`edge_distance_um`).
+    """
+
+    zone_um: float = EDGE_ZONE_UM
+    coefficient: float = EDGE_COEFFICIENT
+    radial_only: bool = True
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.zone_um, (int, float)) and math.isfinite(self.zone_um) and 0.0 < self.zone_um <= 1000.0):
+            raise ConfigError(f"edge zone must be in (0, 1000] um, got {self.zone_um!r}")
+        if not (isinstance(self.coefficient, (int, float)) and math.isfinite(self.coefficient) and 0.0 < self.coefficient <= 1.0):
+            raise ConfigError(f"edge coefficient must be in (0, 1], got {self.coefficient!r}")
+
+    def thin(self, pr, shares, design: np.ndarray, *, pass_index: int = 0):
+        """``pr`` thinned by ``shares`` (:func:`~rotoprint.rotary.equalise.thin_print`), then
+        :func:`restore_near_edges` with these options."""
+        from .equalise import thin_print
+
+        return restore_near_edges(pr, thin_print(pr, shares, pass_index=pass_index), design, shares, options=self,
+                                  pass_index=pass_index)
+
+
+def edge_distance_um(mask: np.ndarray, col: np.ndarray, row: np.ndarray, pitch_x_mm: float, pitch_y_mm: float,
+                     reach_um: float) -> np.ndarray:
+    """Distance (um) of sites inside the design to its edge, looked for up to ``reach_um``.
+
+    Parameters
+    ----------
+    mask : (H, W) bool
+        The design's printing pixels (outside the image counts as empty).
+    col, row : (M,) float64
+        Continuous design coordinates (pixel ``(floor(row), floor(col))``).
+    pitch_x_mm, pitch_y_mm : float
+        The pixel pitches.
+    reach_um : float
+        Distances are exact up to this (every empty pixel within it is looked at).
+
+    Returns
+    -------
+    (M,) float64
+        0 for a site outside the design (or outside the image), else the distance to the nearest
+        empty pixel's square (``inf`` where none lies within ``reach_um``).
+    """
+    m = np.asarray(mask, bool)
+    h, w = m.shape
+    col, row = np.asarray(col, np.float64), np.asarray(row, np.float64)
+    i, j = np.floor(row).astype(np.int64), np.floor(col).astype(np.int64)
+    ni = int(math.ceil(reach_um * 1e-3 / pitch_y_mm))
+    nj = int(math.ceil(reach_um * 1e-3 / pitch_x_mm))
+    pad = np.zeros((h + 2 * ni + 2, w + 2 * nj + 2), bool)
+    pad[ni + 1:ni + 1 + h, nj + 1:nj + 1 + w] = m
+    ii = np.clip(i, -ni - 1, h + ni) + ni + 1
+    jj = np.clip(j, -nj - 1, w + nj) + nj + 1
+    out = np.full(col.size, np.inf)
+    out[~pad[ii, jj]] = 0.0
+    for di in range(-ni, ni + 1):
+        for dj in range(-nj, nj + 1):
+            if di == 0 and dj == 0:
+                continue
+            empty = ~pad[ii + di, jj + dj]
+            if not empty.any():
+                continue
+            # distance from the site to the square of pixel (i + di, j + dj)
+            dy = np.maximum(0.0, np.maximum((i + di) - row, row - (i + di + 1))) * pitch_y_mm
+            dx = np.maximum(0.0, np.maximum((j + dj) - col, col - (j + dj + 1))) * pitch_x_mm
+            out = np.where(empty, np.minimum(out, 1e3 * np.hypot(dx, dy)), out)
+    return out
+
+
+def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarray, zone_um: float) -> np.ndarray:
+    """Sites inside the design with an edge within ``zone_um`` along the platform radius.
+
+    Parameters
+    ----------
+    mask : (H, W) bool
+        The design's printing pixels (outside the image counts as empty).
+    placement : Placement
+    col, row : (M,) float64
+        Continuous design coordinates.
+    zone_um : float
+        At most the smaller pixel pitch (then the design at ``+-zone_um`` along the radius
+        tells it: an empty stretch is at least a pixel wide).
+
+    Returns
+    -------
+    (M,) bool
+    """
+    pl = placement
+    if zone_um * 1e-3 > min(pl.pitch_x_mm, pl.pitch_y_mm) + 1e-12:
+        raise ConfigError(f"a radial edge zone must be at most a pixel ({1e3 * min(pl.pitch_x_mm, pl.pitch_y_mm):.1f} um), got {zone_um!r}")
+    m = np.asarray(mask, bool)
+    h, w = m.shape
+
+    def inside(c: np.ndarray, r: np.ndarray) -> np.ndarray:
+        i, j = np.floor(r).astype(np.int64), np.floor(c).astype(np.int64)
+        ok = (i >= 0) & (i < h) & (j >= 0) & (j < w)
+        out = np.zeros(c.size, bool)
+        out[ok] = m[i[ok], j[ok]]
+        return out
+
+    col, row = np.asarray(col, np.float64), np.asarray(row, np.float64)
+    # only a printing pixel with an empty one among its 8 neighbours can hold a site within a
+    # pixel of an edge: the rest is not looked at again
+    pad = np.zeros((h + 2, w + 2), bool)
+    pad[1:-1, 1:-1] = m
+    rim = m & ~np.logical_and.reduce([pad[1 + di:h + 1 + di, 1 + dj:w + 1 + dj] for di in (-1, 0, 1) for dj in (-1, 0, 1)])
+    i, j = np.floor(row).astype(np.int64), np.floor(col).astype(np.int64)
+    ok = (i >= 0) & (i < h) & (j >= 0) & (j < w)
+    cand = np.zeros(col.size, bool)
+    cand[ok] = rim[i[ok], j[ok]]
+    idx = np.flatnonzero(cand)
+    x, y = pl.to_platform(col[idx], row[idx])
+    rad = np.maximum(np.hypot(x, y), 1e-12)
+    hit = np.zeros(idx.size, bool)
+    for t in (-1.0, 1.0):
+        c2, r2 = pl.to_design(x + t * 1e-3 * zone_um * x / rad, y + t * 1e-3 * zone_um * y / rad)
+        hit |= ~inside(c2, r2)
+    near = np.zeros(col.size, bool)
+    near[idx[hit]] = True
+    return near
+
+
+def restore_near_edges(full, thinned, design: np.ndarray, shares, *, options: EdgeRestore | None = None, pass_index: int = 0):
+    """``thinned`` with some of the drops it lost from ``full`` restored near the design's edges.
+
+    A drop of ``full`` that ``thinned`` left out (nozzle ``k`` of swathe ``j``, absolute firing
+    ``i``) comes back when its site (:func:`~rotoprint.rotary.simulate.place_drops`) lies inside
+    the design within ``zone_um`` of its edge (:func:`edge_distance_um`) and ``floor((i + 1) s +
+    o_k) > floor(i s + o_k)``, ``s = min(1, c f / (1 - f))`` (``f = shares[j][k]``, ``c`` the
+    coefficient, ``o_k`` a phase per nozzle and pass): ``s`` of the ``1 - f`` thinned out over any
+    run of firings, so the track keeps about ``min(1, (1 + c) f)`` in the zone (a track left out,
+    ``f = 0``, stays out). Every other site is as in ``thinned``.
+
+    Parameters
+    ----------
+    full, thinned : RotaryPrint
+        One pass before and after thinning (same swathes, shapes and placement).
+    design : (H, W) uint8
+        The design (:func:`~rotoprint.rotary.simulate.design_mask`).
+    shares : sequence (swathe) of (N,) float64
+        The shares ``thinned`` was thinned by (:func:`~rotoprint.rotary.equalise.thin_print`).
+    options : EdgeRestore, optional
+    pass_index : int
+        The pass (its phases differ from the other passes').
+
+    Returns
+    -------
+    RotaryPrint
+        ``thinned`` with the restored drops (their ``full`` levels).
+
+    Raises
+    ------
+    ConfigError
+        Prints that do not match.
+    """
+    from .simulate import design_mask, place_drops
+
+    opts = options or EdgeRestore()
+    if len(shares) != len(full.swathes) or any(np.shape(f) != (full.head.nozzles,) for f in shares):
+        raise ConfigError("edge restore needs one share per nozzle for every swathe")
+    if len(full.swathes) != len(thinned.swathes) or any(a.levels.shape != b.levels.shape or a.first_firing != b.first_firing
+                                                         for a, b in zip(full.swathes, thinned.swathes)):
+        raise ConfigError("edge restore needs the print before and after thinning, swathe for swathe")
+    lost = dataclasses.replace(full, swathes=tuple(dataclasses.replace(a, levels=np.where(b.levels == 0, a.levels, 0).astype(np.uint8))
+                                                   for a, b in zip(full.swathes, thinned.swathes)))
+    dr = place_drops(lost)
+    if len(dr.nozzle) == 0:
+        return thinned
+    pl = full.placement
+    mask = design_mask(np.asarray(design), full.head.grey_levels)
+    if opts.radial_only:
+        near = radial_edge_near(mask, pl, dr.col, dr.row, opts.zone_um)
+    else:
+        near = edge_distance_um(mask, dr.col, dr.row, pl.pitch_x_mm, pl.pitch_y_mm, opts.zone_um)
+        near = (near > 0.0) & (near <= opts.zone_um)
+    k, i = dr.nozzle, dr.firing.astype(np.float64)
+    o = np.mod((k + 7919 * int(pass_index)) * _GOLDEN2, 1.0)
+    pos = {sw.index: j for j, sw in enumerate(full.swathes)}
+    f = np.stack([np.asarray(x, np.float64) for x in shares])[np.array([pos[int(x)] for x in np.unique(dr.swathe)])[
+        np.searchsorted(np.unique(dr.swathe), dr.swathe)], k]
+    s_ = np.where(f < 1.0, np.minimum(1.0, float(opts.coefficient) * f / np.maximum(1.0 - f, 1e-300)), 0.0)
+    back = near & (np.floor((i + 1.0) * s_ + o) > np.floor(i * s_ + o))
+    out = []
+    for a, b in zip(full.swathes, thinned.swathes):
+        sel = back & (dr.swathe == a.index)
+        if not sel.any():
+            out.append(b)
+            continue
+        lev = b.levels.copy()
+        rows, cols = dr.firing[sel] - a.first_firing, dr.nozzle[sel]
+        lev[rows, cols] = a.levels[rows, cols]
+        out.append(dataclasses.replace(b, levels=lev))
+    return dataclasses.replace(thinned, swathes=tuple(out))
