@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 
 import numpy as np
 import pytest
@@ -68,6 +69,9 @@ def test_build_demo_builds_the_coil_and_says_where_the_report_is(coil_demo):
     assert r["design"]["resistance_ohm"] == pytest.approx(hand, rel=0.01)
     assert r["printed"]["resistance_ohm"] == pytest.approx(hand, rel=0.15)
     assert any("crystallises" in w for w in plan["warnings"])
+    # not a terminal: a line as each stage ends, never a silent build (rich's bar is off here)
+    for stage in ("plan", "check", "layers", "simulate", "resistance", "report"):
+        assert re.search(rf"^  {stage}: \d+ steps? in \d+\.\d s$", err, re.M), (stage, err[:400])
 
 
 @pytest.mark.parametrize(

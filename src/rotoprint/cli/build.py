@@ -7,12 +7,15 @@ problem, nothing written).
 
 from __future__ import annotations
 
+import time
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from .. import ranges as R
+from ._base import is_quiet
 from ._common import ForceOpt, JsonOpt, console, in_range, out_console, print_json, print_table, progress, styled
 
 EXIT_SHORT = 3
@@ -59,6 +62,26 @@ def report_summary(res, *, label: str = "") -> None:
                           f"{_fmt_time(m['time_s'])}{flag})")
 
 
+@contextmanager
+def stage_progress():
+    """``on_step(stage, done, total)`` for :func:`~rotoprint.pipeline.run_build`: a rich bar per
+    stage on a terminal; elsewhere (a pipe, a CI log) one line as each stage ends, with its time,
+    so a long build never sits silent (and a refused job still prints only its error line)."""
+    tasks: dict[str, int] = {}
+    started: dict[str, float] = {}
+    with progress() as bar:
+        def on_step(stage: str, done: int, total: int) -> None:
+            if stage not in tasks:
+                tasks[stage] = bar.add_task(stage, total=total)
+                started[stage] = time.perf_counter()
+            bar.update(tasks[stage], completed=done)
+            if bar.disable and done >= total and stage in started and not is_quiet():
+                dt_s = time.perf_counter() - started.pop(stage)
+                console.print(f"  {stage}: {total} step{'s' if total != 1 else ''} in {dt_s:.1f} s", highlight=False, markup=False)
+
+        yield on_step
+
+
 def build_command(
     job: Annotated[Path, typer.Argument(help="Job file (.toml): parts, materials, printer, placement.")],
     out: Annotated[Path, typer.Option("--out", "-o", help="Output folder (replaced only if provably an earlier rotoprint output, or with --force).")],
@@ -82,14 +105,7 @@ def build_command(
     mopts = False if no_machine else MachineOptions(bits=bits, row_delays=row_delays)  # checked before any work
     check_output_path(out, is_dir=True, inputs=[job], force=force)  # before the job is read
     spec = load_job(job)
-    with progress() as bar:
-        tasks = {}
-
-        def on_step(stage: str, done: int, total: int) -> None:
-            if stage not in tasks:
-                tasks[stage] = bar.add_task(stage, total=total)
-            bar.update(tasks[stage], completed=done)
-
+    with stage_progress() as on_step:
         res = run_build(spec, out, on_step=on_step, check=False if no_check else None, report=not no_report, force=force,
                         inputs=[job, *job_inputs(spec)], machine=mopts)
     if json_out:

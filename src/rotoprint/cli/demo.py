@@ -20,7 +20,7 @@ def demo(
     from ..process import load_job
     from ..pipeline import run_build
     from ..pipeline.examples import write_example
-    from .build import report_summary
+    from .build import report_summary, stage_progress
 
     from ..errors import ConfigError, InputFileError
     from ..process.examples import EXAMPLES
@@ -33,6 +33,7 @@ def demo(
     out.mkdir(parents=True, exist_ok=True)
     job_path = write_example(example, out / "job")
     console.print(f"job file: {job_path.resolve()}")
-    res = run_build(load_job(job_path), out / "build")
+    with stage_progress() as on_step:
+        res = run_build(load_job(job_path), out / "build", on_step=on_step)
     report_summary(res)
     console.print(f"demo done in {time.perf_counter() - t0:.1f} s; rebuild with: rotoprint build {job_path} --out {out / 'build'}")
