@@ -16,6 +16,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from ._thin_kernels import kept_numpy, thin_floors_jit
+
 
 def coefficients(r, phi, direction, angle_rad, inner_radius_mm, pitch_x_mm, pitch_y_mm, height_px):
     """Per-nozzle coefficients ``(A, B, D, E)`` (each ``(N,) float64``) and constants ``(C, F)``.
@@ -424,6 +426,67 @@ def windows_fill_gather_numpy(coef, nozzle, row, count, start, cos_r, sin_r, wid
 
 
 @njit(cache=True, nogil=True)
+def _windows_sample_thin_nb(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, width, height, flat, out, tile, f, o, first):  # pragma: no cover - jit
+    # Track-major in tiles of `tile` firing rows: a tile's cos / sin (2 x 8 x tile bytes) stay in L1 and the
+    # (tile, N) block of `out` in L2 while every window writes its column piece. Per piece: the thinning
+    # floors (one per firing), then the landing index of the kept drops (the others point at the 0
+    # sentinel), vectorised; then the gather. No index is stored (one sweep: a pass's maps serve one print).
+    n_rows = out.shape[0]
+    sentinel = width * height
+    g = np.empty(tile + 1, np.float64)
+    tmp = np.empty(tile, np.int64)
+    for r0 in range(0, n_rows, tile):
+        r1 = min(r0 + tile, n_rows)
+        for q in range(nozzle.shape[0]):
+            lo = max(row[q], r0)
+            hi = min(row[q] + count[q], r1)
+            if hi <= lo:
+                continue
+            n = hi - lo
+            k = nozzle[q]
+            a = A[k]
+            b = B[k]
+            d = D[k]
+            e = E[k]
+            thin_floors_jit(g, float(lo + first), n, f[k], o[k])
+            cs = cos_r[lo:hi]
+            ss = sin_r[lo:hi]
+            for t in range(n):
+                tmp[t] = _landing_index(a, b, d, e, C, F, cs[t], ss[t], width, height) if g[t + 1] > g[t] else sentinel
+            col = out[lo:hi, k]
+            for t in range(n):
+                col[t] = flat[tmp[t]]
+
+
+#: Firing rows per tile of :func:`windows_sample_thin_numba` (measured at 0 deg, 1440 dpi: 64 rows 9.0, 128 rows 8.6 ms).
+SAMPLE_TILE = 128
+
+
+def windows_sample_thin_numba(coef, nozzle, row, count, cos_r, sin_r, width, height, flat, out, f, o, first_firing):
+    """The windows' drops sampled and thinned in one sweep, without the index.
+
+    ``out[row[q] + t, k] = flat[pixel]`` (``k = nozzle[q]``, ``pixel`` the design pixel the drop of
+    print row ``row[q] + t`` lands in) where firing ``first_firing + row[q] + t`` of track ``k``
+    is kept by the rule of :func:`rotoprint.rotary._thin_kernels.kept_jit` with share ``f[k]``
+    and phase ``o[k]`` (``f``, ``o``: ``(N,) float64``), else 0. ``out``: zeroed ``(F, N) uint8``;
+    ``flat``: as for :func:`windows_gather_numba`. The same image as the gather, then
+    :func:`rotoprint.rotary.equalise.thin_print`.
+    """
+    _windows_sample_thin_nb(*coef, nozzle, row, count, cos_r, sin_r, width, height, flat, out, SAMPLE_TILE,
+                            np.ascontiguousarray(f, np.float64), np.ascontiguousarray(o, np.float64), int(first_firing))
+    return out
+
+
+def windows_sample_thin_numpy(coef, nozzle, row, count, cos_r, sin_r, width, height, flat, out, f, o, first_firing):
+    A, B, C, D, E, F = coef
+    k, r = _window_drops(nozzle, row, count)
+    keep = kept_numpy(r + float(first_firing), np.asarray(f, np.float64)[k], np.asarray(o, np.float64)[k])
+    k, r = k[keep], r[keep]
+    out[r, k] = flat[_pointwise_index_numpy(A, B, C, D, E, F, k, cos_r[r], sin_r[r], width, height)]
+    return out
+
+
+@njit(cache=True, nogil=True)
 def _binary_levels_nb(src, level, dst):  # pragma: no cover - jit
     # one vectorised pass: levels, and the largest and the smallest non-zero value
     n = src.shape[0]
@@ -461,4 +524,5 @@ WINDOW_BOUNDS = {"jit": window_bounds_numba, "numpy": window_bounds_numpy}
 WINDOWS_FILL = {"jit": windows_fill_numba, "numpy": windows_fill_numpy}
 WINDOWS_GATHER = {"jit": windows_gather_numba, "numpy": windows_gather_numpy}
 WINDOWS_FILL_GATHER = {"jit": windows_fill_gather_numba, "numpy": windows_fill_gather_numpy}
+WINDOWS_SAMPLE_THIN = {"jit": windows_sample_thin_numba, "numpy": windows_sample_thin_numpy}
 BINARY_LEVELS = {"jit": binary_levels_numba, "numpy": binary_levels_numpy}

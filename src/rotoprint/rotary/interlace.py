@@ -873,7 +873,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
 
     from ..devices import InkjetDevice, load_device
     from .deposit import DepositOptions
-    from .exact import transform_exact
+    from .exact import ThinShares, transform_exact
     from .swathes import plan_swathes
 
     if isinstance(device, InkjetHead):
@@ -946,13 +946,12 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     for q, off in enumerate(pp.offsets_mm):
         pst = dataclasses.replace(st, dpi_y=clock, pivot_offset_mm=off, swathe_overlap_mm=overlap, swathe_seam_mm=seam,
                                   mount_angle_deg=float(st.mount_angle_deg) + angles[q])
-        pr = transform_exact(design, head, placement, pst)
+        thin = fracs is not None and not grey and not (dead_cover is not None and thin_landing)  # thin_print's, while sampling
+        pr = transform_exact(design, head, placement, pst, thin=ThinShares(fracs[q], q) if thin else None)
         if grey:
             from .halftone import halftone_print
 
             pr = halftone_print(pr, fracs[q])
-        elif fracs is not None and not (dead_cover is not None and thin_landing):
-            pr = thin_print(pr, fracs[q], pass_index=q)
         sw = tuple(dataclasses.replace(s, extra={**s.extra, "pass": q, "passes": pp.passes, "pass_offset_mm": off,
                                                  "pass_phase": float(achieved[q, j]), "pass_phase_angle_deg": angles[q]})
                    for j, s in enumerate(pr.swathes))
