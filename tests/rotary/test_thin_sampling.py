@@ -24,11 +24,21 @@ def _band(n_rows=40, n_cols=240):
     return d, Placement(n_cols, n_rows, px, px, inner_radius_mm=60.0)
 
 
+def _shapes(n=240):
+    """The bundled test design (squares, discs, rings, fine bars and dots on empty ground), 360 dpi."""
+    from rotoprint.rotary.testimage import test_design
+
+    px = 25.4 / 360
+    return test_design(n), Placement(n, n, px, px, inner_radius_mm=60.0)
+
+
 @pytest.mark.parametrize("tilt", [0.0, 20.0, 45.0, 70.0])
 @pytest.mark.parametrize("backend", ["jit", "numpy"])
-def test_thinning_while_sampling_is_thin_print_of_the_pointwise_print(tilt, backend):
+@pytest.mark.parametrize("design", [_band, _shapes])
+def test_thinning_while_sampling_is_thin_print_of_the_pointwise_print(tilt, backend, design):
+    """Also where pieces of track are skipped because they can land on no ink (the shapes' empty ground)."""
     head = load_device("omnidot760").head.model_copy(update={"dead_nozzles": (3, 200, 411)})
-    d, pl = _band()
+    d, pl = design()
     sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=pl.radial_range_mm()[0], outer_radius_mm=pl.radial_range_mm()[1])
     rng = np.random.default_rng(int(tilt))
     fr = [np.where(rng.random(head.nozzles) < 0.1, 0.0, rng.uniform(0.25, 1.0, head.nozzles)) for _ in sp.swathes]
@@ -44,7 +54,7 @@ def test_thinning_while_sampling_is_thin_print_of_the_pointwise_print(tilt, back
             assert 0 < np.count_nonzero(a.levels) < np.count_nonzero(p.levels)  # it thinned, and kept drops
             assert not a.levels[:, list(head.dead_nozzles)].any()
     # grey design: sampled bilinear, then thinned by the same rule
-    grey = (np.linspace(0, 255, d.size).reshape(d.shape)).astype(np.uint8)
+    grey = (np.linspace(1, 255, d.size).reshape(d.shape) * (d > 0)).astype(np.uint8)
     want = thin_print(transform_exact(grey, head, pl, **kw), fr, pass_index=1)
     got = transform_exact(grey, head, pl, **kw, thin=ThinShares(fr, 1))
     assert got.design_kind == "grey" and all(np.array_equal(a.levels, b.levels) for a, b in zip(got.swathes, want.swathes))
@@ -91,3 +101,16 @@ def test_pass_prints_thins_while_sampling(monkeypatch):
     _, got, man = pass_prints(d, head, pl, opts)
     assert man["equalise"] == "thinning" and "dead_cover" in man and len(got) > 1 and thinned == [True] * len(got)
     assert all(np.array_equal(a.levels, b.levels) for p, q in zip(got, want) for a, b in zip(p.swathes, q.swathes))
+
+
+def test_the_ink_blocks_count_the_blocks_with_ink():
+    from rotoprint.rotary import _exact_kernels as _k
+
+    d = np.zeros((20, 30), np.uint8)
+    d[3, 5] = d[19, 29] = d[9, 8] = 255
+    flat, _ = _k.binary_levels_numba(d, 1)
+    sat = _k.ink_blocks_numba(flat, 30, 20, 8)
+    blocks = np.zeros((3, 4), np.int32)
+    for y, x in ((3, 5), (19, 29), (9, 8)):
+        blocks[y // 8, x // 8] = 1
+    assert sat.shape == (4, 5) and np.array_equal(sat[1:, 1:], blocks.cumsum(0).cumsum(1)) and not sat[0].any() and not sat[:, 0].any()
