@@ -103,14 +103,18 @@ def test_pass_prints_thins_while_sampling(monkeypatch):
     assert all(np.array_equal(a.levels, b.levels) for p, q in zip(got, want) for a, b in zip(p.swathes, q.swathes))
 
 
-def test_the_ink_blocks_count_the_blocks_with_ink():
+def test_the_ink_blocks_count_the_blocks_with_ink_and_all_ink():
     from rotoprint.rotary import _exact_kernels as _k
 
     d = np.zeros((20, 30), np.uint8)
     d[3, 5] = d[19, 29] = d[9, 8] = 255
+    d[16:20, 8:16] = 255  # the bottom row of blocks is 4 px high: this one is all ink
+    d[0:8, 16:24] = 255  # a whole block
     flat, _ = _k.binary_levels_numba(d, 1)
-    sat = _k.ink_blocks_numba(flat, 30, 20, 8)
-    blocks = np.zeros((3, 4), np.int32)
-    for y, x in ((3, 5), (19, 29), (9, 8)):
-        blocks[y // 8, x // 8] = 1
-    assert sat.shape == (4, 5) and np.array_equal(sat[1:, 1:], blocks.cumsum(0).cumsum(1)) and not sat[0].any() and not sat[:, 0].any()
+    sat = _k.ink_blocks(flat, 30, 20)
+    some, full = np.zeros((3, 4), np.int32), np.zeros((3, 4), np.int32)
+    for y, x in ((3, 5), (19, 29), (9, 8), (16, 8), (0, 16)):
+        some[y // 8, x // 8] = 1
+    full[2, 1] = full[0, 2] = 1
+    assert sat.shape == (2, 4, 5) and not sat[:, 0].any() and not sat[:, :, 0].any()
+    assert np.array_equal(sat[0, 1:, 1:], some.cumsum(0).cumsum(1)) and np.array_equal(sat[1, 1:, 1:], full.cumsum(0).cumsum(1))

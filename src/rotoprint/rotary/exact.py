@@ -164,14 +164,15 @@ class TrackWindows:
         return out
 
     def sample_thin(self, flat: np.ndarray, out: np.ndarray, fractions: np.ndarray, phases: np.ndarray, first_firing: int,
-                    ink_blocks: np.ndarray | None = None) -> np.ndarray:
+                    ink_blocks: np.ndarray | None = None, level: int | None = None) -> np.ndarray:
         """:meth:`gather`, then thinned (firing ``first_firing + row`` of track ``k`` kept by share
         ``fractions[k]`` and phase ``phases[k]``, each ``(N,) float64``), in one sweep that stores no
         index (the landing points of the kept drops only are computed; pieces of track that can
-        land on no ink skipped, by ``ink_blocks``: :func:`~rotoprint.rotary._exact_kernels.ink_blocks_numba` of ``flat``)."""
+        land on no ink skipped and those that land on ink only given ``level``, by ``ink_blocks``:
+        :func:`~rotoprint.rotary._exact_kernels.ink_blocks` of ``flat``, whose non-zero value is ``level``)."""
         return _k.WINDOWS_SAMPLE_THIN[self.backend](self.coefficients, self.nozzle, self.row, self.count, self.cos_row,
                                                     self.sin_row, self.width, self.height, flat, out, fractions, phases, first_firing,
-                                                    ink_blocks)
+                                                    ink_blocks, level)
 
     def dense(self, n_firings: int, n_nozzles: int, sentinel: int) -> np.ndarray:
         """The ``(F, N)`` index map, ``sentinel`` where no drop lands in the design."""
@@ -255,13 +256,14 @@ class ExactMaps:
             raise ConfigError(f"kind must be one of binary, grey; got {kind!r}")
         dead = np.array(self.head.dead_nozzles, dtype=np.int64)
         _, bilinear = _k.KERNELS[self.backend]
-        ink = _k.ink_blocks_numba(flat, self.placement.width_px, self.placement.height_px) \
+        ink = _k.ink_blocks(flat, self.placement.width_px, self.placement.height_px) \
             if thin is not None and kind == "binary" and self.backend == "jit" else None
         out = []
         for j, sm in enumerate(self.swathes):
             zeros = np.zeros((sm.n_firings, sm.layout.r_mm.shape[0]), np.uint8)
             if kind == "binary" and thin is not None:
-                lev = sm.windows.sample_thin(flat, zeros, thin.fractions[j], thin_phases(zeros.shape[1], thin.pass_index), sm.first_firing, ink)
+                lev = sm.windows.sample_thin(flat, zeros, thin.fractions[j], thin_phases(zeros.shape[1], thin.pass_index), sm.first_firing,
+                                             ink, level)
             elif kind == "binary":
                 lev = sm.windows.gather(flat, zeros)
             else:
