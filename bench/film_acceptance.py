@@ -16,10 +16,11 @@ at the equalised clock, thinned while sampled, its shares timed apart) over the 
 at the native clock (today's print of a layer), best of 5, and the same for direct slicing of
 one layer of a real mesh (``slice_rotary``, the planned and the equalised clock vs native).
 
-    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
+    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only [--cpu]] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
                                                   [--default-only] [--dead-only | --live-only] [--no-phases] [--raise-sparse]
                                                   [--no-sensitivity | --sensitivity-only]
 
+``--cpu``: the cost table's times are CPU times (``time.process_time``; steadier on a shared machine).
 ``--equalised-only``: only the equalised rows (the default; with the 5 dead nozzles; with phases and
 overlap), then the cost table. ``--default-only``: only the default print's two rows (without and
 with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / without the 5 dead
@@ -84,22 +85,24 @@ def sensitivity_table(prs, d, head, tilt) -> None:
                   f"{lv.volume_error_fraction:+.1e} | {time.perf_counter() - t:.0f} |", flush=True)
 
 
-def _best(fn, k: int = 3) -> float:
-    """Best of ``k`` wall times, the exact transform's map cache emptied before each (a pass
-    at a new pivot or clock builds its maps: that is its cost)."""
+def _best(fn, k: int = 3, clock=time.perf_counter) -> float:
+    """Best of ``k`` wall times (or of ``clock``: ``time.process_time`` for the CPU time, steadier
+    on a shared machine; the kernels are single-threaded), the exact transform's map cache
+    emptied before each (a pass at a new pivot or clock builds its maps: that is its cost)."""
     from rotoprint.rotary.exact import exact_maps
 
     best = float("inf")
     for _ in range(k):
         exact_maps.cache_clear()
-        t = time.perf_counter()
+        t = clock()
         fn()
-        best = min(best, time.perf_counter() - t)
+        best = min(best, clock() - t)
     return best
 
 
-def cost_table(d, pl, head, tilts, k: int = 5) -> None:
-    """The cost floor: a pass's firing images at the planned clock over today's at native (best of ``k``).
+def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
+    """The cost floor: a pass's firing images at the planned clock over today's at native (best of ``k``
+    times of ``clock``: wall, or ``time.process_time`` with ``--cpu``).
 
     The default (equalised) pass is charged its maps and its thinned images (``transform_exact(...,
     thin=ThinShares)``, as ``pass_prints`` prints it); the shares (``track_fractions``, computed once
@@ -135,24 +138,24 @@ def cost_table(d, pl, head, tilts, k: int = 5) -> None:
 
         fr = shares()
         thin = ThinShares(fr[-1], len(fr) - 1)
-        tf = _best(shares, k)
-        te = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1], thin=thin), k)
+        tf = _best(shares, k, clock)
+        te = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1], thin=thin), k, clock)
         ov = pass_overlap_mm(head)
         sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out, overlap_mm=ov)
         pp = plan_passes(head, sp, footprint_um=49.6, phases=True)
         off = pp.offsets_mm[-1]
         ang = phase_angles(sp, pp.phases, dpi_y=pp.dpi_y)[0][-1]  # the last pass as printed: offset, phase, overlap
-        t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt), k)
+        t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt), k, clock)
         t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off,
-                                           mount_angle_deg=ang, swathe_overlap_mm=ov), k)
+                                           mount_angle_deg=ang, swathe_overlap_mm=ov), k, clock)
         row = (f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.4f} | {t1:.4f} | {t1 / t0:.2f} | {dpi_e:.0f} | {te:.4f} | {te / t0:.2f} | "
                f"{tf:.4f} | {(te + tf / pp_e.passes) / t0:.2f} | {(te + tf) / t0:.2f} |")
         if mesh is not None:
             h = float(mesh.bounds[1][2] - mesh.bounds[0][2])
             kw = dict(layer_height_mm=h / 3, tilt_deg=tilt, inner_radius_mm=60.0)
-            s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1), k)
-            s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1), k)
-            s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1]).layer(1), k)
+            s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1), k, clock)
+            s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1), k, clock)
+            s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1]).layer(1), k, clock)
             row += f" {s0:.4f} | {s1:.4f} | {s1 / s0:.2f} | {s2:.4f} | {s2 / s0:.2f} |"
         print(row, flush=True)
 
@@ -170,8 +173,9 @@ def main() -> None:
     if strip:  # a band of full design ROWS px high through the middle, over the same radial range
         d = np.full((strip[0], n), 255, np.uint8)
         pl = Placement(n, strip[0], px, px, inner_radius_mm=60.0)
+    cpu = {"clock": time.process_time} if "--cpu" in sys.argv else {}
     if "--cost-only" in sys.argv:
-        cost_table(d, pl, head0, tilts)
+        cost_table(d, pl, head0, tilts, **cpu)
         return
     quick, level_on = "--quick" in sys.argv, "--no-level" not in sys.argv
     if "--raise-sparse" in sys.argv:  # the equalisation's opt-in raise of sparse stretches
@@ -246,7 +250,7 @@ def main() -> None:
     if level_on and sens and sens_prs is not None:
         sensitivity_table(sens_prs, d, head0, sens_tilt)
     if not quick:
-        cost_table(d, pl, head0, tilts)
+        cost_table(d, pl, head0, tilts, **cpu)
 
 
 if __name__ == "__main__":
