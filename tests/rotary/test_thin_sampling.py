@@ -69,6 +69,23 @@ def test_the_rule_keeps_exactly_the_share_over_any_run():
     assert not kept_numpy(i, 0.0, 0.3).any()
 
 
+@pytest.mark.parametrize("dpi", [4.0, 40.0, 2880.0])
+def test_coarse_and_fine_clocks_thin_the_same(dpi):
+    """Coarse clocks (at 4 dpi the platform turns ~0.13 rad a row) and a design near the axis (its
+    arcs turn 2.3 rad): the end points' box still bounds every drop (or the piece makes no claim)."""
+    from rotoprint.rotary.testimage import test_design
+
+    head = load_device("omnidot760").head
+    px = 25.4 / 72  # 42 mm at 4 mm from the axis: the design spans 2.8 rad of every track
+    d, pl = test_design(120), Placement(120, 120, px, px, inner_radius_mm=4.0)
+    fr = [np.full(head.nozzles, 0.7)] * 4
+    kw = dict(tilt_deg=20.0, dpi_y=dpi)
+    want = thin_print(transform_exact(d, head, pl, **kw), fr, pass_index=2)
+    got = transform_exact(d, head, pl, **kw, thin=ThinShares(fr[:len(want.swathes)], 2))
+    assert all(np.array_equal(a.levels, b.levels) for a, b in zip(got.swathes, want.swathes))
+    assert sum(int(np.count_nonzero(a.levels)) for a in got.swathes) > 0
+
+
 def test_shares_of_the_wrong_shape_are_one_line_errors():
     head = load_device("omnidot760").head
     d, pl = _band()

@@ -465,13 +465,14 @@ def _ink_state(a, b, d, e, C, F, c0, s0, c1, s1, width, height, sat):  # pragma:
 
 @njit(cache=True, nogil=True)
 def _windows_sample_thin_nb(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, width, height, flat, out, tile, f, o, first,
-                            sat, level):  # pragma: no cover - jit
+                            sat, level, claim_rows):  # pragma: no cover - jit
     # Track-major in tiles of `tile` firing rows: a tile's cos / sin (2 x 8 x tile bytes) stay in L1 and the
     # (tile, N) block of `out` in L2 while every window writes its column piece. A piece whose drops can
     # land on no ink (`_ink_state`, from its end points and the design's blocks) stays 0; one whose drops
     # all land on ink gets `level` where kept. Otherwise: the thinning floors (one per firing), then the
     # landing index of the kept drops (the others point at the 0 sentinel), vectorised; then the gather.
-    # No index is stored (a pass's maps serve one print). `level`: the non-zero value of `flat` (binary).
+    # No index is stored (a pass's maps serve one print). `level`: the non-zero value of `flat` (binary);
+    # `claim_rows`: the longest piece whose arc spans at most pi / 2 (the sagitta bound holds), longer ones are computed.
     n_rows = out.shape[0]
     sentinel = width * height
     g = np.empty(tile + 1, np.float64)
@@ -489,7 +490,8 @@ def _windows_sample_thin_nb(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, 
             b = B[k]
             d = D[k]
             e = E[k]
-            state = _ink_state(a, b, d, e, C, F, cos_r[lo], sin_r[lo], cos_r[hi - 1], sin_r[hi - 1], width, height, sat)
+            state = _ink_state(a, b, d, e, C, F, cos_r[lo], sin_r[lo], cos_r[hi - 1], sin_r[hi - 1], width, height, sat) \
+                if hi - lo <= claim_rows else 1
             if state == 0:
                 continue
             n = hi - lo
@@ -568,9 +570,14 @@ def windows_sample_thin_numba(coef, nozzle, row, count, cos_r, sin_r, width, hei
     if sat is None:
         sat = ink_blocks(flat, width, height)
     level = np.uint8(flat.max() if level is None else level)
+    # the platform's turn per firing row, from the first two rows: a piece's sagitta bound holds while its arc
+    # turns at most pi (a window's arc inside the design always does); pieces turning more than pi / 2 make no claim
+    dphi = abs(math.atan2(cos_r[0] * sin_r[1] - sin_r[0] * cos_r[1], cos_r[0] * cos_r[1] + sin_r[0] * sin_r[1])) \
+        if cos_r.shape[0] > 1 else 0.0
+    claim_rows = int(min(0.5 * math.pi / dphi, 2.0**40)) if dphi > 0 else 2**40
     _windows_sample_thin_nb(*coef, nozzle, row, count, cos_r, sin_r, width, height, flat, out, SAMPLE_TILE,
                             np.ascontiguousarray(f, np.float64), np.ascontiguousarray(o, np.float64), int(first_firing),
-                            sat, level)
+                            sat, level, claim_rows)
     return out
 
 
