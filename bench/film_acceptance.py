@@ -11,15 +11,17 @@ plan's clock, the dead-track cover on), with 5 seeded dead nozzles; beside them 
 then angular phases and swathe overlap (equalised, and plain with and without the dead nozzles). The issue's
 baseline (60 um discs judged at design-pixel centres, `disc_uncovered_fraction`) is printed
 beside the one-pass row. A second table gives the cost floor: the time of one pass's firing
-images (the exact transform at the planned clock and the pass's pivot offset) over the same
-transform at the native clock (today's print of a layer), best of 3, and the same for direct
-slicing of one layer of a real mesh (``slice_rotary``, the planned clock vs native).
+images (the exact transform at the planned clock and the pass's pivot offset; the default pass
+at the equalised clock, thinned while sampled, its shares timed apart) over the same transform
+at the native clock (today's print of a layer), best of 5, and the same for direct slicing of
+one layer of a real mesh (``slice_rotary``, the planned and the equalised clock vs native).
 
-    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
+    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only [--cpu]] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
                                                   [--default-only] [--dead-only | --live-only] [--no-phases] [--raise-sparse]
                                                   [--raise=off|on|auto] [--edge-restore[=ZONE_UM,COEFFICIENT]]
                                                   [--no-sensitivity | --sensitivity-only]
 
+``--cpu``: the cost table's times are CPU times (``time.process_time``; steadier on a shared machine).
 ``--equalised-only``: only the equalised rows (the default; with the 5 dead nozzles; with phases and
 overlap), then the cost table. ``--default-only``: only the default print's two rows (without and
 with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / without the 5 dead
@@ -58,7 +60,7 @@ from rotoprint.rotary import Placement, plan_swathes, simulate, transform_exact
 from rotoprint.rotary.deposit import DepositOptions, LevelOptions, deposit_print
 from rotoprint.rotary.files import read_print
 from rotoprint.rotary.interlace import (COVER_SHARE, EQUALISE_CLOCK_FACTOR, PassOptions, ReachFloor, pass_overlap_mm, phase_angles,
-                                       plan_passes, read_passes, thin_print, track_fractions)
+                                       plan_passes, read_passes, track_fractions)
 from rotoprint.pipeline.prints import transform_passes
 from rotoprint.rotary.options import RotarySetup
 from rotoprint.rotary.testimage import test_design
@@ -107,23 +109,32 @@ def sensitivity_table(prs, d, head, tilt) -> None:
                   f"{lv.volume_error_fraction:+.1e} | {time.perf_counter() - t:.0f} |", flush=True)
 
 
-def _best(fn, k: int = 3) -> float:
-    """Best of ``k`` wall times, the exact transform's map cache emptied before each (a pass
-    at a new pivot or clock builds its maps: that is its cost)."""
+def _best(fn, k: int = 3, clock=time.perf_counter) -> float:
+    """Best of ``k`` wall times (or of ``clock``: ``time.process_time`` for the CPU time, steadier
+    on a shared machine; the kernels are single-threaded), the exact transform's map cache
+    emptied before each (a pass at a new pivot or clock builds its maps: that is its cost)."""
     from rotoprint.rotary.exact import exact_maps
 
     best = float("inf")
     for _ in range(k):
         exact_maps.cache_clear()
-        t = time.perf_counter()
+        t = clock()
         fn()
-        best = min(best, time.perf_counter() - t)
+        best = min(best, clock() - t)
     return best
 
 
-def cost_table(d, pl, head, tilts) -> None:
-    """The cost floor: a pass's firing images at the planned clock over today's at native."""
+def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
+    """The cost floor: a pass's firing images at the planned clock over today's at native (best of ``k``
+    times of ``clock``: wall, or ``time.process_time`` with ``--cpu``).
+
+    The default (equalised) pass is charged its maps and its thinned images (``transform_exact(...,
+    thin=ThinShares)``, as ``pass_prints`` prints it); the shares (``track_fractions``, computed once
+    for all the passes of a layer, from the geometry only) are given beside it, and the ratio with
+    their 1 / P share per pass and with all of them.
+    """
     from rotoprint.rotary.direct import slice_rotary
+    from rotoprint.rotary.exact import ThinShares
     from rotoprint.io.mesh import load_mesh
 
     # /work/shared beside the checkout (the main checkout or a worktree one level deeper)
@@ -134,39 +145,42 @@ def cost_table(d, pl, head, tilts) -> None:
     r_in, r_out = pl.radial_range_mm()
     print()
     print("| tilt deg | passes | planned clock dpi | transform (maps + images), native s | one pass, planned s | ratio | "
-          "equalised clock dpi | one pass equalised (transform + shares + thin_print) s | ratio | "
+          "equalised clock dpi | one pass equalised (maps + thinned images) s | ratio | shares of all P passes s | "
+          "ratio with shares / P | ratio with all shares | "
           f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio | equalised clock s | ratio |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for tilt in tilts:
         # the default print: equalised, no phases or overlap; one pass's images at EQUALISE_CLOCK_FACTOR x the plan's
-        # clock, plus the shares of every pass (computed once per layer, all counted here) and the pass's thinning
+        # clock, thinned while sampled; the shares of every pass (once per layer) timed apart
         sp_e = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)
         pp_e = plan_passes(head, sp_e, footprint_um=49.6)
         dpi_e = pp_e.dpi_y * EQUALISE_CLOCK_FACTOR
 
-        def equalised_pass():
-            fr = track_fractions(head, sp_e, pp_e.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp_e.dpi_y), footprint_um=49.6,
-                                 reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
-            pr = transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1])
-            thin_print(pr, fr[-1], pass_index=len(fr) - 1)
+        def shares():
+            return track_fractions(head, sp_e, pp_e.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp_e.dpi_y), footprint_um=49.6,
+                                   reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
 
-        te = _best(equalised_pass)
+        fr = shares()
+        thin = ThinShares(fr[-1], len(fr) - 1)
+        tf = _best(shares, k, clock)
+        te = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1], thin=thin), k, clock)
         ov = pass_overlap_mm(head)
         sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out, overlap_mm=ov)
         pp = plan_passes(head, sp, footprint_um=49.6, phases=True)
         off = pp.offsets_mm[-1]
         ang = phase_angles(sp, pp.phases, dpi_y=pp.dpi_y)[0][-1]  # the last pass as printed: offset, phase, overlap
-        t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt))
+        t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt), k, clock)
         t1 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt, dpi_y=pp.dpi_y, pivot_offset_mm=off,
-                                           mount_angle_deg=ang, swathe_overlap_mm=ov))
-        row = f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.2f} | {t1:.2f} | {t1 / t0:.2f} | {dpi_e:.0f} | {te:.2f} | {te / t0:.2f} |"
+                                           mount_angle_deg=ang, swathe_overlap_mm=ov), k, clock)
+        row = (f"| {tilt:g} | {pp.passes} | {pp.dpi_y:.0f} | {t0:.4f} | {t1:.4f} | {t1 / t0:.2f} | {dpi_e:.0f} | {te:.4f} | {te / t0:.2f} | "
+               f"{tf:.4f} | {(te + tf / pp_e.passes) / t0:.2f} | {(te + tf) / t0:.2f} |")
         if mesh is not None:
             h = float(mesh.bounds[1][2] - mesh.bounds[0][2])
             kw = dict(layer_height_mm=h / 3, tilt_deg=tilt, inner_radius_mm=60.0)
-            s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1))
-            s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1))
-            s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1]).layer(1))
-            row += f" {s0:.2f} | {s1:.2f} | {s1 / s0:.2f} | {s2:.2f} | {s2 / s0:.2f} |"
+            s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1), k, clock)
+            s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1), k, clock)
+            s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1]).layer(1), k, clock)
+            row += f" {s0:.4f} | {s1:.4f} | {s1 / s0:.2f} | {s2:.4f} | {s2 / s0:.2f} |"
         print(row, flush=True)
 
 
@@ -183,8 +197,9 @@ def main() -> None:
     if strip:  # a band of full design ROWS px high through the middle, over the same radial range
         d = np.full((strip[0], n), 255, np.uint8)
         pl = Placement(n, strip[0], px, px, inner_radius_mm=60.0)
+    cpu = {"clock": time.process_time} if "--cpu" in sys.argv else {}
     if "--cost-only" in sys.argv:
-        cost_table(d, pl, head0, tilts)
+        cost_table(d, pl, head0, tilts, **cpu)
         return
     quick, level_on = "--quick" in sys.argv, "--no-level" not in sys.argv
     raise_opt = {"off": False, "on": True, "auto": "auto"}
@@ -269,7 +284,7 @@ def main() -> None:
     if level_on and sens and sens_prs is not None:
         sensitivity_table(sens_prs, d, head0, sens_tilt)
     if not quick:
-        cost_table(d, pl, head0, tilts)
+        cost_table(d, pl, head0, tilts, **cpu)
 
 
 if __name__ == "__main__":

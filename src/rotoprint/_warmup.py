@@ -42,10 +42,9 @@ WARMED: dict[str, tuple[str, ...]] = {
     "rotoprint.check._kernels.widths": ("_run_clear", "sample_widths", "_seg_cells", "sample_widths_chained", "measure_widths"),
     "rotoprint.rotary._deposit_kernels": ("_weight", "deposit_strip_jit", "interior_rows_jit", "_add_comp", "strip_stats_jit", "pair_counts_jit", "radial_cell_counts_jit"),
     "rotoprint.rotary._direct_kernels": ("_direct_fill",),
-    "rotoprint.rotary._exact_kernels": ("_coords_nb", "_bilinear_nb", "_track_windows_nb", "_window_bounds_nb", "_windows_fill_nb", "_windows_fill_gather_nb", "_binary_levels_nb"),
+    "rotoprint.rotary._exact_kernels": ("_coords_nb", "_bilinear_nb", "_track_windows_nb", "_window_bounds_nb", "_windows_fill_nb", "_windows_fill_gather_nb", "_ink_blocks_nb", "_windows_sample_thin_nb", "_binary_levels_nb"),
     "rotoprint.rotary._halftone_kernels": ("diffuse_jit",),
     "rotoprint.rotary._levelling_kernels": ("restrict_wet_jit", "prolong_combine_jit", "film_stats_jit"),
-    "rotoprint.rotary._thin_kernels": ("thin_levels_jit",),
     "rotoprint.slicing._kernels": ("bucket_crossings", "union_labels"),
 }
 
@@ -64,6 +63,9 @@ NOT_WARMED: dict[str, str] = {
     "rotoprint.rotary._exact_kernels._windows_gather_nb": (
         "the second gather through exact maps already filled (the library's ExactMaps reused for another "
         "design on the same lattice); no command reuses maps, the first gather is _windows_fill_gather_nb"),
+    "rotoprint.rotary._thin_kernels.thin_levels_jit": (
+        "library API (rotoprint.rotary.equalise.thin_print) and the thinning of grey designs sampled with ThinShares; "
+        "the commands' equalised binary passes thin while sampling (_windows_sample_thin_nb), grey heads halftone"),
 }
 
 

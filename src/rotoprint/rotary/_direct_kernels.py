@@ -33,11 +33,15 @@ import math
 import numpy as np
 from numba import njit
 
+from ._thin_kernels import thin_floors_jit
+
 __all__ = ["direct_fill_jit", "direct_fill_numpy", "KERNELS", "QMIN_WIDEN"]
 
 #: Relative widening of a segment's smallest squared radius when picking candidate tracks (the
 #: exact predicate then decides; this only has to keep every track that may cross).
 QMIN_WIDEN = 1e-9
+#: Firing rows per tile of the direct fill's writes (measured: 1440 dpi, 0 deg, the sphere's layer).
+FILL_TILE = 128
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -145,10 +149,15 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
                 sgn[k] = enter
                 k += 1
             cur[m] = k
-    # pass 3: per track, sort its crossings and write the inside spans
+    # pass 3: per track, sort its crossings and list its inside spans (at most one more than its crossings)
+    sp_lo = np.empty(acc + n_tr, np.int64)
+    sp_hi = np.empty(acc + n_tr, np.int64)
+    sp_end = np.empty(n_tr, np.int64)
     for m in range(n_tr):
         a = start[m]
         b = cur[m]
+        z0 = a + m
+        sp_end[m] = z0
         if a == b:
             continue
         for q in range(a + 1, b):  # insertion sort: tracks hold few crossings
@@ -161,26 +170,51 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
                 z -= 1
             pos[z + 1] = p
             sgn[z + 1] = g
-        col = cols[m]
-        f = frac[m]
-        o = offs[m]
         w = 0
         prev = 0
+        ns = z0
         for q in range(a, b + 1):
             i = pos[q] if q < b else n_f
             inside = (w & 1) != 0 if evenodd else w != 0
             if inside and i > prev:
-                if f >= 1.0:
-                    for row in range(prev, i):
-                        out[row, col] = level
-                else:
-                    for row in range(prev, i):
-                        fi = row + i0
-                        if math.floor((fi + 1) * f + o) > math.floor(fi * f + o):
-                            out[row, col] = level
+                sp_lo[ns] = prev
+                sp_hi[ns] = i
+                ns += 1
             if q < b:
                 w += sgn[q]
                 prev = i
+        sp_end[m] = ns
+    # pass 4: write the spans tile by tile of FILL_TILE firing rows, so that the (tile, N) block of the
+    # image stays in cache while every track writes its column piece (a whole-column walk misses it each row)
+    cursor = np.empty(n_tr, np.int64)
+    for m in range(n_tr):
+        cursor[m] = start[m] + m
+    gf = np.empty(FILL_TILE + 1, np.float64)
+    for r0 in range(0, n_f, FILL_TILE):
+        r1 = min(r0 + FILL_TILE, n_f)
+        for m in range(n_tr):
+            z = cursor[m]
+            end = sp_end[m]
+            if z == end:
+                continue
+            col = cols[m]
+            f = frac[m]
+            o = offs[m]
+            while z < end and sp_lo[z] < r1:
+                lo = max(sp_lo[z], r0)
+                hi = min(sp_hi[z], r1)
+                if f >= 1.0:
+                    for row in range(lo, hi):
+                        out[row, col] = level
+                elif hi > lo:  # thinned: one floor per firing (thin_floors_jit: the rule of thin_print)
+                    thin_floors_jit(gf, float(lo + i0), hi - lo, f, o)
+                    for t in range(hi - lo):
+                        if gf[t + 1] > gf[t]:
+                            out[lo + t, col] = level
+                if sp_hi[z] > r1:
+                    break
+                z += 1
+            cursor[m] = z
     return out
 
 

@@ -552,18 +552,22 @@ def _leave_out(r: np.ndarray, n: np.ndarray, lo: float, hi: float, line_mm: floa
 def thin_print(pr, fractions: Sequence[np.ndarray], *, pass_index: int = 0):
     """``pr`` with track ``k`` of swathe ``j`` keeping firing ``i`` only when
     ``floor((i + 1) f + o) > floor(i f + o)`` (``f = fractions[j][k]``, ``o`` a golden-ratio
-    step per nozzle and pass): an ordered, even pattern on the absolute firing index, exactly
-    ``f`` of the firings over any run."""
+    step per nozzle and pass: :func:`~rotoprint.rotary._thin_kernels.thin_phases`): an ordered,
+    even pattern on the absolute firing index, exactly ``f`` of the firings over any run.
+
+    The rule is :func:`~rotoprint.rotary._thin_kernels.kept_jit`, the one the exact transform
+    thins by while it samples (``transform_exact(..., thin=ThinShares(fractions, pass_index))``,
+    identical images without the unthinned one: what :func:`~rotoprint.rotary.interlace.pass_prints` uses).
+    """
     import dataclasses
 
-    from ._thin_kernels import thin_levels_jit
+    from ._thin_kernels import thin_levels_jit, thin_phases
 
     out = []
     for sw, f in zip(pr.swathes, fractions):
-        k = np.arange(sw.levels.shape[1])
-        o = np.mod((k + 7919 * pass_index) * _GOLDEN, 1.0)
+        o = thin_phases(sw.levels.shape[1], pass_index)
         lev = np.ascontiguousarray(sw.levels, dtype=np.uint8)
         kept = np.empty_like(lev)
-        thin_levels_jit(lev, int(sw.first_firing), np.ascontiguousarray(f, dtype=np.float64), o, kept)  # numpy: floor((i+1) f + o) > floor(i f + o)
+        thin_levels_jit(lev, int(sw.first_firing), np.ascontiguousarray(f, dtype=np.float64), o, kept)
         out.append(dataclasses.replace(sw, levels=kept))
     return dataclasses.replace(pr, swathes=tuple(out))

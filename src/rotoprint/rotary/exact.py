@@ -22,13 +22,14 @@ from .._resources import check_raster_fits
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, ImageError
 from . import _exact_kernels as _k
+from ._thin_kernels import thin_levels_jit, thin_phases
 from .head import Mount, NozzleLayout, nozzle_layout
 from .options import RotarySetup, options_from
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_levels
 from .swathes import SwathePlan, pass_enabled, plan_swathes
 
-__all__ = ["SwatheMap", "TrackWindows", "ExactMaps", "exact_maps", "transform_exact", "firing_range", "KERNEL_NAMES"]
+__all__ = ["SwatheMap", "TrackWindows", "ExactMaps", "ThinShares", "exact_maps", "transform_exact", "firing_range", "KERNEL_NAMES"]
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +69,39 @@ def firing_range(phi_rad: np.ndarray, angle_lo_rad: float, angle_hi_rad: float, 
         a = (angle_lo_rad - phi_rad) / dphi_rad
         b = (angle_hi_rad - phi_rad) / dphi_rad
     return int(math.floor(float(a.min()) + 1e-9)), int(math.ceil(float(b.max()) - 1e-9))
+
+
+@dataclass(frozen=True, eq=False)
+class ThinShares:
+    """Shares a print is thinned by while it is sampled (:func:`transform_exact` ``thin=``).
+
+    The image is the one :func:`~rotoprint.rotary.equalise.thin_print` makes of the unthinned
+    print with the same ``fractions`` and ``pass_index`` (tested identical), made in one sweep:
+    the full image at the (doubled) clock of an equalised pass is never built.
+
+    Parameters
+    ----------
+    fractions : sequence (swathe) of (N,) float64
+        Share of its firings each track keeps, in [0, 1], by nozzle.
+    pass_index : int
+        Sets the phases (:func:`~rotoprint.rotary._thin_kernels.thin_phases`).
+    """
+
+    fractions: tuple
+    pass_index: int = 0
+
+    def __post_init__(self) -> None:
+        fr = tuple(np.ascontiguousarray(f, np.float64) for f in self.fractions)
+        if any(f.ndim != 1 for f in fr) or not all(np.isfinite(f).all() for f in fr):
+            raise ConfigError("thinning shares must be one finite (N,) array per swathe")
+        object.__setattr__(self, "fractions", fr)
+        object.__setattr__(self, "pass_index", int(self.pass_index))
+
+    def check(self, n_swathes: int, n_nozzles: int) -> None:
+        """One-line :class:`ConfigError` unless there are ``n_swathes`` arrays of ``(n_nozzles,)``."""
+        if len(self.fractions) != n_swathes or any(f.shape != (n_nozzles,) for f in self.fractions):
+            raise ConfigError(f"thinning shares must give one ({n_nozzles},) array per swathe ({n_swathes}), "
+                              f"got {len(self.fractions)} of shapes {[f.shape for f in self.fractions]}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -128,6 +162,17 @@ class TrackWindows:
         if not self._fill(flat, out):
             _k.WINDOWS_GATHER[self.backend](flat, self.nozzle, self.row, self.count, self.start, self._index, out)
         return out
+
+    def sample_thin(self, flat: np.ndarray, out: np.ndarray, fractions: np.ndarray, phases: np.ndarray, first_firing: int,
+                    ink_blocks: np.ndarray | None = None, level: int | None = None) -> np.ndarray:
+        """:meth:`gather`, then thinned (firing ``first_firing + row`` of track ``k`` kept by share
+        ``fractions[k]`` and phase ``phases[k]``, each ``(N,) float64``), in one sweep that stores no
+        index (the landing points of the kept drops only are computed; pieces of track that can
+        land on no ink skipped and those that land on ink only given ``level``, by ``ink_blocks``:
+        :func:`~rotoprint.rotary._exact_kernels.ink_blocks` of ``flat``, whose non-zero value is ``level``)."""
+        return _k.WINDOWS_SAMPLE_THIN[self.backend](self.coefficients, self.nozzle, self.row, self.count, self.cos_row,
+                                                    self.sin_row, self.width, self.height, flat, out, fractions, phases, first_firing,
+                                                    ink_blocks, level)
 
     def dense(self, n_firings: int, n_nozzles: int, sentinel: int) -> np.ndarray:
         """The ``(F, N)`` index map, ``sentinel`` where no drop lands in the design."""
@@ -192,9 +237,14 @@ class ExactMaps:
     swathes: tuple[SwatheMap, ...]
     backend: str
 
-    def apply(self, design: np.ndarray, *, kind: str | None = None) -> RotaryPrint:
-        """Sample ``design`` ``(H, W) uint8`` through the maps; returns a :class:`RotaryPrint`."""
+    def apply(self, design: np.ndarray, *, kind: str | None = None, thin: ThinShares | None = None) -> RotaryPrint:
+        """Sample ``design`` ``(H, W) uint8`` through the maps; returns a :class:`RotaryPrint`.
+
+        ``thin``: the print thinned by these shares as it is sampled (:class:`ThinShares`).
+        """
         design = _check_design(design, self.placement)
+        if thin is not None:
+            thin.check(len(self.swathes), self.head.nozzles)
         flat = None
         if kind in (None, "binary"):
             # one pass: the drop level of every design pixel (+ the 0 "no drop" sentinel the maps
@@ -206,13 +256,22 @@ class ExactMaps:
             raise ConfigError(f"kind must be one of binary, grey; got {kind!r}")
         dead = np.array(self.head.dead_nozzles, dtype=np.int64)
         _, bilinear = _k.KERNELS[self.backend]
+        ink = _k.ink_blocks(flat, self.placement.width_px, self.placement.height_px) \
+            if thin is not None and kind == "binary" and self.backend == "jit" else None
         out = []
         for j, sm in enumerate(self.swathes):
-            if kind == "binary":
-                lev = sm.windows.gather(flat, np.zeros((sm.n_firings, sm.layout.r_mm.shape[0]), np.uint8))
+            zeros = np.zeros((sm.n_firings, sm.layout.r_mm.shape[0]), np.uint8)
+            if kind == "binary" and thin is not None:
+                lev = sm.windows.sample_thin(flat, zeros, thin.fractions[j], thin_phases(zeros.shape[1], thin.pass_index), sm.first_firing,
+                                             ink, level)
+            elif kind == "binary":
+                lev = sm.windows.gather(flat, zeros)
             else:
                 col, row = sm.coords(self.placement)
                 lev = design_levels(bilinear(design, col, row, sm.index), self.head.grey_levels, kind=kind)
+                if thin is not None:
+                    thin_levels_jit(lev, int(sm.first_firing), thin.fractions[j], thin_phases(lev.shape[1], thin.pass_index), zeros)
+                    lev = zeros
             if dead.size:
                 lev[:, dead] = 0
             out.append(
@@ -397,7 +456,7 @@ exact_maps.cache_info = _exact_maps.cache_info  # type: ignore[attr-defined]
 
 
 def transform_exact(design: np.ndarray, head: InkjetHead, placement: Placement, setup: RotarySetup | None = None, *,
-                    kind: str | None = None, **keywords) -> RotaryPrint:
+                    kind: str | None = None, thin: ThinShares | None = None, **keywords) -> RotaryPrint:
     """Make ``design`` print-ready for a (tilted) head over a rotating platform.
 
     Parameters
@@ -407,6 +466,10 @@ def transform_exact(design: np.ndarray, head: InkjetHead, placement: Placement, 
     head, placement, setup, **keywords : see :func:`exact_maps` (the maps are cached).
     kind : {"binary", "grey"}, optional
         Default: ``"binary"`` when the design holds one non-zero value.
+    thin : ThinShares, optional
+        Thin the print by these shares while sampling it: the same images as
+        :func:`~rotoprint.rotary.equalise.thin_print` of the unthinned print (binary designs in
+        one sweep, without the unthinned image).
 
     Returns
     -------
@@ -424,4 +487,4 @@ def transform_exact(design: np.ndarray, head: InkjetHead, placement: Placement, 
     """
     design = _check_design(design, placement)
     maps = exact_maps(head, placement, options_from(RotarySetup, setup, keywords, what="transform_exact"))
-    return maps.apply(design, kind=kind)
+    return maps.apply(design, kind=kind, thin=thin)

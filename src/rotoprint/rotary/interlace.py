@@ -873,7 +873,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
 
     from ..devices import InkjetDevice, load_device
     from .deposit import DepositOptions
-    from .exact import transform_exact
+    from .exact import ThinShares, transform_exact
     from .swathes import plan_swathes
 
     if isinstance(device, InkjetHead):
@@ -918,9 +918,8 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
                                 floor=g_floor)
     elif equalise:
-        # clock EQUALISE_CLOCK_FACTOR x the plan's; kept drops at most ceil(1 / f) firings apart, so a share
-        # >= EQUALISE_FLOOR keeps every track within the planned spacing (measured: at the plan's clock alone,
-        # thinned clusters open holes), a track keeps less only where its kept drops stay within the lattice reach.
+        # clock EQUALISE_CLOCK_FACTOR x the plan's; kept drops at most ceil(1 / f) firings apart, so a share >= EQUALISE_FLOOR keeps
+        # every track within the planned spacing (at the plan's clock alone, thinned clusters open holes), less only within the reach.
         cover_all = bool(options.dead_cover and head.dead_nozzles and pp.passes > 1)  # shares with all live, room kept for the cover below
         fracs = track_fractions(head, sp, pp.offsets_mm, dataclasses.replace(st, dpi_y=clock), footprint_um=d_um,
                                 reach=ReachFloor(COVER_SHARE * d_um, EQUALISE_CLOCK_FACTOR),
@@ -946,13 +945,14 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     for q, off in enumerate(pp.offsets_mm):
         pst = dataclasses.replace(st, dpi_y=clock, pivot_offset_mm=off, swathe_overlap_mm=overlap, swathe_seam_mm=seam,
                                   mount_angle_deg=float(st.mount_angle_deg) + angles[q])
-        pr = transform_exact(design, head, placement, pst)
+        thin = fracs is not None and not grey and not (dead_cover is not None and thin_landing)  # thin_print's, while sampling
+        pr = transform_exact(design, head, placement, pst, thin=ThinShares(fracs[q], q) if thin and options.edge_restore is None else None)
         if grey:
             from .halftone import halftone_print
 
             pr = halftone_print(pr, fracs[q])
-        elif fracs is not None and not (dead_cover is not None and thin_landing):
-            pr = thin_print(pr, fracs[q], pass_index=q) if options.edge_restore is None else options.edge_restore.thin(pr, fracs[q], design, pass_index=q)
+        elif thin and options.edge_restore is not None:  # the edge compensation restores from the unthinned print
+            pr = options.edge_restore.thin(pr, fracs[q], design, pass_index=q)
         sw = tuple(dataclasses.replace(s, extra={**s.extra, "pass": q, "passes": pp.passes, "pass_offset_mm": off,
                                                  "pass_phase": float(achieved[q, j]), "pass_phase_angle_deg": angles[q]})
                    for j, s in enumerate(pr.swathes))
