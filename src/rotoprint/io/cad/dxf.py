@@ -25,7 +25,7 @@ from shapely.geometry import MultiLineString, Polygon
 
 from ...errors import CadError
 from ..inputs import check_input_file
-from ._geometry import PlanarLayer, arc_points, as_multipolygon, check_valid, fill_rings, length_unit_mm, stroke
+from ._geometry import PlanarLayer, arc_points, as_multipolygon, check_extent, check_valid, fill_rings, length_unit_mm, stroke
 
 __all__ = ["read_dxf", "INSUNITS_MM"]
 
@@ -97,6 +97,9 @@ def _dxf_problem(exc: Exception) -> str:
     if isinstance(exc, UnicodeDecodeError):
         return f"not text in its declared encoding (byte {exc.start})"
     return text or "its structure is broken (truncated?)"
+
+
+_EXTENT_HINT = " (check the coordinates and $INSUNITS or --units)"
 
 
 def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None) -> PlanarLayer:
@@ -217,6 +220,8 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
                                "track)", path=p)
             rings.append(c)
             counts["chained"] += 1
+    if rings:  # far or non-finite coordinates refused before any polygon is built of them
+        check_extent(shapely.multipoints(np.concatenate(rings)), path=p, hint=_EXTENT_HINT)
     for i, r in enumerate(rings):
         check_valid(Polygon(r), f"closed contour {i} (starting at ({r[0, 0]:.6g}, {r[0, 1]:.6g}) mm)", path=p)
     region = fill_rings(rings, "evenodd")
@@ -224,4 +229,5 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
         region = as_multipolygon(shapely.union_all([region, *strokes]))
     region = as_multipolygon(shapely.orient_polygons(region, exterior_cw=False))
     counts["ignored"] = ignored
+    check_extent(region, path=p, hint=_EXTENT_HINT)
     return PlanarLayer(region=region, terminals={}, source=str(p), fmt="dxf", tolerance_mm=float(tolerance_mm), counts=counts)

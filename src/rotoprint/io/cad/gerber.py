@@ -27,12 +27,15 @@ import shapely
 from shapely.geometry import Polygon
 
 from ...errors import CadError
-from ._geometry import PlanarLayer, arc_points, as_multipolygon, circle_polygon, stroke
+from ._geometry import PlanarLayer, arc_points, as_multipolygon, check_extent, circle_polygon, stroke
 
 __all__ = ["read_gerber", "read_excellon"]
 
 #: The largest Gerber or Excellon file read (bytes).
 MAX_FILE_BYTES = 256 * 1024 * 1024
+#: The formats' names in messages, bare and with their article.
+_NAME = {"gerber": "Gerber", "excellon": "Excellon"}
+_A_NAME = {"gerber": "a Gerber", "excellon": "an Excellon"}
 
 
 def _check_size(path: Path) -> None:
@@ -184,6 +187,20 @@ def _terminal_names(obj) -> list[str]:
     return names
 
 
+def _check_not_empty(path: Path, parsed, kind: str) -> None:
+    """A file without one graphic object is a layer only when it states its units (a header
+    and an end, as a CAD tool writes an empty paste or drill layer); an empty file, or text in
+    which the lenient parser found no statement at all, is refused."""
+    name = _NAME[kind]
+    with open(path, "rb") as fh:  # bounded: _check_size passed
+        blank = not fh.read().strip()
+    if blank:
+        raise CadError(f"no {name} content (empty)", path=path)
+    if getattr(parsed.import_settings, "unit", None) is None:
+        raise CadError(f"no {name} statements in it (no units, no draws, flashes or hits): not {_A_NAME[kind]} file",
+                       path=path)
+
+
 def _read(path: Path, tol: float, kind: str) -> PlanarLayer:
     from gerbonara import ExcellonFile, GerberFile
     from gerbonara import graphic_objects as go
@@ -197,10 +214,12 @@ def _read(path: Path, tol: float, kind: str) -> PlanarLayer:
         try:
             f = GerberFile.open(path) if kind == "gerber" else ExcellonFile.open(path)
         except UnicodeDecodeError:
-            raise CadError(f"not a {kind} text file (not ASCII/UTF-8)", path=path) from None
+            raise CadError(f"not {_A_NAME[kind]} text file (not ASCII/UTF-8)", path=path) from None
         except (SyntaxError, ValueError, KeyError, IndexError, TypeError, AttributeError, AssertionError) as exc:
             msg = str(exc).replace(str(path) + ":", "line ").strip() or type(exc).__name__
-            raise CadError(f"not a readable {kind} file: {msg}", path=path) from None
+            raise CadError(f"not a readable {_NAME[kind]} file: {msg}", path=path) from None
+    if not f.objects:
+        _check_not_empty(path, f, kind)
     items = []
     terms: dict[str, list] = {}
     counts = {"flashes": 0, "draws": 0, "arcs": 0, "regions": 0}
@@ -248,6 +267,8 @@ def _read(path: Path, tol: float, kind: str) -> PlanarLayer:
     flush()
     region = as_multipolygon(_combine(items))
     region = as_multipolygon(shapely.orient_polygons(region, exterior_cw=False))
+    check_extent(region, path=path, hint=" (check the coordinates and the %FS and %MO statements)" if kind == "gerber"
+                 else " (check the coordinates and the units: METRIC or INCH)")
     terminals = {k: shapely.union_all(v) for k, v in terms.items()}
     counts["warnings"] = [str(w.message) for w in caught][:20]
     return PlanarLayer(region=region, terminals=terminals, source=str(path), fmt=kind, tolerance_mm=tol, counts=counts)

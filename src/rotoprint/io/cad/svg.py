@@ -10,8 +10,10 @@ Units: svgelements resolves the document to CSS pixels (96 per inch; ``width="30
 ``viewBox`` maps user units to millimetres), so coordinates are ``px * 25.4 / 96`` mm; ``units``
 overrides that (the pixel is then that unit). Y is flipped (SVG's Y runs down the page).
 
-Refused: ``width``/``height`` in a unit that is not a length, transforms nested more than
-:data:`MAX_TRANSFORM_DEPTH` deep, elements nested more than :data:`MAX_ELEMENT_DEPTH` deep.
+Refused: ``width``/``height`` in a unit that is not a length, a page (``width``, ``height``,
+``viewBox``) or a drawing beyond the layer bound (:data:`rotoprint.ranges.COORD_MM`; the message
+gives the size in mm it would be), transforms nested more than :data:`MAX_TRANSFORM_DEPTH`
+deep, elements nested more than :data:`MAX_ELEMENT_DEPTH` deep.
 """
 
 from __future__ import annotations
@@ -27,7 +29,8 @@ from shapely.geometry import LinearRing, LineString
 
 from ...errors import CadError
 from ..inputs import check_input_file
-from ._geometry import PlanarLayer, as_multipolygon, fill_rings, length_unit_mm, segments_for_arc
+from ...ranges import COORD_MM
+from ._geometry import MAX_SPAN_MM, PlanarLayer, as_multipolygon, check_extent, fill_rings, length_unit_mm, segments_for_arc
 
 __all__ = ["read_svg", "MAX_TRANSFORM_DEPTH", "MAX_ELEMENT_DEPTH"]
 
@@ -36,9 +39,50 @@ MAX_TRANSFORM_DEPTH = 32
 MAX_ELEMENT_DEPTH = 256
 _SVG_LENGTH = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([a-zA-Z%]*)\s*$")
 _SVG_UNITS = {"", "px", "mm", "cm", "in", "pt", "pc", "q", "%", "em", "ex"}
+#: CSS pixels per absolute CSS unit (relative ones, % em ex, are not checked for size).
+_SVG_ABSOLUTE_PX = {"": 1.0, "px": 1.0, "mm": 96 / 25.4, "cm": 96 / 2.54, "in": 96.0, "pt": 96 / 72, "pc": 16.0,
+                    "q": 96 / 25.4 / 4}
 
 
-def _precheck(path: Path) -> None:
+def _check_page(el, path: Path, mm_per_px: float) -> None:
+    """The root ``<svg>``'s ``width``, ``height`` and ``viewBox``: lengths, and a page that
+    fits the layer bound (:data:`MAX_SPAN_MM`); a refusal gives the size in mm it would be.
+    A viewBox sizes the page (its user unit the pixel) only where no absolute width or
+    height does."""
+    sized = {}
+    for k in ("width", "height"):
+        v = el.get(k)
+        if v is None:
+            continue
+        m = _SVG_LENGTH.match(v)
+        if not m or m.group(2).lower() not in _SVG_UNITS:
+            raise CadError(f"{k}={v!r} of the <svg> element is not a length", path=path)
+        unit = m.group(2).lower()
+        if unit in _SVG_ABSOLUTE_PX:  # the reader's millimetres: CSS pixels times the pixel's size
+            size_mm = float(m.group(1)) * _SVG_ABSOLUTE_PX[unit] * mm_per_px
+            _check_page_size(f"{k}={v!r}", size_mm, path)
+            sized[k] = size_mm
+    vb = el.get("viewBox")
+    if vb is None:
+        return
+    try:
+        nums = [float(t) for t in vb.replace(",", " ").split()]
+    except ValueError:
+        nums = []
+    if len(nums) != 4 or not all(math.isfinite(v) for v in nums):
+        raise CadError(f"viewBox={vb!r} of the <svg> element is not four finite numbers", path=path)
+    for k, v, lo in (("width", nums[2], nums[0]), ("height", nums[3], nums[1])):
+        if k not in sized:  # the viewBox's user unit is the pixel: its extent is the page's
+            _check_page_size(f"viewBox={vb!r} ({k})", (abs(lo) + abs(v)) * mm_per_px, path)
+
+
+def _check_page_size(what: str, size_mm: float, path: Path) -> None:
+    if not (math.isfinite(size_mm) and abs(size_mm) <= MAX_SPAN_MM):
+        raise CadError(f"{what} of the <svg> element makes the page {size_mm:.3g} mm; a layer must fit in "
+                       f"{MAX_SPAN_MM:g} mm (coordinates {COORD_MM.text()})", path=path)
+
+
+def _precheck(path: Path, mm_per_px: float) -> None:
     depth = 0
     tdepth = [0]
     worst = 0
@@ -55,13 +99,7 @@ def _precheck(path: Path) -> None:
                     raise CadError(f"transforms are nested more than {MAX_TRANSFORM_DEPTH} deep; flatten the "
                                    "groups before reading", path=path)
                 if depth == 1:
-                    for k in ("width", "height"):
-                        v = el.get(k)
-                        if v is None:
-                            continue
-                        m = _SVG_LENGTH.match(v)
-                        if not m or m.group(2).lower() not in _SVG_UNITS:
-                            raise CadError(f"{k}={v!r} of the <svg> element is not a length", path=path)
+                    _check_page(el, path, mm_per_px)
             else:
                 depth -= 1
                 tdepth.pop()
@@ -156,9 +194,9 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
 
     p = Path(path)
     check_input_file(p, what="SVG file", limit_bytes=MAX_FILE_BYTES)  # regular, bounded: never a blocking read
-    _precheck(p)
     # svgelements' own CSS pixel per mm (it converts "mm" with this factor)
     mm_per_px = length_unit_mm(units, path=p) if units else 1.0 / float(se.Length("1mm").value(ppi=96.0))
+    _precheck(p, mm_per_px)
     tol = float(tolerance_mm) / mm_per_px
     try:
         doc = se.SVG.parse(str(p), reify=True, ppi=96.0)
@@ -196,4 +234,5 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
 
     region = as_multipolygon(affinity.affine_transform(region, [mm_per_px, 0, 0, -mm_per_px, 0, 0]))
     region = as_multipolygon(shapely.orient_polygons(region, exterior_cw=False))
+    check_extent(region, path=p, hint=" (check the coordinates, transforms and --units)")
     return PlanarLayer(region=region, terminals={}, source=str(p), fmt="svg", tolerance_mm=float(tolerance_mm), counts=counts)

@@ -1,0 +1,100 @@
+"""Hostile Gerber, Excellon, SVG and DXF layers through `rotoprint info`, as a user runs it.
+
+Each refusal: exit 2, one line naming the file and the problem, no traceback, nothing written.
+An empty but well-formed layer (a header and an end, as a CAD tool writes an unused paste or
+drill layer) is legitimate: its figures are printed without a NaN, its JSON parses strictly.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from _bounds_helpers import assert_refused, run_cli_bounded, tree
+
+HEADER_GERBER = "%FSLAX26Y26*%\n%MOMM*%\nM02*\n"
+HEADER_EXCELLON = "M48\nMETRIC\n%\nM30\n"
+
+
+def _refused(tmp_path, name: str, text: str | bytes, *fragments: str) -> str:
+    p = tmp_path / name
+    p.write_bytes(text if isinstance(text, bytes) else text.encode())
+    before = tree(tmp_path)
+    line = assert_refused(run_cli_bounded("info", name, cwd=tmp_path), f"{name}:", *fragments)
+    assert tree(tmp_path) == before
+    return line
+
+
+@pytest.mark.parametrize(("name", "text", "said"), [
+    ("empty.gbr", "", "no Gerber content (empty)"),
+    ("blank.gtl", "\n \n\t\n", "no Gerber content (empty)"),
+    ("empty.drl", "", "no Excellon content (empty)"),
+    ("prose.gbr", "hello world\nthis is no Gerber\n", "no Gerber statements in it"),
+])
+def test_empty_or_statementless_gerber_and_excellon_are_refused(tmp_path, name, text, said):
+    _refused(tmp_path, name, text, said)
+
+
+def _strict_json(text: str) -> dict:
+    def no_constant(c):
+        raise AssertionError(f"{c} in the JSON")
+
+    return json.loads(text, parse_constant=no_constant)
+
+
+@pytest.mark.parametrize(("name", "text"), [("paste.gbr", HEADER_GERBER), ("none.drl", HEADER_EXCELLON),
+                                            ("blank.svg", '<svg xmlns="http://www.w3.org/2000/svg" width="10mm" height="5mm"/>')])
+def test_an_empty_well_formed_layer_has_sane_figures(tmp_path, name, text):
+    (tmp_path / name).write_text(text)
+    run = run_cli_bounded("info", name, cwd=tmp_path)
+    assert run.code == 0, run.err
+    assert "nan" not in run.out.lower() and "inf" not in run.out.lower(), run.out
+    assert "empty layer" in run.out
+    run = run_cli_bounded("info", "--json", name, cwd=tmp_path)
+    assert run.code == 0, run.err
+    d = _strict_json(run.out)
+    assert d["area_mm2"] == 0.0 and d["regions"] == 0
+    assert d["bounds_mm"] is None and d["size_mm"] is None
+
+
+def _svg(root_attrs: str, body: str = '<rect x="0" y="0" width="10" height="10" fill="black"/>') -> str:
+    return f'<svg xmlns="http://www.w3.org/2000/svg" {root_attrs}>{body}</svg>'
+
+
+@pytest.mark.parametrize(("attrs", "body", "said"), [
+    ('width="1e300mm" height="1e300mm" viewBox="0 0 10 10"', None, "width='1e300mm' of the <svg> element makes the page 1e+300 mm"),
+    ('width="10mm" height="1e300in" viewBox="0 0 10 10"', None, "height='1e300in' of the <svg> element makes the page 2.54e+301 mm"),
+    ('width="1e300mm" height="1e300mm"', None, "makes the page 1e+300 mm"),  # no viewBox: the page alone
+    ('viewBox="0 0 1e300 1e300"', None, "viewBox='0 0 1e300 1e300' (width) of the <svg> element makes the page 2.65e+299 mm"),
+    ('width="10mm" height="10mm" viewBox="0 0 nan 10"', None, "viewBox='0 0 nan 10' of the <svg> element is not four finite numbers"),
+    ('width="10mm" height="10mm" viewBox="0 0 10 10"', '<rect width="1e300" height="1e300" fill="black"/>',
+     "the layer would be 1e+300 x 1e+300 mm"),
+    ('width="10mm" height="10mm" viewBox="0 0 10 10"', '<rect width="1" height="1" transform="scale(1e300)" fill="black"/>',
+     "the layer would be 1e+300 x 1e+300 mm"),
+    ('width="10mm" height="10mm" viewBox="0 0 10 10"', '<rect x="20000" width="1" height="1" fill="black"/>',
+     "from (2e+04, -1) to (2e+04, 0) mm; a layer must lie in [-10000, 10000] mm"),
+    ('width="10mm" height="10mm" viewBox="0 0 10 10"', '<circle cx="0" cy="0" r="1e300" fill="black"/>', "not a finite number"),
+    ('width="10mm" height="10mm" viewBox="0 0 10 10"', '<path d="M 0 0 A 1e300 1e300 0 0 1 10 10 Z" fill="black"/>',
+     "not a finite number"),
+    ('width="10mm" height="10mm" viewBox="0 0 10 10"', '<circle cx="0" cy="0" r="1e20" fill="black"/>', "use a larger tolerance"),
+])
+def test_svg_of_a_huge_size_is_refused_with_the_size(tmp_path, attrs, body, said):
+    _refused(tmp_path, "big.svg", _svg(attrs, *(() if body is None else (body,))), said)
+
+
+def test_a_huge_page_in_the_users_own_units_is_measured_in_them(tmp_path):
+    (tmp_path / "p.svg").write_text(_svg('width="1000" height="10"'))  # 1000 px: 264.6 mm, or 1000 m with --units m
+    assert run_cli_bounded("info", "p.svg", cwd=tmp_path).code == 0
+    line = assert_refused(run_cli_bounded("info", "p.svg", "--units", "m", cwd=tmp_path), "p.svg:")
+    assert "makes the page 1e+06 mm" in line, line
+
+
+def test_far_gerber_excellon_and_dxf_coordinates_are_refused(tmp_path):
+    _refused(tmp_path, "far.drl", "M48\nMETRIC\nT1C1.0\n%\nT1\nX1.0Y1.0\nX9999999.0Y1.0\nM30\n",
+             "the layer would be 1e+07 x 0.998 mm", "METRIC or INCH")
+    _refused(tmp_path, "far.gbr", "%FSLAX66Y66*%\n%MOIN*%\n%ADD10C,0.01*%\nD10*\nX999999000000Y0D03*\nM02*\n",
+             "from (2.54e+07, -0.126)", "%FS and %MO")
+    dxf = "\n".join(["0", "SECTION", "2", "ENTITIES", "0", "CIRCLE", "8", "0", "10", "1e200", "20", "0.0", "30", "0.0",
+                     "40", "1.0", "0", "ENDSEC", "0", "EOF", ""])
+    _refused(tmp_path, "far.dxf", dxf, "the layer would be", "$INSUNITS")
