@@ -8,7 +8,9 @@ drill layer) is legitimate: its figures are printed without a NaN, its JSON pars
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from _bounds_helpers import assert_refused, run_cli_bounded, tree
@@ -30,7 +32,7 @@ def _refused(tmp_path, name: str, text: str | bytes, *fragments: str) -> str:
     ("empty.gbr", "", "no Gerber content (empty)"),
     ("blank.gtl", "\n \n\t\n", "no Gerber content (empty)"),
     ("empty.drl", "", "no Excellon content (empty)"),
-    ("prose.gbr", "hello world\nthis is no Gerber\n", "no Gerber statements in it"),
+    ("prose.gbr", "hello world\nthis is no Gerber\n", "no Gerber units and nothing drawn (truncated, or not a Gerber file)"),
 ])
 def test_empty_or_statementless_gerber_and_excellon_are_refused(tmp_path, name, text, said):
     _refused(tmp_path, name, text, said)
@@ -98,3 +100,35 @@ def test_far_gerber_excellon_and_dxf_coordinates_are_refused(tmp_path):
     dxf = "\n".join(["0", "SECTION", "2", "ENTITIES", "0", "CIRCLE", "8", "0", "10", "1e200", "20", "0.0", "30", "0.0",
                      "40", "1.0", "0", "ENDSEC", "0", "EOF", ""])
     _refused(tmp_path, "far.dxf", dxf, "the layer would be", "$INSUNITS")
+
+
+CAD_COIL = Path(__file__).resolve().parents[2] / "examples" / "cad-coil"
+
+
+@pytest.mark.parametrize("name", ["coil-F_Cu.gbr", "coil-vias.drl", "coil-body.dxf"])
+def test_a_cut_short_layer_file_is_refused_at_every_cut(tmp_path, name):
+    """A copy that stopped part way lacks what comes after the cut: never a smaller layer. The
+    Gerber and Excellon cuts lack their end statement (M02, M30); the DXF its EOF (ezdxf's
+    tag reader ran out inside a section: it was a StopIteration traceback)."""
+    from rotoprint.errors import RotoprintError
+    from rotoprint.io.cad import read_layer
+
+    data = (CAD_COIL / name).read_bytes()
+    whole = read_layer(CAD_COIL / name, tolerance_mm=0.01)
+    assert whole.area_mm2 > 0
+    cuts = sorted({int(len(data) * f) for f in np.linspace(0.02, 0.98, 25)} | {len(data) - 5})
+    p = tmp_path / name
+    for cut in cuts:
+        p.write_bytes(data[:cut])
+        with pytest.raises(RotoprintError) as ei:
+            read_layer(p, tolerance_mm=0.01)
+        assert str(ei.value).startswith(f"{p}: "), (cut, str(ei.value))
+
+
+@pytest.mark.parametrize(("name", "cut", "said"), [
+    ("coil-F_Cu.gbr", 400, "no M02* or M00* end statement at its end: the file is cut short"),
+    ("coil-vias.drl", 60, "no Excellon units and nothing drilled (truncated, or not an Excellon file)"),
+    ("coil-body.dxf", 2000, "not a readable DXF file: it ends inside a section (truncated)"),
+])
+def test_a_cut_short_layer_is_one_line_from_the_cli(tmp_path, name, cut, said):
+    _refused(tmp_path, name, (CAD_COIL / name).read_bytes()[:cut], said)

@@ -129,7 +129,10 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
     check_input_file(p, what="DXF file", limit_bytes=MAX_FILE_BYTES)  # regular, bounded: never a blocking read
     try:
         doc = ezdxf.readfile(p)
-    except (ezdxf.DXFError, OSError, UnicodeDecodeError, ValueError) as exc:
+    except StopIteration:  # ezdxf's tag reader ran out of tags inside a section: the file ends early
+        raise CadError("not a readable DXF file: it ends inside a section (truncated)", path=p) from None
+    except (ezdxf.DXFError, OSError, UnicodeDecodeError, ValueError, IndexError, KeyError, TypeError, AttributeError,
+            AssertionError) as exc:
         raise CadError(f"not a readable DXF file: {_dxf_problem(exc)}", path=p) from None
     if units is not None:
         scale = length_unit_mm(units, path=p)

@@ -197,7 +197,26 @@ def _check_not_empty(path: Path, parsed, kind: str) -> None:
     if blank:
         raise CadError(f"no {name} content (empty)", path=path)
     if getattr(parsed.import_settings, "unit", None) is None:
-        raise CadError(f"no {name} statements in it (no units, no draws, flashes or hits): not {_A_NAME[kind]} file",
+        made = "nothing drawn" if kind == "gerber" else "nothing drilled"
+        raise CadError(f"no {name} units and {made} (truncated, or not {_A_NAME[kind]} file)", path=path)
+
+
+#: The statements a whole file ends with: Gerber's M02 (M00, deprecated, also stops the
+#: file), Excellon's end of program M30 (or M00).
+_ENDS = {"gerber": (b"M02*", b"M00*"), "excellon": (b"M30", b"M00")}
+
+
+def _check_ends(path: Path, kind: str) -> None:
+    """A file cut short (a copy or download that stopped, a tool that crashed while writing)
+    lacks its end statement; what it lacks would not be printed, so it is refused."""
+    with open(path, "rb") as fh:
+        size = fh.seek(0, 2)
+        fh.seek(max(0, size - 256))
+        tail = fh.read().rstrip()
+    last = tail.rsplit(b"\n", 1)[-1].strip()
+    if not any(last.endswith(e) for e in _ENDS[kind]):
+        want = " or ".join(e.decode() for e in _ENDS[kind])
+        raise CadError(f"no {want} end statement at its end: the file is cut short (truncated) or not fully written",
                        path=path)
 
 
@@ -220,6 +239,7 @@ def _read(path: Path, tol: float, kind: str) -> PlanarLayer:
             raise CadError(f"not a readable {_NAME[kind]} file: {msg}", path=path) from None
     if not f.objects:
         _check_not_empty(path, f, kind)
+    _check_ends(path, kind)
     items = []
     terms: dict[str, list] = {}
     counts = {"flashes": 0, "draws": 0, "arcs": 0, "regions": 0}
