@@ -132,3 +132,44 @@ def test_a_cut_short_layer_file_is_refused_at_every_cut(tmp_path, name):
 ])
 def test_a_cut_short_layer_is_one_line_from_the_cli(tmp_path, name, cut, said):
     _refused(tmp_path, name, (CAD_COIL / name).read_bytes()[:cut], said)
+
+
+def _dxf(tmp_path, name: str, add) -> str:
+    import ezdxf
+
+    doc = ezdxf.new()
+    doc.header["$INSUNITS"] = 4  # mm
+    add(doc.modelspace())
+    doc.saveas(tmp_path / name)
+    return (tmp_path / name).read_text()
+
+
+@pytest.mark.parametrize(("case", "said"), [
+    ("circle r=0", "CIRCLE (handle"),  # were shapely's 'A linearring requires at least 4 coordinates' tracebacks
+    ("circle r=-1", "has radius -1; a circle needs a positive radius"),
+    ("spline, singular", "SPLINE (handle"),  # was numpy's LinAlgError traceback
+    ("ellipse 1e300", "ELLIPSE (handle"),  # was a RecursionError traceback
+])
+def test_a_degenerate_dxf_entity_is_one_line_naming_it(tmp_path, case, said):
+    adds = {
+        "circle r=0": lambda m: m.add_circle((0, 0), 0),
+        "circle r=-1": lambda m: m.add_circle((0, 0), -1),
+        "spline, singular": lambda m: m.add_spline([(0, 0), (1e300, 1), (2, 0), (0, 0)]),
+        "ellipse 1e300": lambda m: m.add_ellipse((0, 0), major_axis=(1e300, 0), ratio=0.5),
+    }
+    text = _dxf(tmp_path, "src.dxf", adds[case])
+    line = _refused(tmp_path, "e.dxf", text, said)
+    assert "Traceback" not in line
+
+
+SVG_ROOT = 'width="10mm" height="10mm" viewBox="0 0 10 10"'
+
+
+@pytest.mark.parametrize(("body", "said"), [
+    ('<circle r="-1" fill="black"/>', "<circle> r='-1' is a negative length"),  # was drawn as a circle of radius 1
+    ('<path d="M 0 0 L 1 1" stroke="black" stroke-width="-1"/>', "<path> stroke-width='-1' is a negative length"),
+    ('<path d="M 0 0 C 1e300 1e300 2 2 3 3 Z" fill="black"/>', "a curve needs 4.61e+151 chords"),  # was a 150-digit count
+    ('<use href="#a"/><g id="a"><use href="#a"/></g>', "its <use> references loop"),  # was a RecursionError traceback
+])
+def test_a_hostile_svg_element_is_one_line(tmp_path, body, said):
+    _refused(tmp_path, "e.svg", _svg(SVG_ROOT, body), said)

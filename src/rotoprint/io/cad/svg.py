@@ -108,6 +108,24 @@ def _precheck(path: Path, mm_per_px: float) -> None:
         raise CadError(f"not a readable SVG (XML) file: {exc}", path=path) from None
 
 
+def _chords(x: float) -> float:
+    """``ceil(x)``, at least 1, for a finite ``x`` within the chord limit; ``x`` itself
+    (infinite, NaN or huge: refused by the caller) otherwise."""
+    return max(1, math.ceil(x)) if x <= 1_000_000 else x
+
+
+def _negative_size(el) -> str | None:
+    """The first of ``r``, ``rx``, ``ry``, ``width``, ``height`` or ``stroke-width`` an element
+    gives as a negative length (an error in SVG: the element is not drawn by a browser,
+    svgelements would draw its mirror image), as ``name=value``."""
+    for k in ("r", "rx", "ry", "width", "height", "stroke-width"):
+        v = el.values.get(k)
+        m = _SVG_LENGTH.match(str(v)) if isinstance(v, str) else None
+        if m and float(m.group(1)) < 0:
+            return f"{k}={v!r}"
+    return None
+
+
 def _flatten(sub, tol: float) -> tuple[np.ndarray, bool]:
     """One subpath's points (px) and whether it closes."""
     from svgelements import Arc, Close, CubicBezier, Line, Move, QuadraticBezier
@@ -131,15 +149,15 @@ def _flatten(sub, tol: float) -> tuple[np.ndarray, bool]:
             elif isinstance(seg, CubicBezier):
                 c = [np.array([q.x, q.y]) for q in (seg.start, seg.control1, seg.control2, seg.end)]
                 m = max(np.hypot(*(c[0] - 2 * c[1] + c[2])), np.hypot(*(c[1] - 2 * c[2] + c[3])))
-                n = max(1, math.ceil(math.sqrt(6 * m / (8 * tol))))
+                n = _chords(math.sqrt(6 * m / (8 * tol)))
             elif isinstance(seg, QuadraticBezier):
                 c = [np.array([q.x, q.y]) for q in (seg.start, seg.control, seg.end)]
                 m = np.hypot(*(c[0] - 2 * c[1] + c[2]))
-                n = max(1, math.ceil(math.sqrt(2 * m / (8 * tol))))
+                n = _chords(math.sqrt(2 * m / (8 * tol)))
             else:
                 raise CadError(f"unsupported path segment {type(seg).__name__}")
-            if n > 1_000_000:
-                raise CadError(f"a curve needs {n:,} chords at this tolerance; use a larger tolerance")
+            if not n <= 1_000_000:  # a NaN count is refused too
+                raise CadError(f"a curve needs {n:.3g} chords at this tolerance; use a larger tolerance")
             for t in np.arange(1, n + 1) / n:
                 q = seg.point(float(t))
                 pts.append((q.x, q.y))
@@ -200,6 +218,8 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
     tol = float(tolerance_mm) / mm_per_px
     try:
         doc = se.SVG.parse(str(p), reify=True, ppi=96.0)
+    except RecursionError:  # <use> elements that refer to themselves, or one another in a loop
+        raise CadError("not a readable SVG file: its <use> references loop (an element uses itself)", path=p) from None
     except (ValueError, TypeError, ET.ParseError, IndexError, ZeroDivisionError) as exc:
         raise CadError(f"not a readable SVG file: {exc}", path=p) from None
     parts = []
@@ -209,6 +229,9 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
             continue
         if str(el.values.get("visibility", "visible")) == "hidden" or str(el.values.get("display", "")) == "none":
             continue
+        bad = _negative_size(el)
+        if bad is not None:
+            raise CadError(f"<{el.values.get('tag', type(el).__name__.lower())}> {bad} is a negative length", path=p)
         path_ = se.Path(el)
         subs = [_flatten(s, tol) for s in path_.as_subpaths()]
         subs = [(a, c) for a, c in subs if len(a)]
