@@ -8,6 +8,7 @@ drill layer) is legitimate: its figures are printed without a NaN, its JSON pars
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -173,3 +174,35 @@ SVG_ROOT = 'width="10mm" height="10mm" viewBox="0 0 10 10"'
 ])
 def test_a_hostile_svg_element_is_one_line(tmp_path, body, said):
     _refused(tmp_path, "e.svg", _svg(SVG_ROOT, body), said)
+
+
+GERBER_HEAD = "%FSLAX46Y46*%\n%MOMM*%\n"
+
+
+@pytest.mark.parametrize(("name", "text", "said"), [
+    # 10^12 copies would have run the machine out of memory; gerbonara draws an SR block once
+    ("sr.gbr", GERBER_HEAD + "%SRX1000000Y1000000I1J1*%\n%ADD10C,1*%\nD10*\nX0Y0D03*\n%SR*%\nM02*\n",
+     "line 3: %SR step and repeat of 1,000,000 x 1,000,000 copies is not read"),
+    ("sr6.gbr", GERBER_HEAD + "%ADD10C,1*%\n%SRX3Y2I5J5*%\nD10*\nX0Y0D03*\nX2000000Y0D03*\n%SR*%\nM02*\n",
+     "line 4: %SR step and repeat of 3 x 2 copies is not read (the Gerber reader would draw one copy)"),
+    # a polygon is built vertex by vertex: 10^9 of them never finished
+    ("gon.gbr", GERBER_HEAD + "%ADD10P,1X1000000000*%\nD10*\nX0Y0D03*\nM02*\n",
+     "line 3: a polygon aperture of 1000000000 vertices; a Gerber polygon has 3 to 12"),
+    ("gon2.gbr", GERBER_HEAD + "%ADD10P,1X2*%\nD10*\nX0Y0D03*\nM02*\n", "a polygon aperture of 2 vertices"),
+    ("am.gbr", GERBER_HEAD + "%AMGON*5,1,100000000,0,0,1,0*%\n%ADD10GON*%\nD10*\nX0Y0D03*\nM02*\n",
+     "line 3: a macro polygon (primitive 5) of 100000000 vertices"),
+    ("rep.drl", "M48\nMETRIC\nT1C1.0\n%\nT1\nX1.0Y1.0\nR1000000000X0.1Y0\nM30\n",
+     "line 7: R1000000000 repeats a hole 1,000,000,000 times"),
+])
+def test_a_declared_expansion_is_bounded_before_reading(tmp_path, name, text, said):
+    _refused(tmp_path, name, text, said)
+
+
+def test_a_single_step_and_a_polygon_still_read(tmp_path):
+    from rotoprint.io.cad import read_layer
+
+    p = tmp_path / "ok.gbr"
+    p.write_text(GERBER_HEAD + "%SRX1Y1I0J0*%\n%ADD10P,1X6*%\nD10*\nX0Y0D03*\n%SR*%\nM02*\n")
+    lay = read_layer(p, tolerance_mm=0.001)
+    hexagon = 6 * 0.5 * 0.5**2 * math.sin(2 * math.pi / 6)  # a regular hexagon of circumradius 0.5 mm
+    assert lay.regions == 1 and lay.area_mm2 == pytest.approx(hexagon, rel=1e-9)
