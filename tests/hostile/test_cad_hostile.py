@@ -171,6 +171,11 @@ SVG_ROOT = 'width="10mm" height="10mm" viewBox="0 0 10 10"'
     ('<path d="M 0 0 L 1 1" stroke="black" stroke-width="-1"/>', "<path> stroke-width='-1' is a negative length"),
     ('<path d="M 0 0 C 1e300 1e300 2 2 3 3 Z" fill="black"/>', "a curve needs 4.61e+151 chords"),  # was a 150-digit count
     ('<use href="#a"/><g id="a"><use href="#a"/></g>', "its <use> references loop"),  # was a RecursionError traceback
+    # were svgelements' 'tuple index out of range' and a GEOSException traceback
+    ('<rect width="1" height="1" transform="matrix(nan 0 0 1 0 0)" fill="black"/>',
+     "transform='matrix(nan 0 0 1 0 0)' of a <rect> holds a number that is not finite"),
+    ('<rect width="1" height="1" transform="translate(1,1e999)" fill="black"/>',
+     "transform='translate(1,1e999)' of a <rect> holds a number that is not finite"),
 ])
 def test_a_hostile_svg_element_is_one_line(tmp_path, body, said):
     _refused(tmp_path, "e.svg", _svg(SVG_ROOT, body), said)

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import shapely
+from shapely.errors import GEOSException
 from shapely.geometry import LinearRing, LineString
 
 from ...errors import CadError
@@ -38,6 +39,8 @@ MAX_FILE_BYTES = 64 * 1024 * 1024
 MAX_TRANSFORM_DEPTH = 32
 MAX_ELEMENT_DEPTH = 256
 _SVG_LENGTH = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([a-zA-Z%]*)\s*$")
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+_NOT_FINITE = re.compile(r"(?<![a-zA-Z])(nan|inf(inity)?)(?![a-zA-Z])", re.IGNORECASE)
 _SVG_UNITS = {"", "px", "mm", "cm", "in", "pt", "pc", "q", "%", "em", "ex"}
 #: CSS pixels per absolute CSS unit (relative ones, % em ex, are not checked for size).
 _SVG_ABSOLUTE_PX = {"": 1.0, "px": 1.0, "mm": 96 / 25.4, "cm": 96 / 2.54, "in": 96.0, "pt": 96 / 72, "pc": 16.0,
@@ -90,7 +93,11 @@ def _precheck(path: Path, mm_per_px: float) -> None:
         for ev, el in ET.iterparse(path, events=("start", "end")):
             if ev == "start":
                 depth += 1
-                t = tdepth[-1] + (1 if el.get("transform") else 0)
+                tf = el.get("transform")
+                t = tdepth[-1] + (1 if tf else 0)
+                if tf and (_NOT_FINITE.search(tf) or not all(math.isfinite(float(v)) for v in _NUMBER.findall(tf))):
+                    raise CadError(f"transform={tf[:80]!r} of a <{el.tag.rpartition('}')[2]}> holds a number that is "
+                                   "not finite", path=path)
                 tdepth.append(t)
                 worst = max(worst, t)
                 if depth > MAX_ELEMENT_DEPTH:
@@ -222,40 +229,48 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
         raise CadError("not a readable SVG file: its <use> references loop (an element uses itself)", path=p) from None
     except (ValueError, TypeError, ET.ParseError, IndexError, ZeroDivisionError) as exc:
         raise CadError(f"not a readable SVG file: {exc}", path=p) from None
-    parts = []
-    counts = {"fills": 0, "strokes": 0}
-    for el in doc.elements():
-        if not isinstance(el, se.Shape) or isinstance(el, se.Text):
-            continue
-        if str(el.values.get("visibility", "visible")) == "hidden" or str(el.values.get("display", "")) == "none":
-            continue
-        bad = _negative_size(el)
-        if bad is not None:
-            raise CadError(f"<{el.values.get('tag', type(el).__name__.lower())}> {bad} is a negative length", path=p)
-        path_ = se.Path(el)
-        subs = [_flatten(s, tol) for s in path_.as_subpaths()]
-        subs = [(a, c) for a, c in subs if len(a)]
-        if not subs:
-            continue
-        fill = el.fill
-        if fill is not None and fill.value is not None and fill.alpha != 0:
-            rule = "evenodd" if str(el.values.get("fill-rule", "nonzero")).strip() == "evenodd" else "nonzero"
-            reg = fill_rings([a for a, _ in subs], rule)
-            if not reg.is_empty:
-                parts.append(reg)
-                counts["fills"] += 1
-        stroke = el.stroke
-        w = float(getattr(el, "implicit_stroke_width", None) or el.stroke_width or 0.0)
-        if stroke is not None and stroke.value is not None and stroke.alpha != 0 and w > 0:
-            for a, c in subs:
-                g = _stroke(a, c, w, el.values, tol)
-                if not g.is_empty:
-                    parts.append(g)
-            counts["strokes"] += 1
-    region = as_multipolygon(shapely.union_all(parts)) if parts else as_multipolygon(shapely.Polygon())
-    from shapely import affinity
+    try:
+        parts = []
+        counts = {"fills": 0, "strokes": 0}
+        for el in doc.elements():
+            if not isinstance(el, se.Shape) or isinstance(el, se.Text):
+                continue
+            if str(el.values.get("visibility", "visible")) == "hidden" or str(el.values.get("display", "")) == "none":
+                continue
+            bad = _negative_size(el)
+            if bad is not None:
+                raise CadError(f"<{el.values.get('tag', type(el).__name__.lower())}> {bad} is a negative length", path=p)
+            path_ = se.Path(el)
+            subs = [_flatten(s, tol) for s in path_.as_subpaths()]
+            subs = [(a, c) for a, c in subs if len(a)]
+            if not subs:
+                continue
+            fill = el.fill
+            if fill is not None and fill.value is not None and fill.alpha != 0:
+                rule = "evenodd" if str(el.values.get("fill-rule", "nonzero")).strip() == "evenodd" else "nonzero"
+                reg = fill_rings([a for a, _ in subs], rule)
+                if not reg.is_empty:
+                    parts.append(reg)
+                    counts["fills"] += 1
+            stroke = el.stroke
+            w = float(getattr(el, "implicit_stroke_width", None) or el.stroke_width or 0.0)
+            if stroke is not None and stroke.value is not None and stroke.alpha != 0 and w > 0:
+                for a, c in subs:
+                    g = _stroke(a, c, w, el.values, tol)
+                    if not g.is_empty:
+                        parts.append(g)
+                counts["strokes"] += 1
+        region = as_multipolygon(shapely.union_all(parts)) if parts else as_multipolygon(shapely.Polygon())
+        from shapely import affinity
 
-    region = as_multipolygon(affinity.affine_transform(region, [mm_per_px, 0, 0, -mm_per_px, 0, 0]))
-    region = as_multipolygon(shapely.orient_polygons(region, exterior_cw=False))
+        region = as_multipolygon(affinity.affine_transform(region, [mm_per_px, 0, 0, -mm_per_px, 0, 0]))
+        region = as_multipolygon(shapely.orient_polygons(region, exterior_cw=False))
+    except CadError:
+        raise
+    except (GEOSException, ValueError, ArithmeticError) as exc:
+        # coordinates beyond the float range (1e999 reads as inf) or degenerate: GEOS cannot node them
+        reason = " ".join(str(exc).split())[:120] or type(exc).__name__
+        raise CadError(f"its shapes cannot be made into geometry (coordinates not finite, or degenerate): {reason}",
+                       path=p) from None
     check_extent(region, path=p, hint=" (check the coordinates, transforms and --units)")
     return PlanarLayer(region=region, terminals={}, source=str(p), fmt="svg", tolerance_mm=float(tolerance_mm), counts=counts)
