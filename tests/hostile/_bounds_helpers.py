@@ -10,12 +10,21 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+import rotoprint
+
 #: Address space the CLI may map (numpy, numba and Pillow start in far less).
 MEMORY_LIMIT_BYTES = 1536 << 20
 #: A hang guard, not a speed target (those live in bench/): a blocking or endless read never
 #: returns, so any generous bound catches it, while a loaded machine (the suite runs beside
 #: other work) may take several times the idle start-up.
 TIME_LIMIT_S = 120.0
+
+
+#: The child imports the rotoprint this test process imported: a relative PYTHONPATH (``src``,
+#: as the suite is run from a checkout) would name another folder from the child's cwd, and
+#: the child would then run an installed copy instead of the code under test.
+_SRC_PATH = os.pathsep.join([str(Path(rotoprint.__file__).resolve().parents[1]),
+                             *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))])
 
 
 @dataclass
@@ -38,7 +47,8 @@ def run_cli_bounded(*args: str | Path, cwd: Path, timeout_s: float = TIME_LIMIT_
     proc = subprocess.run(
         [sys.executable, "-m", "rotoprint.cli.main", *map(str, args)],
         cwd=cwd, capture_output=True, text=True, timeout=timeout_s, preexec_fn=_limit_memory,
-        env={**os.environ, "NUMBA_DISABLE_JIT": os.environ.get("NUMBA_DISABLE_JIT", "0"), **(env or {})},
+        env={**os.environ, "NUMBA_DISABLE_JIT": os.environ.get("NUMBA_DISABLE_JIT", "0"), "PYTHONPATH": _SRC_PATH,
+             **(env or {})},
         stdin=subprocess.DEVNULL,
     )
     dt = time.perf_counter() - t0

@@ -150,7 +150,7 @@ def test_relative_device_in_a_job_is_read_from_the_jobs_folder(tmp_path):
     (jobdir / "dev.toml").write_text("name = 3\n")
     (jobdir / "job.toml").write_text(JOB.format(device="dev.toml", materials="", mesh="box.stl"))
     run = run_cli_bounded("build", jobdir / "job.toml", "-o", "out", cwd=tmp_path)
-    assert_refused(run, str(jobdir / "dev.toml"), "invalid device field")
+    assert_refused(run, str(jobdir / "dev.toml"), "no device kind")
 
 
 def _bomb(path: Path, inflated: int, member: str = "3D/3dmodel.model") -> None:

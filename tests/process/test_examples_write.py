@@ -88,7 +88,7 @@ def test_demo_refuses_an_edited_job_without_a_traceback(run_cli, tmp_path):
 #: change a job by accident: a user's earlier copy would then be refused as "edited" by the
 #: next `rotoprint demo`. When a job changes on purpose, update its digest here.
 JOB_SHA256 = {
-    "coil-sensor": "35bfeb1c5eb65af2d6552941a28471818ba3c22b7d3b132f2a42ea1d32e7475e",
+    "coil-sensor": "aab679f231df7a4e268824b319cee919bcd91635ad6bb423ebc72e63e679bee9",
     "gas-sensor": "eef40ecbf0764936217a4af07aa6c4a437696d2431563c68d37164ae6a788db0",
     "cad-coil": "5e06ad979524a15be1d3b09add05096961afb28d06068dfb1511c0b6fd1c465e",
 }

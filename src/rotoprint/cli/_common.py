@@ -105,7 +105,7 @@ def styled(*parts: str | tuple[str, str]) -> Text:
 
 def print_quantities(title: str, data: dict, rows: list[tuple[str, str]]) -> None:
     """`rotoprint info`'s table (meshes and CAD layers): ``quantity | value``, the bounds and
-    size of ``data`` (``bounds_mm``, ``size_mm``) after the first two ``rows`` entries, the
+    size of ``data`` (``bounds_mm``, ``size_mm``; None for an empty layer, shown as '-') after the first two ``rows`` entries, the
     other rows after them; printed whole (:func:`print_table`)."""
     from rich.table import Table
 
@@ -113,9 +113,12 @@ def print_quantities(title: str, data: dict, rows: list[tuple[str, str]]) -> Non
     t.add_column("quantity", style="bold")
     t.add_column("value")
     b = data["bounds_mm"]
-    bounds = [("bounds min (mm)", ", ".join(f"{v:.4f}" for v in b["min"])),
-              ("bounds max (mm)", ", ".join(f"{v:.4f}" for v in b["max"])),
-              ("size (mm)", " x ".join(f"{v:.4f}" for v in data["size_mm"]))]
+    if b is None:  # an empty layer: nothing to bound
+        bounds = [("bounds min (mm)", "-"), ("bounds max (mm)", "-"), ("size (mm)", "- (empty layer)")]
+    else:
+        bounds = [("bounds min (mm)", ", ".join(f"{v:.4f}" for v in b["min"])),
+                  ("bounds max (mm)", ", ".join(f"{v:.4f}" for v in b["max"])),
+                  ("size (mm)", " x ".join(f"{v:.4f}" for v in data["size_mm"]))]
     for k, v in [*rows[:2], *bounds, *rows[2:]]:
         t.add_row(k, v)
     print_table(t)

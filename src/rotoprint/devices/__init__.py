@@ -53,15 +53,25 @@ def _check_overrides(data: dict[str, Any], overrides: dict[str, Any], origin: st
 
 
 def _validate(data: dict[str, Any], origin: str, overridden: tuple[str, ...] = ()) -> InkjetDevice | ProjectorDevice:
+    from ..io.records import field_problem, validation_line
+
     try:
         return _ADAPTER.validate_python(data)
     except ValidationError as exc:
         err = exc.errors()[0]
         raw = [str(p) for p in err["loc"]]
         if len(raw) >= 2 and raw[-2] in ("head", "projector") and raw[-1] in overridden:
-            raise ConfigError(f"{_override_name(raw[-1])}: {err['msg']} (device {origin})") from None
-        where = ".".join(p for p in raw if p not in ("inkjet", "projector")) or "(top level)"
-        raise DeviceError(f"invalid device field '{where}': {err['msg']}", path=origin) from None
+            raise ConfigError(f"{_override_name(raw[-1])} {field_problem(err).lstrip(': ')} (device {origin})") from None
+        if err["type"] == "union_tag_not_found":
+            empty = " (the file is empty)" if not data else ""
+            raise DeviceError(f"no device kind{empty}: a device file says kind = \"inkjet\" or kind = \"projector\"",
+                              path=origin) from None
+        if err["type"] == "union_tag_invalid":
+            raise DeviceError(f"kind must be \"inkjet\" or \"projector\", got {err['ctx'].get('tag')!r}",
+                              path=origin) from None
+        # the tagged union puts the kind first in the path (inkjet.head.nozzles): left out
+        raise DeviceError(validation_line(exc, skip=("inkjet", "projector"), record="the device",
+                                          field="device field"), path=origin) from None
 
 
 def load_device(spec: str | Path, **overrides: Any) -> InkjetDevice | ProjectorDevice:

@@ -361,7 +361,7 @@ def load_mesh(
     if not (lo >= COORD_MM.lo and hi <= COORD_MM.hi):
         far = lo if -lo > hi else hi
         raise MeshError(
-            f"a coordinate reaches {far:.3g} mm after units, scale and transform; parts must lie within "
+            f"a coordinate reaches {far:.3g} mm after units, scale and transform; parts must lie "
             f"{COORD_MM.text()} (check --units, --scale and --translate)",
             path=path,
         )

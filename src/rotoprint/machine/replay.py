@@ -34,6 +34,7 @@ from ..devices.models import InkjetHead
 from ..errors import ConfigError, InputFileError, RotoprintError
 from ..io.inputs import parse_json, read_input_bytes
 from ..io.machine import nozzle_order, read_packed, unpack_levels, words_per_row
+from ..io.records import MissingKeyError, as_record, missing_key_message, validation_line
 from ..rotary.files import check_print_fields
 from ..rotary.placement import Placement
 from ..rotary.printdata import RotaryPrint, SwatheImage, runs_to_mask
@@ -86,27 +87,43 @@ def load_program(path: str | Path) -> dict:
     """
     p = Path(path)
     prog = parse_json(read_input_bytes(p, what="machine program", limit_bytes=MAX_PROGRAM_BYTES), p, what="program")
+    try:
+        return _checked_program(as_record(prog), p)
+    except MissingKeyError as exc:
+        raise InputFileError(missing_key_message(exc), path=p) from None
+
+
+def _checked_program(prog: dict, p: Path) -> dict:
+    """:func:`load_program`'s checks of the parsed ``prog`` (a :class:`~rotoprint.io.records.Record`)."""
     if not isinstance(prog, dict) or prog.get("format") != PROGRAM_FORMAT:
         raise InputFileError(f"not a rotoprint machine program (format {PROGRAM_FORMAT!r} expected)", path=p)
     if not isinstance(prog.get("version"), int) or prog["version"] > PROGRAM_VERSION:
         raise InputFileError(f"program version {prog.get('version')!r}; this rotoprint reads up to {PROGRAM_VERSION}", path=p)
+    if not isinstance(prog["machine"], dict):
+        raise InputFileError(f"program has no valid machine section (a table), got {R.show_value(prog['machine'])}",
+                             path=p)
     try:
         spec = MachineSpec(**prog["machine"])
     except ValidationError as exc:
-        err = exc.errors()[0]
-        raise InputFileError(f"machine.{'.'.join(str(x) for x in err['loc'])}: {err['msg']}", path=p) from None
-    except (KeyError, TypeError):
-        raise InputFileError("program has no valid machine section", path=p) from None
+        raise InputFileError(validation_line(exc, "machine"), path=p) from None
     prog["_spec"] = spec
     _check_design_grid(prog.get("design_grid"), p)
-    try:
-        for h in prog["heads"]:
+    for k in ("heads", "layers"):
+        if not isinstance(prog[k], list):
+            raise InputFileError(f"{k} must be a list, got {R.show_value(prog[k])}", path=p)
+    if not isinstance(prog["totals"], dict):
+        raise InputFileError(f"totals must be a table, got {R.show_value(prog['totals'])}", path=p)
+    for j, h in enumerate(prog["heads"]):
+        if not isinstance(h, dict) or not isinstance(h["model"], dict) or not isinstance(h["swathes"], list):
+            raise InputFileError(f"heads[{j}] must be a table with a table model and a list swathes", path=p)
+        try:
             h["_model"] = InkjetHead(**h["model"])
-            for s in h["swathes"]:
-                _check_swathe(spec, h, s, {**s, **s["clock"]}, f"head {h['name']} swathe {s['swathe']}", p)
-        prog["layers"], prog["totals"]  # noqa: B018 - presence
-    except (KeyError, TypeError, ValidationError) as exc:
-        raise InputFileError(f"program is incomplete or invalid: {type(exc).__name__}: {exc}", path=p) from None
+        except ValidationError as exc:
+            raise InputFileError(validation_line(exc, f"heads[{j}].model"), path=p) from None
+        for s in h["swathes"]:
+            if not (isinstance(s, dict) and isinstance(s["clock"], dict)):
+                raise InputFileError(f"heads[{j}]: a swathe and its clock must be tables", path=p)
+            _check_swathe(spec, h, s, {**s, **s["clock"]}, f"head {h['name']} swathe {s['swathe']}", p)
     return prog
 
 
@@ -372,6 +389,8 @@ def _layer_images(lay: dict, prog: dict, p: Path, files: _Files, want: set[int] 
                                    enabled=None if runs is None else runs_to_mask(runs, model.nozzles)))
         r0 = rs[0]
         where = f"layer {i} image {r0['file']}"
+        if not isinstance(r0["placement"], dict):
+            raise InputFileError(f"{where}: field placement must be a table, got {R.show_value(r0['placement'])}", path=p)
         try:
             placement = Placement.from_json(r0["placement"])
         except RotoprintError as exc:
@@ -409,18 +428,23 @@ def replay_layers(prog: dict, program_path: str | Path, *, layers: list[int] | N
         One per (material, ink) of the layer, swathes together.
     """
     p = Path(program_path)
+    prog = as_record(prog)
     root = p.parent
     files = _Files(root, p)
     want = None if layers is None else set(layers)
     for lay in prog["layers"]:
         try:
             out = _layer_images(lay, prog, p, files, want)
+        except MissingKeyError as exc:
+            raise InputFileError(missing_key_message(exc), path=p) from None
         except (KeyError, TypeError, ValueError, IndexError) as exc:
             if isinstance(exc, RotoprintError):
                 raise
             where = f"layer {R.show_value(lay.get('index'))}" if isinstance(lay, dict) else "a layer"
-            raise InputFileError(f"{where}: program record is incomplete or invalid: {type(exc).__name__}: "
-                                 f"{str(exc)[:80]}", path=p) from None
+            if type(exc) is KeyError:  # a record copied out of the program (no path kept)
+                raise InputFileError(f"{where}: a record has no key {exc}: the program is incomplete", path=p) from None
+            raise InputFileError(f"{where}: a program record holds a value of the wrong type or size "
+                                 f"({type(exc).__name__}: {str(exc)[:80]})", path=p) from None
         if out is not None:
             yield lay, out
 
@@ -463,12 +487,20 @@ def replay_program(path: str | Path, *, layer: int | None = None, on_step: Calla
         ``time_s``, ``steps``, the program's totals; ``clock``: the largest angle error per
         revolution, the flagged swathes, ``angles`` and the largest drop displacement.
     """
-    from ..rotary.simulate import check_overlay_fits, place_drops, simulate
-
     if angles not in ANGLES:
         raise ConfigError(f"angles must be one of {', '.join(ANGLES)}, got {angles!r}")
     p = Path(path)
     prog = load_program(p)
+    try:
+        return _replay(prog, p, layer, on_step, keep_layer, overlay_scale, deposit, angles)
+    except MissingKeyError as exc:
+        raise InputFileError(missing_key_message(exc), path=p) from None
+
+
+def _replay(prog: dict, p: Path, layer, on_step, keep_layer, overlay_scale, deposit: bool, angles: str) -> dict:
+    """:func:`replay_program` of the loaded ``prog``."""
+    from ..rotary.simulate import check_overlay_fits, place_drops, simulate
+
     if overlay_scale is not None:
         try:
             g = prog["design_grid"]

@@ -46,7 +46,7 @@ layer_height_mm = 0.02
 device = "omnidot760"
 tilt_deg = 20.0
 direction = 1
-equalise = true          # the same drops per mm2 at every radius (inner tracks thinned)
+equalise = true          # the same ink per mm2 at every radius: the passes print their shares of the union-equalised film
 
 passes = "auto"          # interlaced passes at the planner's radial offsets (docs/build.md)
 # no [printer.clock] dpi_y: the drop spacing along the track follows from the pass plan, so the drops merge

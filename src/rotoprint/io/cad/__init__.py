@@ -70,20 +70,25 @@ def read_layer(path: str | Path, *, tolerance_mm: float, units: str | None = Non
         length_unit_mm(units, path=p)
         if suf in GERBER_SUFFIXES | EXCELLON_SUFFIXES:
             raise CadError(f"units = {units!r} given, but a Gerber or Excellon file states its own units", path=p)
-    if suf in GERBER_SUFFIXES:
-        from .gerber import read_gerber
+    try:
+        if suf in GERBER_SUFFIXES:
+            from .gerber import read_gerber
 
-        return read_gerber(p, tolerance_mm=tolerance_mm)
-    if suf in EXCELLON_SUFFIXES:
-        from .gerber import read_excellon
+            return read_gerber(p, tolerance_mm=tolerance_mm)
+        if suf in EXCELLON_SUFFIXES:
+            from .gerber import read_excellon
 
-        return read_excellon(p, tolerance_mm=tolerance_mm)
-    if suf == ".dxf":
-        from .dxf import read_dxf
+            return read_excellon(p, tolerance_mm=tolerance_mm)
+        if suf == ".dxf":
+            from .dxf import read_dxf
 
-        return read_dxf(p, tolerance_mm=tolerance_mm, units=units)
-    if suf == ".svg":
-        from .svg import read_svg
+            return read_dxf(p, tolerance_mm=tolerance_mm, units=units)
+        if suf == ".svg":
+            from .svg import read_svg
 
-        return read_svg(p, tolerance_mm=tolerance_mm, units=units)
+            return read_svg(p, tolerance_mm=tolerance_mm, units=units)
+    except CadError as exc:  # a geometry helper's refusal does not know the file: named here
+        if exc.path is None:
+            raise CadError(exc.problem, path=p) from None
+        raise
     raise InputFileError(f"unknown layer file type {suf!r}; use one of {', '.join(sorted(CAD_SUFFIXES))}", path=p)

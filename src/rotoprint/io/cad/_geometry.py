@@ -18,9 +18,10 @@ from shapely.geometry import LineString, MultiPolygon, Polygon
 from shapely.geometry.base import BaseGeometry
 
 from ...errors import CadError
+from ...ranges import COORD_MM
 
 __all__ = ["MIN_TOLERANCE_MM", "PlanarLayer", "arc_points", "circle_polygon", "stroke", "segments_for_arc", "as_multipolygon",
-           "LENGTH_UNITS_MM", "length_unit_mm", "narrowest_mm", "check_valid"]
+           "LENGTH_UNITS_MM", "length_unit_mm", "narrowest_mm", "check_valid", "check_extent", "MAX_SPAN_MM"]
 
 #: Millimetres per unit of the length units a layer may be given in.
 LENGTH_UNITS_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "um": 1e-3, "in": 25.4, "inch": 25.4, "mil": 0.0254,
@@ -33,6 +34,22 @@ MAX_VERTICES = 2_000_000
 MIN_TOLERANCE_MM = 1e-4
 #: Boundary samples of the ray test for the narrowest track and gap.
 MAX_RAY_SAMPLES = 20_000
+#: The widest layer (mm): every coordinate lies within rotoprint.ranges.COORD_MM, as a mesh's.
+MAX_SPAN_MM = COORD_MM.hi - COORD_MM.lo
+
+
+def check_extent(region: BaseGeometry, *, path=None, hint: str = "") -> None:
+    """A :class:`CadError` unless every coordinate of ``region`` is finite and within
+    :data:`rotoprint.ranges.COORD_MM` (mm); the message gives the size the layer would have.
+    An empty region passes (it has no coordinates)."""
+    if region.is_empty:
+        return
+    x0, y0, x1, y1 = (float(v) for v in region.bounds)
+    ok = all(math.isfinite(v) and COORD_MM.lo <= v <= COORD_MM.hi for v in (x0, y0, x1, y1))
+    if ok and math.isfinite(region.area):
+        return
+    raise CadError(f"the layer would be {x1 - x0:.3g} x {y1 - y0:.3g} mm, from ({x0:.3g}, {y0:.3g}) to "
+                   f"({x1:.3g}, {y1:.3g}) mm; a layer must lie {COORD_MM.text()}{hint}", path=path)
 
 
 def length_unit_mm(unit: str, *, path=None) -> float:
@@ -52,15 +69,19 @@ def segments_for_arc(radius: float, sweep_rad: float, tol: float) -> int:
     23
     """
     sweep = abs(float(sweep_rad))
+    if not (math.isfinite(radius) and math.isfinite(sweep)):
+        raise CadError(f"an arc's radius ({radius:g}) or sweep ({sweep:g} rad) is not a finite number")
     if radius <= 0 or sweep == 0:
         return 1
     if tol >= radius:
         step = math.pi / 2
     else:
-        step = 2.0 * math.acos(1.0 - tol / radius)
-    n = max(1, math.ceil(sweep / step - 1e-12))
+        x = tol / radius  # 1 - x rounds to 1 for a far larger radius: acos(1 - x) ~ sqrt(2 x) there
+        step = 2.0 * math.acos(1.0 - x) if x > 1e-8 else 2.0 * math.sqrt(2.0 * x)
+    chords = sweep / step - 1e-12 if step > 0 else math.inf
+    n = max(1, math.ceil(chords)) if chords <= MAX_VERTICES else math.inf
     if n > MAX_VERTICES:
-        raise CadError(f"an arc of radius {radius:g} mm at a tolerance of {tol:g} mm needs {n:,} chords "
+        raise CadError(f"an arc of radius {radius:g} mm at a tolerance of {tol:g} mm needs {chords:.3g} chords "
                        f"(limit {MAX_VERTICES:,}); use a larger tolerance")
     return n
 
@@ -201,10 +222,14 @@ class PlanarLayer:
     def info(self) -> dict:
         track, track_at = narrowest_mm(self.region, inward=True, min_mm=2 * self.tolerance_mm)
         gap, gap_at = narrowest_mm(self.region, inward=False, min_mm=2 * self.tolerance_mm)
-        b = self.region.bounds if not self.region.is_empty else (math.nan,) * 4
+        if self.region.is_empty:  # an empty layer (a header and an end) has no bounds: null, never NaN
+            bounds, size = None, None
+        else:
+            b = [float(v) for v in self.region.bounds]
+            bounds, size = {"min": [b[0], b[1]], "max": [b[2], b[3]]}, [b[2] - b[0], b[3] - b[1]]
         return {
             "file": self.source, "format": self.fmt, "area_mm2": self.area_mm2,
-            "bounds_mm": {"min": [b[0], b[1]], "max": [b[2], b[3]]}, "size_mm": [b[2] - b[0], b[3] - b[1]],
+            "bounds_mm": bounds, "size_mm": size,
             "regions": self.regions, "holes": self.holes, "vertices": self.vertices(),
             "narrowest_track_mm": track, "narrowest_track_at_mm": track_at,
             "narrowest_gap_mm": gap, "narrowest_gap_at_mm": gap_at,

@@ -25,7 +25,7 @@ from shapely.geometry import MultiLineString, Polygon
 
 from ...errors import CadError
 from ..inputs import check_input_file
-from ._geometry import PlanarLayer, arc_points, as_multipolygon, check_valid, fill_rings, length_unit_mm, stroke
+from ._geometry import PlanarLayer, arc_points, as_multipolygon, check_extent, check_valid, fill_rings, length_unit_mm, stroke
 
 __all__ = ["read_dxf", "INSUNITS_MM"]
 
@@ -99,6 +99,9 @@ def _dxf_problem(exc: Exception) -> str:
     return text or "its structure is broken (truncated?)"
 
 
+_EXTENT_HINT = " (check the coordinates and $INSUNITS or --units)"
+
+
 def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None) -> PlanarLayer:
     """Read a DXF file's model space into its exact region.
 
@@ -126,7 +129,10 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
     check_input_file(p, what="DXF file", limit_bytes=MAX_FILE_BYTES)  # regular, bounded: never a blocking read
     try:
         doc = ezdxf.readfile(p)
-    except (ezdxf.DXFError, OSError, UnicodeDecodeError, ValueError) as exc:
+    except StopIteration:  # ezdxf's tag reader ran out of tags inside a section: the file ends early
+        raise CadError("not a readable DXF file: it ends inside a section (truncated)", path=p) from None
+    except (ezdxf.DXFError, OSError, UnicodeDecodeError, ValueError, IndexError, KeyError, TypeError, AttributeError,
+            AssertionError) as exc:
         raise CadError(f"not a readable DXF file: {_dxf_problem(exc)}", path=p) from None
     if units is not None:
         scale = length_unit_mm(units, path=p)
@@ -150,62 +156,73 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
         raise CadError(exc.problem, path=p) from None
     for e in entities:
         t = e.dxftype()
-        if t in ("LWPOLYLINE", "POLYLINE"):
-            if t == "LWPOLYLINE":
-                raw = list(e.get_points("xyseb"))
-                closed = bool(e.closed)
-                cw = float(e.dxf.get("const_width", 0.0) or 0.0)
-                pts = [(float(x), float(y), float(b)) for x, y, s, w, b in raw]
-                widths = {cw} if cw > 0 else {float(s) for _, _, s, _, _ in raw[: len(raw) if closed else -1]} | \
-                    {float(w) for _, _, _, w, _ in raw[: len(raw) if closed else -1]}
-            else:
-                if e.is_3d_polyline or e.is_poly_face_mesh or e.is_polygon_mesh:
-                    ignored[t + " (3-D)"] = ignored.get(t + " (3-D)", 0) + 1
+        try:
+            if t in ("LWPOLYLINE", "POLYLINE"):
+                if t == "LWPOLYLINE":
+                    raw = list(e.get_points("xyseb"))
+                    closed = bool(e.closed)
+                    cw = float(e.dxf.get("const_width", 0.0) or 0.0)
+                    pts = [(float(x), float(y), float(b)) for x, y, s, w, b in raw]
+                    widths = {cw} if cw > 0 else {float(s) for _, _, s, _, _ in raw[: len(raw) if closed else -1]} | \
+                        {float(w) for _, _, _, w, _ in raw[: len(raw) if closed else -1]}
+                else:
+                    if e.is_3d_polyline or e.is_poly_face_mesh or e.is_polygon_mesh:
+                        ignored[t + " (3-D)"] = ignored.get(t + " (3-D)", 0) + 1
+                        continue
+                    vs = list(e.vertices)
+                    closed = bool(e.is_closed)
+                    pts = [(float(v.dxf.location.x), float(v.dxf.location.y), float(v.dxf.get("bulge", 0.0))) for v in vs]
+                    d0 = float(e.dxf.get("default_start_width", 0.0) or 0.0)
+                    d1 = float(e.dxf.get("default_end_width", 0.0) or 0.0)
+                    widths = {float(v.dxf.get("start_width", d0)) for v in vs} | {float(v.dxf.get("end_width", d1)) for v in vs}
+                if len(pts) < 2:
                     continue
-                vs = list(e.vertices)
-                closed = bool(e.is_closed)
-                pts = [(float(v.dxf.location.x), float(v.dxf.location.y), float(v.dxf.get("bulge", 0.0))) for v in vs]
-                d0 = float(e.dxf.get("default_start_width", 0.0) or 0.0)
-                d1 = float(e.dxf.get("default_end_width", 0.0) or 0.0)
-                widths = {float(v.dxf.get("start_width", d0)) for v in vs} | {float(v.dxf.get("end_width", d1)) for v in vs}
-            if len(pts) < 2:
-                continue
-            widths = {w for w in widths} or {0.0}
-            path_pts = _poly_path(pts, closed, tol)
-            if max(widths) > 0:
-                if len(widths) > 1:
-                    raise CadError(f"{t} (handle {e.dxf.handle}) has varying widths {sorted(widths)}; only a constant "
-                                   "width is a track", path=p)
-                w = widths.pop()
-                strokes.append(stroke(path_pts * scale, w * scale, tolerance_mm))
-                counts["tracks"] += 1
-            elif closed:
-                rings.append(path_pts * scale)
+                widths = {w for w in widths} or {0.0}
+                path_pts = _poly_path(pts, closed, tol)
+                if max(widths) > 0:
+                    if len(widths) > 1:
+                        raise CadError(f"{t} (handle {e.dxf.handle}) has varying widths {sorted(widths)}; only a constant "
+                                       "width is a track", path=p)
+                    w = widths.pop()
+                    strokes.append(stroke(path_pts * scale, w * scale, tolerance_mm))
+                    counts["tracks"] += 1
+                elif closed:
+                    rings.append(path_pts * scale)
+                    counts["contours"] += 1
+                else:
+                    pieces.append(path_pts * scale)
+            elif t == "CIRCLE":
+                c = e.dxf.center
+                if not (math.isfinite(e.dxf.radius) and e.dxf.radius > 0):
+                    raise CadError(f"CIRCLE (handle {e.dxf.handle}) has radius {e.dxf.radius:g}; a circle needs a positive "
+                                   "radius", path=p)
+                pts = arc_points(c.x, c.y, e.dxf.radius, 0.0, 2 * math.pi, tol)
+                rings.append(pts * scale)
                 counts["contours"] += 1
+            elif t == "ARC":
+                c = e.dxf.center
+                a0 = math.radians(e.dxf.start_angle)
+                sweep = math.radians((e.dxf.end_angle - e.dxf.start_angle) % 360.0) or 2 * math.pi
+                pieces.append(arc_points(c.x, c.y, e.dxf.radius, a0, sweep, tol) * scale)
+            elif t == "LINE":
+                s, en = e.dxf.start, e.dxf.end
+                pieces.append(np.array([[s.x, s.y], [en.x, en.y]], np.float64) * scale)
+            elif t in ("SPLINE", "ELLIPSE"):
+                pts = np.array([(v.x, v.y) for v in e.flattening(tol)], np.float64) * scale
+                if len(pts) >= 2 and np.hypot(*(pts[0] - pts[-1])) <= JOIN_MM:
+                    rings.append(pts)
+                    counts["contours"] += 1
+                else:
+                    pieces.append(pts)
             else:
-                pieces.append(path_pts * scale)
-        elif t == "CIRCLE":
-            c = e.dxf.center
-            pts = arc_points(c.x, c.y, e.dxf.radius, 0.0, 2 * math.pi, tol)
-            rings.append(pts * scale)
-            counts["contours"] += 1
-        elif t == "ARC":
-            c = e.dxf.center
-            a0 = math.radians(e.dxf.start_angle)
-            sweep = math.radians((e.dxf.end_angle - e.dxf.start_angle) % 360.0) or 2 * math.pi
-            pieces.append(arc_points(c.x, c.y, e.dxf.radius, a0, sweep, tol) * scale)
-        elif t == "LINE":
-            s, en = e.dxf.start, e.dxf.end
-            pieces.append(np.array([[s.x, s.y], [en.x, en.y]], np.float64) * scale)
-        elif t in ("SPLINE", "ELLIPSE"):
-            pts = np.array([(v.x, v.y) for v in e.flattening(tol)], np.float64) * scale
-            if len(pts) >= 2 and np.hypot(*(pts[0] - pts[-1])) <= JOIN_MM:
-                rings.append(pts)
-                counts["contours"] += 1
-            else:
-                pieces.append(pts)
-        else:
-            ignored[t] = ignored.get(t, 0) + 1
+                ignored[t] = ignored.get(t, 0) + 1
+        except CadError:
+            raise
+        except (ValueError, ArithmeticError, RecursionError, IndexError, TypeError, AttributeError) as exc:
+            # a degenerate entity (a zero radius, a spline whose knots make a singular system, an
+            # ellipse too large to flatten): its handle named, the library's reason after it
+            reason = " ".join(str(exc).split())[:120] or type(exc).__name__
+            raise CadError(f"{t} (handle {e.dxf.get('handle', '?')}) cannot be made into geometry: {reason}", path=p) from None
     if pieces:
         q = 1.0 / JOIN_MM
         merged = shapely.line_merge(MultiLineString([np.round(pc * q) / q for pc in pieces]))
@@ -217,6 +234,8 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
                                "track)", path=p)
             rings.append(c)
             counts["chained"] += 1
+    if rings:  # far or non-finite coordinates refused before any polygon is built of them
+        check_extent(shapely.multipoints(np.concatenate(rings)), path=p, hint=_EXTENT_HINT)
     for i, r in enumerate(rings):
         check_valid(Polygon(r), f"closed contour {i} (starting at ({r[0, 0]:.6g}, {r[0, 1]:.6g}) mm)", path=p)
     region = fill_rings(rings, "evenodd")
@@ -224,4 +243,5 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
         region = as_multipolygon(shapely.union_all([region, *strokes]))
     region = as_multipolygon(shapely.orient_polygons(region, exterior_cw=False))
     counts["ignored"] = ignored
+    check_extent(region, path=p, hint=_EXTENT_HINT)
     return PlanarLayer(region=region, terminals={}, source=str(p), fmt="dxf", tolerance_mm=float(tolerance_mm), counts=counts)

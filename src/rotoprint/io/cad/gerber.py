@@ -13,12 +13,16 @@ with the attribute ``%TATerminal,NAME*%`` is the terminal ``NAME``.
 
 Refused, with the file and the line named where gerbonara says it: an undefined aperture, a
 draw with a non-circular aperture, a region contour that does not end where it starts, or one
-that crosses itself.
+that crosses itself; before it reads: a %SR step and repeat of more than one copy (gerbonara
+draws the block once), a polygon of other than 3 to 12 vertices, Excellon repeat codes beyond
+:data:`MAX_REPEATS` (:data:`MAX_REPEATED_HOLES` in all); after: a file without its end
+statement (M02, M30: cut short), an empty one.
 """
 
 from __future__ import annotations
 
 import math
+import re
 import warnings
 from pathlib import Path
 
@@ -27,12 +31,15 @@ import shapely
 from shapely.geometry import Polygon
 
 from ...errors import CadError
-from ._geometry import PlanarLayer, arc_points, as_multipolygon, circle_polygon, stroke
+from ._geometry import PlanarLayer, arc_points, as_multipolygon, check_extent, circle_polygon, stroke
 
 __all__ = ["read_gerber", "read_excellon"]
 
 #: The largest Gerber or Excellon file read (bytes).
 MAX_FILE_BYTES = 256 * 1024 * 1024
+#: The formats' names in messages, bare and with their article.
+_NAME = {"gerber": "Gerber", "excellon": "Excellon"}
+_A_NAME = {"gerber": "a Gerber", "excellon": "an Excellon"}
 
 
 def _check_size(path: Path) -> None:
@@ -184,6 +191,93 @@ def _terminal_names(obj) -> list[str]:
     return names
 
 
+def _check_not_empty(path: Path, parsed, kind: str) -> None:
+    """A file without one graphic object is a layer only when it states its units (a header
+    and an end, as a CAD tool writes an empty paste or drill layer); an empty file, or text in
+    which the lenient parser found no statement at all, is refused."""
+    name = _NAME[kind]
+    with open(path, "rb") as fh:  # bounded: _check_size passed
+        blank = not fh.read().strip()
+    if blank:
+        raise CadError(f"no {name} content (empty)", path=path)
+    if getattr(parsed.import_settings, "unit", None) is None:
+        made = "nothing drawn" if kind == "gerber" else "nothing drilled"
+        raise CadError(f"no {name} units and {made} (truncated, or not {_A_NAME[kind]} file)", path=path)
+
+
+#: The statements a whole file ends with: Gerber's M02 (M00, deprecated, also stops the
+#: file), Excellon's end of program M30 (or M00).
+_ENDS = {"gerber": (b"M02*", b"M00*"), "excellon": (b"M30", b"M00")}
+
+
+#: At most this many holes one Excellon R repeat code adds, and this many all of them: the
+#: reader adds every repeated hole one by one, so the counts are bounded before it reads.
+MAX_REPEATS = 10_000
+MAX_REPEATED_HOLES = 1_000_000
+#: A Gerber polygon aperture (%ADD..P) or macro polygon (primitive 5) has 3 to 12 vertices.
+POLYGON_VERTICES = (3, 12)
+
+_SR = re.compile(rb"%\s*SR\s*X(\d+)\s*Y(\d+)")
+_AD_POLYGON = re.compile(rb"%\s*ADD\d+\s*P\s*,\s*[^X*%]*X\s*([-+0-9.eE]+)")
+_AM_BLOCK = re.compile(rb"%\s*AM[^*%]*\*([^%]*)%")
+_AM_POLYGON = re.compile(rb"(?:^|\*)\s*5\s*,[^,*]*,\s*([-+0-9.eE]+)\s*,")
+_EXC_REPEAT = re.compile(rb"^\s*R(\d+)", re.MULTILINE)
+
+
+def _line_of(data: bytes, pos: int) -> int:
+    return data.count(b"\n", 0, pos) + 1
+
+
+def _check_expansions(data: bytes, path: Path, kind: str) -> None:
+    """What the file declares before the reader expands it: step-and-repeat and repeat-hole
+    counts, polygon vertex counts (a huge one would be built vertex by vertex)."""
+    if kind == "excellon":
+        total = 0
+        for m in _EXC_REPEAT.finditer(data):
+            n = int(m.group(1))
+            total += n
+            if n > MAX_REPEATS or total > MAX_REPEATED_HOLES:
+                raise CadError(f"line {_line_of(data, m.start())}: R{n} repeats a hole {n:,} times ({total:,} repeated "
+                               f"holes so far); at most {MAX_REPEATS:,} per code and {MAX_REPEATED_HOLES:,} in all are "
+                               "read", path=path)
+        return
+    for m in _SR.finditer(data):
+        # gerbonara (1.x) opens the block with an empty list and tests it for truth, so no
+        # object is ever collected and the block is drawn once: a panel would be read as one
+        # board. Refused rather than read wrong (and before a huge count is expanded).
+        nx, ny = int(m.group(1)), int(m.group(2))
+        if nx * ny > 1:
+            raise CadError(f"line {_line_of(data, m.start())}: %SR step and repeat of {nx:,} x {ny:,} copies is not "
+                           "read (the Gerber reader would draw one copy); export the panel flattened", path=path)
+    lo, hi = POLYGON_VERTICES
+    found = [(m.start(), m.group(1), "polygon aperture") for m in _AD_POLYGON.finditer(data)]
+    for block in _AM_BLOCK.finditer(data):
+        found += [(block.start(), m.group(1), "macro polygon (primitive 5)")
+                  for m in _AM_POLYGON.finditer(block.group(1))]
+    for pos, raw, what in found:
+        try:
+            n = float(raw)
+        except ValueError:
+            continue  # not a number: the reader says what is wrong with it
+        if not lo <= n <= hi:
+            raise CadError(f"line {_line_of(data, pos)}: a {what} of {raw.decode(errors='replace')} vertices; a "
+                           f"Gerber polygon has {lo} to {hi}", path=path)
+
+
+def _check_ends(path: Path, kind: str) -> None:
+    """A file cut short (a copy or download that stopped, a tool that crashed while writing)
+    lacks its end statement; what it lacks would not be printed, so it is refused."""
+    with open(path, "rb") as fh:
+        size = fh.seek(0, 2)
+        fh.seek(max(0, size - 256))
+        tail = fh.read().rstrip()
+    last = tail.rsplit(b"\n", 1)[-1].strip()
+    if not any(last.endswith(e) for e in _ENDS[kind]):
+        want = " or ".join(e.decode() for e in _ENDS[kind])
+        raise CadError(f"no {want} end statement at its end: the file is cut short (truncated) or not fully written",
+                       path=path)
+
+
 def _read(path: Path, tol: float, kind: str) -> PlanarLayer:
     from gerbonara import ExcellonFile, GerberFile
     from gerbonara import graphic_objects as go
@@ -192,15 +286,20 @@ def _read(path: Path, tol: float, kind: str) -> PlanarLayer:
     _check_size(path)
     if not tol > 0:
         raise CadError(f"the arc tolerance must be > 0 mm, got {tol!r}", path=path)
+    with open(path, "rb") as fh:  # bounded: _check_size passed
+        _check_expansions(fh.read(), path, kind)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
             f = GerberFile.open(path) if kind == "gerber" else ExcellonFile.open(path)
         except UnicodeDecodeError:
-            raise CadError(f"not a {kind} text file (not ASCII/UTF-8)", path=path) from None
+            raise CadError(f"not {_A_NAME[kind]} text file (not ASCII/UTF-8)", path=path) from None
         except (SyntaxError, ValueError, KeyError, IndexError, TypeError, AttributeError, AssertionError) as exc:
             msg = str(exc).replace(str(path) + ":", "line ").strip() or type(exc).__name__
-            raise CadError(f"not a readable {kind} file: {msg}", path=path) from None
+            raise CadError(f"not a readable {_NAME[kind]} file: {msg}", path=path) from None
+    if not f.objects:
+        _check_not_empty(path, f, kind)
+    _check_ends(path, kind)
     items = []
     terms: dict[str, list] = {}
     counts = {"flashes": 0, "draws": 0, "arcs": 0, "regions": 0}
@@ -248,6 +347,8 @@ def _read(path: Path, tol: float, kind: str) -> PlanarLayer:
     flush()
     region = as_multipolygon(_combine(items))
     region = as_multipolygon(shapely.orient_polygons(region, exterior_cw=False))
+    check_extent(region, path=path, hint=" (check the coordinates and the %FS and %MO statements)" if kind == "gerber"
+                 else " (check the coordinates and the units: METRIC or INCH)")
     terminals = {k: shapely.union_all(v) for k, v in terms.items()}
     counts["warnings"] = [str(w.message) for w in caught][:20]
     return PlanarLayer(region=region, terminals=terminals, source=str(path), fmt=kind, tolerance_mm=tol, counts=counts)
