@@ -85,8 +85,9 @@ def test_demo_refuses_an_edited_job_without_a_traceback(run_cli, tmp_path):
 
 #: SHA-256 of each bundled job file. The texts are put together from shared pieces
 #: (process/_job_pieces.py); a change to a piece must not
-#: change a job by accident: a user's earlier copy would then be refused as "edited" by the
-#: next `rotoprint demo`. When a job changes on purpose, update its digest here.
+#: change a job by accident. When a job changes on purpose, update its digest here and add the
+#: old one to pipeline/examples._EARLIER_SHA256, so a user's earlier copy is not refused as
+#: "edited" by the next `rotoprint demo` (test below).
 JOB_SHA256 = {
     "coil-sensor": "aab679f231df7a4e268824b319cee919bcd91635ad6bb423ebc72e63e679bee9",
     "gas-sensor": "eef40ecbf0764936217a4af07aa6c4a437696d2431563c68d37164ae6a788db0",
@@ -105,3 +106,26 @@ def test_the_bundled_job_files_are_the_ones_users_have():
         assert hashlib.sha256(data).hexdigest() == JOB_SHA256[name], name
         heads[name] = tomllib.loads(data.decode("utf-8"))["printer"]["heads"]
     assert heads["cad-coil"] == heads["coil-sensor"][:4] == heads["gas-sensor"][:4]  # the shared H1-H4
+
+
+def test_an_earlier_releases_job_file_is_replaced_not_refused(tmp_path):
+    import hashlib
+
+    from rotoprint.pipeline.examples import _EARLIER_SHA256
+
+    new = example_files("coil-sensor")["coil-sensor.toml"]
+    # the job as releases before the equalise comment's change wrote it (its digest pinned there)
+    old = new.replace(b"# the same ink per mm2 at every radius: the passes print their shares of the union-equalised film",
+                      b"# the same drops per mm2 at every radius (inner tracks thinned)")
+    assert old != new and hashlib.sha256(old).hexdigest() == "35bfeb1c5eb65af2d6552941a28471818ba3c22b7d3b132f2a42ea1d32e7475e"
+    assert hashlib.sha256(old).hexdigest() in _EARLIER_SHA256
+    assert not ({hashlib.sha256(example_files(n)[j]).hexdigest() for n, (j, _, _) in EXAMPLES.items()} - _EARLIER_SHA256
+                - set(JOB_SHA256.values()))
+    folder = tmp_path / "job"
+    write_example("coil-sensor", folder)
+    (folder / "coil-sensor.toml").write_bytes(old)
+    write_example("coil-sensor", folder)  # our own earlier copy: replaced
+    assert (folder / "coil-sensor.toml").read_bytes() == new
+    (folder / "coil-sensor.toml").write_bytes(old + b"# mine\n")  # an edit of it is still refused
+    with pytest.raises(InputFileError, match="edited"):
+        write_example("coil-sensor", folder)
