@@ -26,6 +26,7 @@ from .. import ranges as R
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from ..errors import ConfigError, InputFileError
+from ..io.records import field_problem
 
 __all__ = [
     "Ink",
@@ -217,7 +218,9 @@ BUILTIN_MATERIALS: dict[str, dict] = {
 
 
 def validation_message(exc: ValidationError, prefix: str = "") -> str:
-    """One line: the first error's field path and problem (``parts[1].material: ...``).
+    """One line in words: the first error's field path and what it must be
+    (``job.layer_height_mm must be at least 0.0001, got -1``), or the path and a check's own
+    sentence (``parts[1].material: unknown material ...``).
 
     Parameters
     ----------
@@ -228,8 +231,9 @@ def validation_message(exc: ValidationError, prefix: str = "") -> str:
     Returns
     -------
     str
-        ``PATH: PROBLEM``, with ``, got VALUE`` for a scalar input and a count of the other
-        problems when there are more; the path is ``job`` when it is empty.
+        ``PATH PROBLEM`` in words (:func:`rotoprint.io.records.field_problem`), with ``, got
+        VALUE`` for a scalar input and a count of the other problems when there are more; the
+        path is ``job`` when it is empty.
     """
     errs = exc.errors()
     e = errs[0]
@@ -239,11 +243,10 @@ def validation_message(exc: ValidationError, prefix: str = "") -> str:
             loc += f"[{part}]"
         else:
             loc += ("." if loc else "") + str(part)
-    msg = e.get("msg", "invalid").removeprefix("Value error, ")
+    problem = field_problem(e)
     more = f" (and {len(errs) - 1} more problem(s))" if len(errs) > 1 else ""
-    got = e.get("input")
-    shown = "" if isinstance(got, dict | list) or e.get("type") == "missing" else f", got {got!r}"
-    return f"{loc or 'job'}: {msg}{shown}{more}"
+    sep = "" if problem.startswith(":") else " "
+    return f"{loc or 'job'}{sep}{problem}{more}"
 
 
 class MaterialLibrary:
