@@ -17,15 +17,14 @@ TITLE = "Film: a pass's firing images against today's layer (issue 14 cost floor
 
 
 def run(quick: bool = False) -> list[dict]:
-    from film_acceptance import _best
+    from film_acceptance import _best, default_shares
 
     from rotoprint import load_device
     from rotoprint.io.mesh import load_mesh
     from rotoprint.rotary import Placement, plan_swathes, transform_exact
     from rotoprint.rotary.direct import slice_rotary
     from rotoprint.rotary.exact import ThinShares
-    from rotoprint.rotary.interlace import COVER_SHARE, EQUALISE_CLOCK_FACTOR, ReachFloor, plan_passes, track_fractions
-    from rotoprint.rotary.options import RotarySetup
+    from rotoprint.rotary.interlace import EQUALISE_CLOCK_FACTOR, plan_passes
     from rotoprint.rotary.testimage import test_design
 
     head = load_device("omnidot760").head
@@ -48,8 +47,7 @@ def run(quick: bool = False) -> list[dict]:
         dpi_e = pp.dpi_y * EQUALISE_CLOCK_FACTOR
 
         def shares():
-            return track_fractions(head, sp, pp.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp.dpi_y), footprint_um=49.6,
-                                   reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
+            return default_shares(head, sp, pp, tilt)
 
         fr = shares()
         thin = ThinShares(fr[-1], len(fr) - 1)

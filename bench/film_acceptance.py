@@ -124,6 +124,13 @@ def _best(fn, k: int = 3, clock=time.perf_counter) -> float:
     return best
 
 
+def default_shares(head, sp, pp, tilt: float) -> list:
+    """The default (equalised) print's shares of every pass of plan ``pp`` over swathes ``sp``, as
+    ``pass_prints`` computes them (once for all passes; the geometry only): what the cost tables time."""
+    return track_fractions(head, sp, pp.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp.dpi_y), footprint_um=49.6,
+                           reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
+
+
 def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
     """The cost floor: a pass's firing images at the planned clock over today's at native (best of ``k``
     times of ``clock``: wall, or ``time.process_time`` with ``--cpu``).
@@ -157,8 +164,7 @@ def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
         dpi_e = pp_e.dpi_y * EQUALISE_CLOCK_FACTOR
 
         def shares():
-            return track_fractions(head, sp_e, pp_e.offsets_mm, RotarySetup(tilt_deg=tilt, dpi_y=pp_e.dpi_y), footprint_um=49.6,
-                                   reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
+            return default_shares(head, sp_e, pp_e, tilt)
 
         fr = shares()
         thin = ThinShares(fr[-1], len(fr) - 1)
