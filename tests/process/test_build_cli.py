@@ -130,6 +130,19 @@ def test_build_job_wrong_types_are_one_line_in_words(change, line):
         assert raw not in msg, msg
 
 
+def test_build_cli_wrong_typed_field_is_one_line_in_words(run_cli, tmp_path):
+    job = tmp_path / "typed.toml"
+    job.write_text('[job]\nlayer_height_mm = "thin"\n[printer]\nheads = [{name = "A", ink = "ammonium_sulphate"}, '
+                   '{name = "B", ink = "calcium_chloride"}]\n[placement]\ninner_radius_mm = 60\n[[parts]]\nname = "p"\n'
+                   'material = "plaster"\nshape = { kind = "box", size_mm = [2, 2, 0.1] }\n')
+    out = tmp_path / "out"
+    code, so, err = run_cli("build", job, "--out", out)
+    lines = [x for x in err.strip().splitlines() if x.strip()]
+    assert code == 2 and not out.exists() and len(lines) == 1, err
+    assert str(job) in lines[0] and "job.layer_height_mm must be a number, got 'thin'" in lines[0], err
+    assert "Input should" not in err and "Traceback" not in err
+
+
 def test_build_cli_bad_job_exit_2_one_line_nothing_written(run_cli, tmp_path):
     job = tmp_path / "bad.toml"
     job.write_text('[job]\nlayer_height_mm = 0.05\n[printer]\nheads = [{name = "A", ink = "ammonium_sulphate"}, {name = "B", ink = "calcium_chloride"}]\n'
