@@ -33,8 +33,8 @@
     part = "coil"
     between = ["outer", "inner"]
 
-Validation errors name the field (``parts[1].material: unknown material 'silvr' ...``) and the
-file, and are :class:`~rotoprint.errors.ConfigError` (exit code 2 on the command line).
+Validation errors are one line in words naming the field (``job.layer_height_mm must be a number,
+got 'thin'``, ``parts[1].material: unknown material 'silvr' ...``) and the file, and are :class:`~rotoprint.errors.ConfigError` (exit code 2 on the command line).
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ __all__ = ["JobSpec", "JobInfo", "PrinterSpec", "HeadSpec", "ClockSpec", "Placem
 
 class _Strict(BaseModel):
     # allow_inf_nan=False: a NaN or infinite number is refused by the field that holds it
-    # ("placement.inner_radius_mm: Input should be a finite number"), not later by whatever uses it.
+    # ("placement.inner_radius_mm must be a finite number, got inf"), not later by whatever uses it.
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
 
 
