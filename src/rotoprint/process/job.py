@@ -34,7 +34,8 @@
     between = ["outer", "inner"]
 
 Validation errors are one line in words naming the field (``job.layer_height_mm must be a number,
-got 'thin'``, ``parts[1].material: unknown material 'silvr' ...``) and the file, and are :class:`~rotoprint.errors.ConfigError` (exit code 2 on the command line).
+got 'thin'``, ``parts[1].material: unknown material 'silvr' ...``) and the file, and are
+:class:`~rotoprint.errors.ConfigError` (exit code 2 on the command line).
 """
 
 from __future__ import annotations
