@@ -34,6 +34,8 @@ def transform_command(
                                         "N > 1 writes PRINT-p1.png ... and PRINT-passes.json.")] = "1",
     equalise: Annotated[bool | None, typer.Option("--equalise/--no-equalise", help="With --passes: thin dense tracks so every radius gets the same volume per area "
                                                   "(the default); --no-equalise: the plain print, every track keeps every drop.")] = None,
+    edge_restore: Annotated[bool, typer.Option("--edge-restore", help="With equalised --passes: restore some thinned-out drops within 50 um of the design's "
+                                               "edges met along the radius, where levelling would thin the film (rotary/edgecomp.py).")] = False,
     json_out: JsonOpt = False,
     quiet: QuietOpt = False,
     force: ForceOpt = False,
@@ -78,7 +80,12 @@ def transform_command(
         from ..rotary.interlace import PassOptions
         from ..rotary.options import RotarySetup
 
-        popts = PassOptions(setup=RotarySetup(**kw), passes=passes, equalise=equalise is not False)
+        if edge_restore and equalise is False:
+            raise ConfigError("--edge-restore needs the equalised passes (not --no-equalise)")
+        from ..rotary.edgecomp import EdgeRestore
+
+        popts = PassOptions(setup=RotarySetup(**kw), passes=passes, equalise=equalise is not False,
+                            edge_restore=EdgeRestore() if edge_restore else None)
         manifest = transform_passes(design, dev, pl, out, popts, design_info=info, force=force, inputs=inputs)
         if json_out:
             print_json(manifest)
@@ -94,8 +101,8 @@ def transform_command(
             for f in manifest["files"]:
                 console.print(f"  {f}")
         return
-    if equalise is not None:
-        raise ConfigError(f"--{'' if equalise else 'no-'}equalise needs --passes (N or auto)")
+    if equalise is not None or edge_restore:
+        raise ConfigError(f"--{'edge-restore' if edge_restore else ('' if equalise else 'no-') + 'equalise'} needs --passes (N or auto)")
     if method == "exact":
         from ..rotary.exact import transform_exact
 

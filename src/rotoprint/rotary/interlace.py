@@ -976,8 +976,8 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         "phase_angles_deg": list(angles),
         "phases_by_swathe": [[float(x) for x in row] for row in achieved],
     }
-    if dead_cover is not None:
-        manifest["dead_cover"] = dead_cover
+    restored = options.edge_restore is not None and fracs is not None and not grey and not thin_landing  # applied: recorded
+    manifest.update({k: v for k, v in (("dead_cover", dead_cover), ("edge_restore", dataclasses.asdict(options.edge_restore) if restored else None)) if v is not None})
     return device_name, prints, manifest
 
 
