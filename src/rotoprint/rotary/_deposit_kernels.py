@@ -165,6 +165,19 @@ def _add_comp(acc, i, t):
     acc[i] = s
 
 
+@njit(cache=True, nogil=True, inline="always")
+def radial_bin_add(bins_sum, bins_n, col, r_in, px, ca, sa, yl, t):
+    """Thickness ``t`` of the film cell at design column ``col`` (continuous, pixels) of a row at
+    ``yl`` mm into its 1 mm radial bin ``floor(r)`` of ``bins_sum`` ``(B,) float64`` and
+    ``bins_n`` ``(B,) int64`` (bins outside ``0..B-1`` skipped); ``r_in``, ``px``, ``ca``, ``sa``
+    as in :func:`strip_stats_jit`'s ``geo``."""
+    xl = r_in + col * px
+    b = int(math.floor(math.hypot(ca * xl - sa * yl, sa * xl + ca * yl)))
+    if 0 <= b < bins_sum.size:
+        bins_sum[b] += t
+        bins_n[b] += 1
+
+
 @njit(cache=True, nogil=True)
 def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bins_n, samples):
     """Accumulate the figures of film rows ``film`` ``(rows, cols) float64`` (grid rows
@@ -183,7 +196,6 @@ def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bin
     rows, cols = film.shape
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
-    nb = bins_sum.size
     k = 0
     ns = 0
     for i in range(rows):
@@ -214,12 +226,7 @@ def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bin
             _add_comp(acc, 4, t)
             if t < acc[6]:
                 acc[6] = t
-            col = (j + 0.5 - ox) / nx
-            xl = r_in + col * px
-            b = int(math.floor(math.hypot(ca * xl - sa * yl, sa * xl + ca * yl)))
-            if 0 <= b < nb:
-                bins_sum[b] += t
-                bins_n[b] += 1
+            radial_bin_add(bins_sum, bins_n, (j + 0.5 - ox) / nx, r_in, px, ca, sa, yl, t)
     return ns
 
 

@@ -16,6 +16,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ._deposit_kernels import radial_bin_add
+
 __all__ = ["axis_weights", "restrict_wet_jit", "prolong_combine_jit", "film_stats_jit"]
 
 
@@ -103,7 +105,6 @@ def film_stats_jit(lv, inter_bits, row0, geo, half_mean, acc, bins_sum, bins_n):
     rows, cols = lv.shape
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
-    nb = bins_sum.size
     for i in range(rows):
         row = (i + row0 + 0.5 - oy) / ny
         yl = (hpx / 2.0 - row) * py
@@ -127,9 +128,4 @@ def film_stats_jit(lv, inter_bits, row0, geo, half_mean, acc, bins_sum, bins_n):
                 acc[5] += 1.0
                 if t < half_mean:
                     acc[6] += 1.0
-                col = (j + 0.5 - ox) / nx
-                xl = r_in + col * px
-                b = int(math.floor(math.hypot(ca * xl - sa * yl, sa * xl + ca * yl)))
-                if 0 <= b < nb:
-                    bins_sum[b] += t
-                    bins_n[b] += 1
+                radial_bin_add(bins_sum, bins_n, (j + 0.5 - ox) / nx, r_in, px, ca, sa, yl, t)
