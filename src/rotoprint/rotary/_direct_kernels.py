@@ -79,6 +79,50 @@ def _firing_pos(x0, y0, dx, dy, t, psi0, dphi, direction, i0, n_f):  # pragma: n
 
 
 @njit(cache=True, nogil=True)
+def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, n_ev, n_f, level, out):  # pragma: no cover - jit
+    n_tr = cols.shape[0]
+    n_c = out.shape[1]
+    ev_row = np.empty(n_ev, np.int64)
+    ev_col = np.empty(n_ev, np.int64)
+    ev_step = np.empty(n_ev, np.int64)
+    e = 0
+    for m in range(n_tr):
+        if frac[m] < 1.0:
+            continue
+        for z in range(start[m] + m, sp_end[m]):
+            ev_row[e] = sp_lo[z]
+            ev_col[e] = cols[m]
+            ev_step[e] = 1
+            ev_row[e + 1] = sp_hi[z]
+            ev_col[e + 1] = cols[m]
+            ev_step[e + 1] = -1
+            e += 2
+    order = np.argsort(ev_row, kind="mergesort")
+    cnt = np.zeros(n_c, np.int64)
+    state = np.zeros(n_c, np.uint8)
+    n_in = 0  # columns with a positive count
+    e = 0
+    row = ev_row[order[0]]
+    while row < n_f:
+        while e < n_ev and ev_row[order[e]] == row:
+            k = order[e]
+            c = ev_col[k]
+            was = cnt[c] > 0
+            cnt[c] += ev_step[k]
+            now = cnt[c] > 0
+            if now != was:
+                state[c] = level if now else 0
+                n_in += 1 if now else -1
+            e += 1
+        nxt = ev_row[order[e]] if e < n_ev else n_f
+        if n_in:
+            for r in range(row, min(nxt, n_f)):
+                for c in range(n_c):
+                    out[r, c] = state[c]
+        row = nxt
+
+
+@njit(cache=True, nogil=True)
 def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction, i0, n_f, evenodd, level, out):  # pragma: no cover - jit
     n_seg = sx0.shape[0]
     n_tr = r2.shape[0]
@@ -184,8 +228,17 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
                 w += sgn[q]
                 prev = i
         sp_end[m] = ns
-    # pass 4: write the spans tile by tile of FILL_TILE firing rows, so that the (tile, N) block of the
-    # image stays in cache while every track writes its column piece (a whole-column walk misses it each row)
+    # pass 4: the tracks kept whole (frac >= 1) by a scanline sweep: their span ends as events in
+    # firing order update a row state (inside count and byte per image column), and each row that
+    # holds ink is one contiguous copy of the state (byte stores down columns cost ~4 x more)
+    n_ev = 0
+    for m in range(n_tr):
+        if frac[m] >= 1.0:
+            n_ev += 2 * (sp_end[m] - start[m] - m)
+    if n_ev:
+        _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, n_ev, n_f, level, out)
+    # pass 5: the thinned tracks' spans tile by tile of FILL_TILE firing rows, so that the (tile, N) block
+    # of the image stays in cache while every track writes its column piece (a whole-column walk misses it each row)
     cursor = np.empty(n_tr, np.int64)
     for m in range(n_tr):
         cursor[m] = start[m] + m
@@ -197,16 +250,15 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
             end = sp_end[m]
             if z == end:
                 continue
-            col = cols[m]
             f = frac[m]
+            if f >= 1.0:
+                continue
+            col = cols[m]
             o = offs[m]
             while z < end and sp_lo[z] < r1:
                 lo = max(sp_lo[z], r0)
                 hi = min(sp_hi[z], r1)
-                if f >= 1.0:
-                    for row in range(lo, hi):
-                        out[row, col] = level
-                elif hi > lo:  # thinned: one floor per firing (thin_floors_jit: the rule of thin_print)
+                if hi > lo:  # thinned: one floor per firing (thin_floors_jit: the rule of thin_print)
                     thin_floors_jit(gf, float(lo + i0), hi - lo, f, o)
                     for t in range(hi - lo):
                         if gf[t + 1] > gf[t]:
