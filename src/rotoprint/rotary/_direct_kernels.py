@@ -79,44 +79,71 @@ def _firing_pos(x0, y0, dx, dy, t, psi0, dphi, direction, i0, n_f):  # pragma: n
 
 
 @njit(cache=True, nogil=True)
-def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, n_ev, n_f, level, out):  # pragma: no cover - jit
+def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev, i0, n_f, level, out):  # pragma: no cover - jit
+    """Write the spans of the tracks kept whole (``frac >= 1``) and, when ``thinned``, of the thinned
+    ones (``0 < frac < 1``, at most one per image column) in firing order: span ends are events that
+    update a row state by image column (inside counts, the byte of the whole tracks, the share and
+    phase of the thinned track inside); each row holding ink is written whole from the state, a
+    thinned column by thin_print's rule (``kept_jit``'s float64 expression, the same floors)."""
     n_tr = cols.shape[0]
     n_c = out.shape[1]
     ev_row = np.empty(n_ev, np.int64)
-    ev_col = np.empty(n_ev, np.int64)
+    ev_trk = np.empty(n_ev, np.int64)
     ev_step = np.empty(n_ev, np.int64)
     e = 0
     for m in range(n_tr):
-        if frac[m] < 1.0:
+        f = frac[m]
+        if f < 1.0 and not (thinned and f > 0.0):
             continue
         for z in range(start[m] + m, sp_end[m]):
             ev_row[e] = sp_lo[z]
-            ev_col[e] = cols[m]
+            ev_trk[e] = m
             ev_step[e] = 1
             ev_row[e + 1] = sp_hi[z]
-            ev_col[e + 1] = cols[m]
+            ev_trk[e + 1] = m
             ev_step[e + 1] = -1
             e += 2
     order = np.argsort(ev_row, kind="mergesort")
     cnt = np.zeros(n_c, np.int64)
     state = np.zeros(n_c, np.uint8)
-    n_in = 0  # columns with a positive count
+    fc = np.zeros(n_c, np.float64)
+    oc = np.zeros(n_c, np.float64)
+    n_in = 0  # columns holding a whole track
+    n_thin = 0  # columns holding a thinned track
     e = 0
     row = ev_row[order[0]]
     while row < n_f:
         while e < n_ev and ev_row[order[e]] == row:
             k = order[e]
-            c = ev_col[k]
-            was = cnt[c] > 0
-            cnt[c] += ev_step[k]
-            now = cnt[c] > 0
-            if now != was:
-                state[c] = level if now else 0
-                n_in += 1 if now else -1
+            m = ev_trk[k]
+            c = cols[m]
+            if frac[m] >= 1.0:
+                was = cnt[c] > 0
+                cnt[c] += ev_step[k]
+                now = cnt[c] > 0
+                if now != was:
+                    state[c] = level if now else 0
+                    n_in += 1 if now else -1
+            elif ev_step[k] > 0:  # a thinned column's track is the only thinned one there: inside or not
+                fc[c] = frac[m]
+                oc[c] = offs[m]
+                n_thin += 1
+            else:
+                fc[c] = 0.0
+                oc[c] = 0.0
+                n_thin -= 1
             e += 1
         nxt = ev_row[order[e]] if e < n_ev else n_f
-        if n_in:
-            for r in range(row, min(nxt, n_f)):
+        if nxt > n_f:
+            nxt = n_f
+        if n_thin:
+            for r in range(row, nxt):
+                i = float(r + i0)
+                for c in range(n_c):
+                    keep = np.floor((i + 1.0) * fc[c] + oc[c]) > np.floor(i * fc[c] + oc[c])
+                    out[r, c] = level if keep else state[c]
+        elif n_in:
+            for r in range(row, nxt):
                 for c in range(n_c):
                     out[r, c] = state[c]
         row = nxt
@@ -231,12 +258,20 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
     # pass 4: the tracks kept whole (frac >= 1) by a scanline sweep: their span ends as events in
     # firing order update a row state (inside count and byte per image column), and each row that
     # holds ink is one contiguous copy of the state (byte stores down columns cost ~4 x more)
+    # (and the thinned tracks too unless two share an image column: then pass 5 writes those)
+    per_col = np.zeros(out.shape[1], np.int64)
+    thinned = True
+    for m in range(n_tr):
+        if 0.0 < frac[m] < 1.0:
+            per_col[cols[m]] += 1
+            if per_col[cols[m]] > 1:
+                thinned = False
     n_ev = 0
     for m in range(n_tr):
-        if frac[m] >= 1.0:
+        if frac[m] >= 1.0 or (thinned and frac[m] > 0.0):
             n_ev += 2 * (sp_end[m] - start[m] - m)
     if n_ev:
-        _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, n_ev, n_f, level, out)
+        _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev, i0, n_f, level, out)
     # pass 5: the thinned tracks' spans tile by tile of FILL_TILE firing rows, so that the (tile, N) block
     # of the image stays in cache while every track writes its column piece (a whole-column walk misses it each row)
     cursor = np.empty(n_tr, np.int64)
@@ -251,7 +286,7 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
             if z == end:
                 continue
             f = frac[m]
-            if f >= 1.0:
+            if f >= 1.0 or thinned:
                 continue
             col = cols[m]
             o = offs[m]
