@@ -78,6 +78,28 @@ def _firing_pos(x0, y0, dx, dy, t, psi0, dphi, direction, i0, n_f):  # pragma: n
     return int(math.ceil(u))
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _copy_rows(out, r0, r1, c0, c1, state):  # pragma: no cover - jit
+    for r in range(r0, r1):
+        row = out[r, c0:c1]
+        src = state[c0:c1]
+        for c in range(c1 - c0):
+            row[c] = src[c]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _thin_rows(out, r0, r1, i0, c0, c1, fc, oc, state, level):  # pragma: no cover - jit
+    f = fc[c0:c1]
+    o = oc[c0:c1]
+    s = state[c0:c1]
+    for r in range(r0, r1):
+        i = float(r + i0)
+        row = out[r, c0:c1]
+        for c in range(c1 - c0):
+            keep = np.floor((i + 1.0) * f[c] + o[c]) > np.floor(i * f[c] + o[c])
+            row[c] = level if keep else s[c]
+
+
 @njit(cache=True, nogil=True)
 def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev, i0, n_f, level, out):  # pragma: no cover - jit
     """Write the spans of the tracks kept whole (``frac >= 1``) and, when ``thinned``, of the thinned
@@ -110,6 +132,9 @@ def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev,
     oc = np.zeros(n_c, np.float64)
     n_in = 0  # columns holding a whole track
     n_thin = 0  # columns holding a thinned track
+    lo = n_c  # the rows are written on columns lo .. hi - 1, which hold every column inside (the rest stay 0)
+    hi = 0
+    shrink = False
     e = 0
     row = ev_row[order[0]]
     while row < n_f:
@@ -132,20 +157,25 @@ def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev,
                 fc[c] = 0.0
                 oc[c] = 0.0
                 n_thin -= 1
+            if ev_step[k] > 0:
+                lo = min(lo, c)
+                hi = max(hi, c + 1)
+            else:
+                shrink = True
             e += 1
         nxt = ev_row[order[e]] if e < n_ev else n_f
         if nxt > n_f:
             nxt = n_f
+        if shrink:
+            while lo < hi and cnt[lo] == 0 and fc[lo] == 0.0:
+                lo += 1
+            while hi > lo and cnt[hi - 1] == 0 and fc[hi - 1] == 0.0:
+                hi -= 1
+            shrink = False
         if n_thin:
-            for r in range(row, nxt):
-                i = float(r + i0)
-                for c in range(n_c):
-                    keep = np.floor((i + 1.0) * fc[c] + oc[c]) > np.floor(i * fc[c] + oc[c])
-                    out[r, c] = level if keep else state[c]
+            _thin_rows(out, row, nxt, i0, lo, hi, fc, oc, state, level)
         elif n_in:
-            for r in range(row, nxt):
-                for c in range(n_c):
-                    out[r, c] = state[c]
+            _copy_rows(out, row, nxt, lo, hi, state)
         row = nxt
 
 
