@@ -21,6 +21,9 @@ Rules (exact, no tolerance decides a case):
   crossing that leaves the circle and ``+direction`` for one that enters it.
 - Crossings before the image count for every firing, those after it for none.
 
+Writing (the jit kernel): a scanline sweep of the spans' ends in firing order keeps a row state by
+image column, and each row holding ink is written whole from it (contiguous stores).
+
 Optional thinning (density equalisation): firing ``i`` of track ``m`` is kept when
 ``floor((i + 1) * frac[m] + offset[m]) > floor(i * frac[m] + offset[m])`` (an ordered, even
 pattern on the absolute firing index: exactly ``frac`` of the firings over any run).
@@ -285,10 +288,9 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
                 w += sgn[q]
                 prev = i
         sp_end[m] = ns
-    # pass 4: the tracks kept whole (frac >= 1) by a scanline sweep: their span ends as events in
-    # firing order update a row state (inside count and byte per image column), and each row that
-    # holds ink is one contiguous copy of the state (byte stores down columns cost ~4 x more)
-    # (and the thinned tracks too unless two share an image column: then pass 5 writes those)
+    # pass 4: a scanline sweep (_scanline_fill) of the tracks kept whole (frac >= 1) and the thinned
+    # ones (0 < frac < 1) unless two thinned tracks share an image column (then pass 5 writes those):
+    # each row that holds ink is written whole from a row state (byte stores down columns cost 2-4 x more)
     per_col = np.zeros(out.shape[1], np.int64)
     thinned = True
     for m in range(n_tr):
