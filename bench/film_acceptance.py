@@ -138,9 +138,11 @@ def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
     The default (equalised) pass is charged its maps and its thinned images (``transform_exact(...,
     thin=ThinShares)``, as ``pass_prints`` prints it); the shares (``track_fractions``, computed once
     for all the passes of a layer, from the geometry only) are given beside it, and the ratio with
-    their 1 / P share per pass and with all of them.
+    their 1 / P share per pass and with all of them. Beside the direct slicer's single layers, a real
+    P-pass layer of it (``union_pass_shares`` once, then every pass's ``slice_rotary(..., shares=)``
+    layer) per pass, with and without the shares (which a build computes once for all its layers).
     """
-    from rotoprint.rotary.direct import slice_rotary
+    from rotoprint.rotary.direct import slice_rotary, union_pass_shares
     from rotoprint.rotary.exact import ThinShares
     from rotoprint.io.mesh import load_mesh
 
@@ -154,8 +156,9 @@ def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
     print("| tilt deg | passes | planned clock dpi | transform (maps + images), native s | one pass, planned s | ratio | "
           "equalised clock dpi | one pass equalised (maps + thinned images) s | ratio | shares of all P passes s | "
           "ratio with shares / P | ratio with all shares | "
-          f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio | equalised clock s | ratio |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+          f"slice_rotary 1 layer{f' ({meshes[0].name})' if meshes else ''}, native s | planned s | ratio | equalised clock s | ratio | "
+          "P-pass layer (union shares + every pass's slice_rotary with its shares) / P s | ratio | its passes alone / P s | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for tilt in tilts:
         # the default print: equalised, no phases or overlap; one pass's images at EQUALISE_CLOCK_FACTOR x the plan's
         # clock, thinned while sampled; the shares of every pass (once per layer) timed apart
@@ -187,6 +190,24 @@ def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
             s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1), k, clock)
             s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1]).layer(1), k, clock)
             row += f" {s0:.4f} | {s1:.4f} | {s1 / s0:.2f} | {s2:.4f} | {s2 / s0:.2f} |"
+            # a real P-pass layer of the direct slicer, as slice_rotary_passes prints it: the union's shares
+            # (once per build: charged whole to this layer here), then each pass at its offset with its shares
+            pp_d = plan_passes(head, slice_rotary(mesh, "omnidot760", **kw).plan, footprint_um=DepositOptions().full_footprint_um(head))
+
+            def union():
+                j0 = slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp_d.dpi_y)
+                return union_pass_shares(head, j0.plan, pp_d.offsets_mm, dpi_y=pp_d.dpi_y)[:2]
+
+            sh_d, clk_d = union()
+
+            def passes_alone():
+                for q, o in enumerate(pp_d.offsets_mm):
+                    slice_rotary(mesh, "omnidot760", **kw, dpi_y=clk_d, pivot_offset_mm=o, shares=sh_d[q], pass_index=q).layer(1)
+
+            tp = _best(passes_alone, k, clock)
+            tu = _best(union, k, clock)
+            n_p = pp_d.passes
+            row += f" {(tu + tp) / n_p:.4f} | {(tu + tp) / n_p / s0:.2f} | {tp / n_p:.4f} | {tp / n_p / s0:.2f} |"
         print(row, flush=True)
 
 

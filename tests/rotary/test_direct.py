@@ -168,6 +168,40 @@ def test_kernels_identical_on_random_polygons():
         np.testing.assert_array_equal(K.direct_fill_jit(*args, **kw), K.direct_fill_numpy(*args, **kw))
 
 
+def test_kernels_identical_with_whole_thinned_and_shared_columns():
+    """The jit fill's row sweep (tracks kept whole, thinned tracks by thin_print's rule, shares of
+    0) against the numpy reference, also when two tracks write one image column (one whole and one
+    thinned; two thinned, which sends the thinned tracks to the tiled column writes)."""
+    rng = np.random.default_rng(23)
+    n_tr = 160
+    r = np.sort(rng.uniform(30, 40, n_tr))
+    psi0 = rng.uniform(-0.05, 0.05, n_tr)
+    frac = rng.choice([1.0, 0.0, 0.3, 0.55, 0.9, 1.0 / 3.0], n_tr)
+    base = rng.permutation(300)[:n_tr]
+    whole, thin = np.flatnonzero(frac >= 1.0), np.flatnonzero((frac > 0.0) & (frac < 1.0))
+    shared_whole = base.copy()
+    shared_whole[thin[0]] = base[whole[0]]  # a whole and a thinned track in one column
+    shared_thin = shared_whole.copy()
+    other = thin[2:][np.flatnonzero(frac[thin[2:]] != frac[thin[1]])[0]]
+    shared_thin[thin[1]] = base[other]  # two thinned tracks (different shares) in one column
+    n_kept = []
+    for trial, cols in enumerate([base, shared_whole, shared_thin] * 4):
+        if trial < 3:  # a box over every track first: both tracks of a shared column inside on the same firings
+            x, y = np.array([29.0, 41.0, 41.0, 29.0]), np.array([-5.0, -5.0, 5.0, 5.0])
+        else:
+            n = rng.integers(3, 40)
+            x = rng.uniform(29, 41, n)
+            y = rng.uniform(-5, 5, n)
+        args = (x, y, np.roll(x, -1), np.roll(y, -1), r * r, psi0, cols, frac, rng.uniform(0, 1, n_tr))
+        direction = int(rng.choice([1, -1]))
+        kw = dict(dphi=0.002, direction=direction, i0=-100 if trial < 3 else int(rng.integers(-200, 50)), n_f=400, n_cols=300,
+                  fill=["nonzero", "evenodd"][trial % 2], level=3)
+        a = K.direct_fill_jit(*args, **kw)
+        np.testing.assert_array_equal(a, K.direct_fill_numpy(*args, **kw))
+        n_kept.append(int((a > 0).sum()))
+    assert min(n_kept[:3]) > 0 and sum(n_kept) > 5000
+
+
 # ---------------------------------------------------------------------- two-step and swathes
 
 

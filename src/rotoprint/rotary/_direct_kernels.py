@@ -21,6 +21,9 @@ Rules (exact, no tolerance decides a case):
   crossing that leaves the circle and ``+direction`` for one that enters it.
 - Crossings before the image count for every firing, those after it for none.
 
+Writing (the jit kernel): a scanline sweep of the spans' ends in firing order keeps a row state by
+image column, and each row holding ink is written whole from it (contiguous stores).
+
 Optional thinning (density equalisation): firing ``i`` of track ``m`` is kept when
 ``floor((i + 1) * frac[m] + offset[m]) > floor(i * frac[m] + offset[m])`` (an ordered, even
 pattern on the absolute firing index: exactly ``frac`` of the firings over any run).
@@ -76,6 +79,107 @@ def _firing_pos(x0, y0, dx, dy, t, psi0, dphi, direction, i0, n_f):  # pragma: n
     if u >= n_f:
         return n_f
     return int(math.ceil(u))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _copy_rows(out, r0, r1, c0, c1, state):  # pragma: no cover - jit
+    for r in range(r0, r1):
+        row = out[r, c0:c1]
+        src = state[c0:c1]
+        for c in range(c1 - c0):
+            row[c] = src[c]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _thin_rows(out, r0, r1, i0, c0, c1, fc, oc, state, level):  # pragma: no cover - jit
+    f = fc[c0:c1]
+    o = oc[c0:c1]
+    s = state[c0:c1]
+    for r in range(r0, r1):
+        i = float(r + i0)
+        row = out[r, c0:c1]
+        for c in range(c1 - c0):
+            keep = np.floor((i + 1.0) * f[c] + o[c]) > np.floor(i * f[c] + o[c])
+            row[c] = level if keep else s[c]
+
+
+@njit(cache=True, nogil=True)
+def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev, i0, n_f, level, out):  # pragma: no cover - jit
+    """Write the spans of the tracks kept whole (``frac >= 1``) and, when ``thinned``, of the thinned
+    ones (``0 < frac < 1``, at most one per image column) in firing order: span ends are events that
+    update a row state by image column (inside counts, the byte of the whole tracks, the share and
+    phase of the thinned track inside); each row holding ink is written whole from the state, a
+    thinned column by thin_print's rule (``kept_jit``'s float64 expression, the same floors)."""
+    n_tr = cols.shape[0]
+    n_c = out.shape[1]
+    ev_row = np.empty(n_ev, np.int64)
+    ev_trk = np.empty(n_ev, np.int64)
+    ev_step = np.empty(n_ev, np.int64)
+    e = 0
+    for m in range(n_tr):
+        f = frac[m]
+        if f < 1.0 and not (thinned and f > 0.0):
+            continue
+        for z in range(start[m] + m, sp_end[m]):
+            ev_row[e] = sp_lo[z]
+            ev_trk[e] = m
+            ev_step[e] = 1
+            ev_row[e + 1] = sp_hi[z]
+            ev_trk[e + 1] = m
+            ev_step[e + 1] = -1
+            e += 2
+    order = np.argsort(ev_row, kind="mergesort")
+    cnt = np.zeros(n_c, np.int64)
+    state = np.zeros(n_c, np.uint8)
+    fc = np.zeros(n_c, np.float64)
+    oc = np.zeros(n_c, np.float64)
+    n_in = 0  # columns holding a whole track
+    n_thin = 0  # columns holding a thinned track
+    lo = n_c  # the rows are written on columns lo .. hi - 1, which hold every column inside (the rest stay 0)
+    hi = 0
+    shrink = False
+    e = 0
+    row = ev_row[order[0]]
+    while row < n_f:
+        while e < n_ev and ev_row[order[e]] == row:
+            k = order[e]
+            m = ev_trk[k]
+            c = cols[m]
+            if frac[m] >= 1.0:
+                was = cnt[c] > 0
+                cnt[c] += ev_step[k]
+                now = cnt[c] > 0
+                if now != was:
+                    state[c] = level if now else 0
+                    n_in += 1 if now else -1
+            elif ev_step[k] > 0:  # a thinned column's track is the only thinned one there: inside or not
+                fc[c] = frac[m]
+                oc[c] = offs[m]
+                n_thin += 1
+            else:
+                fc[c] = 0.0
+                oc[c] = 0.0
+                n_thin -= 1
+            if ev_step[k] > 0:
+                lo = min(lo, c)
+                hi = max(hi, c + 1)
+            else:
+                shrink = True
+            e += 1
+        nxt = ev_row[order[e]] if e < n_ev else n_f
+        if nxt > n_f:
+            nxt = n_f
+        if shrink:
+            while lo < hi and cnt[lo] == 0 and fc[lo] == 0.0:
+                lo += 1
+            while hi > lo and cnt[hi - 1] == 0 and fc[hi - 1] == 0.0:
+                hi -= 1
+            shrink = False
+        if n_thin:
+            _thin_rows(out, row, nxt, i0, lo, hi, fc, oc, state, level)
+        elif n_in:
+            _copy_rows(out, row, nxt, lo, hi, state)
+        row = nxt
 
 
 @njit(cache=True, nogil=True)
@@ -184,8 +288,24 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
                 w += sgn[q]
                 prev = i
         sp_end[m] = ns
-    # pass 4: write the spans tile by tile of FILL_TILE firing rows, so that the (tile, N) block of the
-    # image stays in cache while every track writes its column piece (a whole-column walk misses it each row)
+    # pass 4: a scanline sweep (_scanline_fill) of the tracks kept whole (frac >= 1) and the thinned
+    # ones (0 < frac < 1) unless two thinned tracks share an image column (then pass 5 writes those):
+    # each row that holds ink is written whole from a row state (byte stores down columns cost 2-4 x more)
+    per_col = np.zeros(out.shape[1], np.int64)
+    thinned = True
+    for m in range(n_tr):
+        if 0.0 < frac[m] < 1.0:
+            per_col[cols[m]] += 1
+            if per_col[cols[m]] > 1:
+                thinned = False
+    n_ev = 0
+    for m in range(n_tr):
+        if frac[m] >= 1.0 or (thinned and frac[m] > 0.0):
+            n_ev += 2 * (sp_end[m] - start[m] - m)
+    if n_ev:
+        _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev, i0, n_f, level, out)
+    # pass 5: the thinned tracks' spans tile by tile of FILL_TILE firing rows, so that the (tile, N) block
+    # of the image stays in cache while every track writes its column piece (a whole-column walk misses it each row)
     cursor = np.empty(n_tr, np.int64)
     for m in range(n_tr):
         cursor[m] = start[m] + m
@@ -197,16 +317,15 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
             end = sp_end[m]
             if z == end:
                 continue
-            col = cols[m]
             f = frac[m]
+            if f >= 1.0 or thinned:
+                continue
+            col = cols[m]
             o = offs[m]
             while z < end and sp_lo[z] < r1:
                 lo = max(sp_lo[z], r0)
                 hi = min(sp_hi[z], r1)
-                if f >= 1.0:
-                    for row in range(lo, hi):
-                        out[row, col] = level
-                elif hi > lo:  # thinned: one floor per firing (thin_floors_jit: the rule of thin_print)
+                if hi > lo:  # thinned: one floor per firing (thin_floors_jit: the rule of thin_print)
                     thin_floors_jit(gf, float(lo + i0), hi - lo, f, o)
                     for t in range(hi - lo):
                         if gf[t + 1] > gf[t]:
