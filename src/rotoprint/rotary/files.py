@@ -173,6 +173,8 @@ def check_print_fields(side: dict, head: InkjetHead, sp: Path, *, what: str = "s
     pixels = 0
     for j, d in enumerate(side["swathes"]):
         where = "" if flat else f"swathes[{j}]."
+        if not isinstance(d, dict):
+            raise InputFileError(f"{what} swathes[{j}] must be a table, got {R.show_value(d)}", path=sp)
         dphi = _number(d, "dphi_rad", where, sp, positive=True, rng=_DPHI_RAD, what=what)
         if "angle_per_firing_deg" in d:
             deg = _number(d, "angle_per_firing_deg", where, sp, positive=True, what=what)
