@@ -144,7 +144,12 @@ def test_simulate_without_sidecar(run_cli, tmp_path, design_png):
         (lambda s: s["swathes"][0].update(angle_per_firing_deg=1.0), "sidecar field swathes[0].angle_per_firing_deg is 1.0, but dphi_rad"),
         (lambda s: s["swathes"][0].update(pivot_radius_mm="60"), "sidecar field swathes[0].pivot_radius_mm must be a finite number"),
         (lambda s: s.update(direction=0), "sidecar field direction must be 1 or -1"),
-        (lambda s: s["head"].update(nozzles=0), "sidecar field head.nozzles: Input should be greater than 0"),
+        (lambda s: s["head"].update(nozzles=0), "sidecar field 'head.nozzles' must be greater than 0, got 0"),
+        (lambda s: s["placement"].update(width_px=-1), "sidecar field placement.width_px must be an integer in 1 ..."),
+        (lambda s: s["placement"].pop("inner_radius_mm"), "placement has no key 'inner_radius_mm': the sidecar is incomplete"),
+        (lambda s: s["swathes"][0].update(file=3), "sidecar field swathes[0].file must be a file name, got 3"),
+        (lambda s: s["swathes"].append("s2.png"), "sidecar field swathes[1] must be a table, got 's2.png'"),
+        (lambda s: s.update(design=5), "sidecar field design must be a table whose kind is a text string, got 5"),
     ],
 )
 def test_simulate_refuses_bad_sidecar(run_cli, tmp_path, design_png, edit, pattern):

@@ -26,6 +26,7 @@ from pydantic import ValidationError
 
 from ..errors import ImageError, InputFileError, RotoprintError
 from ..io.ownership import mark_json, mark_png
+from ..io.records import MissingKeyError, as_record, missing_key_message, validation_line
 from ..io.images import png_bytes
 from ..io.images import open_image
 from ..io.inputs import MAX_IMAGE_BYTES, read_input_bytes, read_json_file
@@ -136,6 +137,19 @@ _FIRING_INDEX = R.Range(-R.MAX_COUNT, R.MAX_COUNT, integer=True)
 _DPHI_RAD = R.Range(0.0, 2 * math.pi, "rad", lo_open=True)
 
 
+def _check_placement(pl: dict, sp: Path) -> None:
+    """The sidecar's ``placement`` table: whole positive pixel counts, positive pitches and inner
+    radius, a finite angle (InputFileError naming ``sp`` and the field; KeyError if one is missing)."""
+    if not isinstance(pl, dict):
+        raise InputFileError(f"sidecar field placement must be a table, got {R.show_value(pl)}", path=sp)
+    for key in ("width_px", "height_px"):
+        _number(pl, key, "placement.", sp, rng=R.Range(1, R.MAX_COUNT, integer=True))
+    for key in ("pitch_x_mm", "pitch_y_mm", "inner_radius_mm"):
+        _number(pl, key, "placement.", sp, positive=True)
+    if "angle_deg" in pl:
+        _number(pl, "angle_deg", "placement.", sp, rng=R.ANGLE_DEG)
+
+
 def check_print_fields(side: dict, head: InkjetHead, sp: Path, *, what: str = "sidecar field", flat: bool = False) -> None:
     """Range checks on the numbers of a sidecar (:mod:`rotoprint.ranges`): tilt within the
     head's limit, angles, densities and radii in range, integer counts and nozzle runs within
@@ -159,6 +173,8 @@ def check_print_fields(side: dict, head: InkjetHead, sp: Path, *, what: str = "s
     pixels = 0
     for j, d in enumerate(side["swathes"]):
         where = "" if flat else f"swathes[{j}]."
+        if not isinstance(d, dict):
+            raise InputFileError(f"{what} swathes[{j}] must be a table, got {R.show_value(d)}", path=sp)
         dphi = _number(d, "dphi_rad", where, sp, positive=True, rng=_DPHI_RAD, what=what)
         if "angle_per_firing_deg" in d:
             deg = _number(d, "angle_per_firing_deg", where, sp, positive=True, what=what)
@@ -209,9 +225,10 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
     Raises
     ------
     InputFileError
-        Missing files, a sidecar that is not ours, or a sidecar field that is missing, not a
-        finite number, or out of range (a tilt at or beyond the head's limit, ``dphi_rad <= 0``);
-        the message names the sidecar and the field.
+        Missing files, a sidecar that is not ours, or a sidecar field that is missing, of the
+        wrong type, or out of range (a tilt at or beyond the head's limit, ``dphi_rad <= 0``,
+        ``head.nozzles`` not a whole number > 0); one line in words naming the sidecar and the
+        field by its path (:mod:`rotoprint.io.records`), never pydantic's own text.
     ImageError
         A swathe image that is not 8-bit greyscale or not the size the sidecar says.
     """
@@ -226,14 +243,25 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
     side = read_json_file(sp, what="sidecar")
     if not isinstance(side, dict) or side.get("format") != SIDECAR_FORMAT:
         raise InputFileError(f"not a rotoprint rotary-print sidecar (format {SIDECAR_FORMAT!r} expected)", path=sp)
+    side = as_record(side)
     try:
         try:
-            head = InkjetHead(**side["head"])
+            head = InkjetHead.model_validate(side["head"])
         except ValidationError as exc:
-            err = exc.errors()[0]
-            where = ".".join(str(p) for p in err["loc"])
-            raise InputFileError(f"sidecar field head.{where}: {err['msg']}", path=sp) from None
+            raise InputFileError(validation_line(exc, "head", record="the sidecar", field="sidecar field"),
+                                 path=sp) from None
         check_print_fields(side, head, sp)
+        _check_placement(side["placement"], sp)
+        if not isinstance(side["method"], str):
+            raise InputFileError(f"sidecar field method must be a text string, got {R.show_value(side['method'])}", path=sp)
+        design = side.get("design", {})
+        if not isinstance(design, dict) or not isinstance(design.get("kind", "binary"), str):
+            raise InputFileError("sidecar field design must be a table whose kind is a text string, got "
+                                 f"{R.show_value(design)}", path=sp)
+        for j, d in enumerate(side["swathes"]):
+            if not isinstance(d["file"], str):
+                raise InputFileError(f"sidecar field swathes[{j}].file must be a file name, got {R.show_value(d['file'])}",
+                                     path=sp)
         placement = Placement.from_json(side["placement"])
         swathes = []
         for d in side["swathes"]:
@@ -278,8 +306,10 @@ def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:
             dpi_y=float(side["dpi_y"]),
             placement=placement,
             swathes=tuple(swathes),
-            design_kind=str(side.get("design", {}).get("kind", "binary")),
+            design_kind=design.get("kind", "binary"),
         )
+    except MissingKeyError as exc:
+        raise InputFileError(missing_key_message(exc, "the sidecar"), path=sp) from None
     except (KeyError, TypeError, ValueError) as exc:
         if isinstance(exc, RotoprintError):
             raise
