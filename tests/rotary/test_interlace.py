@@ -687,3 +687,29 @@ def test_default_passes_are_equalised_and_level_to_half_the_mean(head):
         assert f.uncovered_fraction == 0.0 and abs(f.levelled.volume_error_fraction) < 1e-9
     assert films[True].levelled.thinnest_to_mean >= 0.5
     assert films[True].levelled.thinnest_to_mean > films[False].levelled.thinnest_to_mean + 0.15
+
+
+def test_edge_restore_cli_fine_designs_and_grey_heads(run_cli, tmp_path):
+    """--edge-restore at a design finer than 50 um per pixel takes a pixel-wide zone (was refused);
+    a grey-level head, whose equalisation is by drop size, is refused in one line."""
+    from importlib.resources import files
+
+    from PIL import Image
+
+    d = np.zeros((60, 60), np.uint8)
+    d[10:50, 10:50] = 255
+    p = tmp_path / "d.png"
+    Image.fromarray(d).save(p)
+    code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "30", "--design-dpi", "720",
+                           "--passes", "auto", "--edge-restore", "--out", tmp_path / "f.png", "-q")
+    assert code == 0, err
+    man = json.loads((tmp_path / "f-passes.json").read_text())
+    assert man["edge_restore"]["zone_um"] == pytest.approx(25.4 / 720 * 1000)
+    preset = (files("rotoprint.devices") / "presets" / "omnidot760.toml").read_text()
+    grey = tmp_path / "grey.toml"
+    assert "\ngrey_levels = 1\n" in preset
+    grey.write_text(preset.replace("\ngrey_levels = 1\n", "\ngrey_levels = 3\n", 1))
+    code, _, err = run_cli("transform", p, "--device", grey, "--tilt", "0", "--radius", "30", "--passes", "2", "--edge-restore",
+                           "--out", tmp_path / "g.png")
+    assert code == 2 and "--edge-restore needs a binary head" in err and len(err.strip().splitlines()) == 1, err
+    assert not list(tmp_path.glob("g-*")) and not (tmp_path / "g.png").exists()

@@ -66,7 +66,7 @@ def report_summary(res, *, label: str = "") -> None:
 def stage_progress():
     """``on_step(stage, done, total)`` for :func:`~rotoprint.pipeline.run_build`: a rich bar per
     stage on a terminal; elsewhere (a pipe, a CI log) one line as each stage ends, with its time,
-    so a long build never sits silent (and a refused job still prints only its error line)."""
+    so a long build never sits silent (a job refused before its plan is done prints only its error line)."""
     tasks: dict[str, int] = {}
     started: dict[str, float] = {}
     with progress() as bar:

@@ -34,8 +34,9 @@ def transform_command(
                                         "N > 1 writes PRINT-p1.png ... and PRINT-passes.json.")] = "1",
     equalise: Annotated[bool | None, typer.Option("--equalise/--no-equalise", help="With --passes: thin dense tracks so every radius gets the same volume per area "
                                                   "(the default); --no-equalise: the plain print, every track keeps every drop.")] = None,
-    edge_restore: Annotated[bool, typer.Option("--edge-restore", help="With equalised --passes: restore some thinned-out drops within 50 um of the design's "
-                                               "edges met along the radius, where levelling would thin the film (rotary/edgecomp.py).")] = False,
+    edge_restore: Annotated[bool, typer.Option("--edge-restore", help="With equalised --passes (binary heads): restore some thinned-out drops within 50 um "
+                                               "(at most a design pixel) of the design's edges met along the radius, where levelling would thin "
+                                               "the film (rotary/edgecomp.py).")] = False,
     json_out: JsonOpt = False,
     quiet: QuietOpt = False,
     force: ForceOpt = False,
@@ -82,10 +83,15 @@ def transform_command(
 
         if edge_restore and equalise is False:
             raise ConfigError("--edge-restore needs the equalised passes (not --no-equalise)")
-        from ..rotary.edgecomp import EdgeRestore
+        if edge_restore and dev.head.grey_levels > 1:
+            raise ConfigError(f"--edge-restore needs a binary head; {dev.name}'s has {dev.head.grey_levels} grey levels "
+                              "(its equalisation spreads ink by drop size, not by thinning)")
+        from ..rotary.edgecomp import EDGE_ZONE_UM, EdgeRestore
 
+        # the zone: 50 um, or one design pixel where the pixels are finer (the radial look-up's reach)
+        zone_um = min(EDGE_ZONE_UM, 1000.0 * min(pl.pitch_x_mm, pl.pitch_y_mm))
         popts = PassOptions(setup=RotarySetup(**kw), passes=passes, equalise=equalise is not False,
-                            edge_restore=EdgeRestore() if edge_restore else None)
+                            edge_restore=EdgeRestore(zone_um=zone_um) if edge_restore else None)
         manifest = transform_passes(design, dev, pl, out, popts, design_info=info, force=force, inputs=inputs)
         if json_out:
             print_json(manifest)

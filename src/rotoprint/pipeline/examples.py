@@ -13,14 +13,17 @@ from ..process.examples import example_files
 __all__ = ["write_example"]
 
 
-# SHA-256 of the job files earlier releases wrote (every committed version of examples/*/*.toml):
+# SHA-256 of the job files earlier releases wrote (every committed version of examples/*/*.toml and
+# what process/examples.py wrote at each commit that changed it, since its example_files existed):
 # a folder holding one of them holds our own earlier copy, replaced like the current one, so a
 # changed comment in a bundled job never turns a user's earlier `rotoprint demo` folder "edited".
 _EARLIER_SHA256 = frozenset({
     "5e06ad979524a15be1d3b09add05096961afb28d06068dfb1511c0b6fd1c465e",  # cad-coil.toml
     "93c878a95bf023756fd974aaaad6c6031e5ae4638e926594900445d028ea51bd",
+    "beeb6b1a47fe66e44ef21c64bffd97fe56d5af2557718c00f4e9d874566ddd93",
     "35bfeb1c5eb65af2d6552941a28471818ba3c22b7d3b132f2a42ea1d32e7475e",  # coil-sensor.toml
     "90929a8eb1382a1180ec64f546ef63c4529fd921e5acc4605bdc399293d9089e",
+    "0b39ded22ccf8bdbb01596d3d701277cab24def0f607d38e54f991d220fa769d",
     "86814f5d838f73d75d1c3cb0cb295a5af25e98ad93686f194fc67ab0a17dab0c",  # gas-sensor.toml
     "eef40ecbf0764936217a4af07aa6c4a437696d2431563c68d37164ae6a788db0",
 })
@@ -39,8 +42,8 @@ def _holds(p: Path, data: bytes) -> bool:
         if not p.is_file():
             return False
         size = p.stat().st_size
-        if size == len(data):
-            return read_input_bytes(p, what="example file", limit_bytes=len(data)) == data
+        if size == len(data) and read_input_bytes(p, what="example file", limit_bytes=len(data)) == data:
+            return True
         if p.suffix != ".toml" or size > _EARLIER_MAX_BYTES:
             return False
         return hashlib.sha256(read_input_bytes(p, what="example file", limit_bytes=size)).hexdigest() in _EARLIER_SHA256
