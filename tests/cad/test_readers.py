@@ -256,3 +256,12 @@ def test_info_prints_a_layers_and_a_meshs_bounds_in_one_table_form(run_cli, tmp_
         assert names.index("bounds min (mm)") == 2 and names[3:5] == ["bounds max (mm)", "size (mm)"], names
     assert "20.0000 x 10.0000" in tables[".dxf"][2] and "20.0000 x 10.0000 x 1.0000" in tables[".stl"][2]
     assert "0.0000, 0.0000" in tables[".dxf"][0] and "0.0000, 0.0000, 0.0000" in tables[".stl"][0]
+
+
+def test_dxf_without_a_header_is_unitless_mm(tmp_path):
+    # a minimal R12 file (ENTITIES only, as small writers make): ezdxf gives it its own default
+    # $INSUNITS (metres); the file declares none, so it is unitless: millimetres, not 1000 x larger
+    q = tmp_path / "c.dxf"
+    q.write_text("0\nSECTION\n2\nENTITIES\n0\nCIRCLE\n8\n0\n10\n5.0\n20\n5.0\n30\n0.0\n40\n2.0\n0\nENDSEC\n0\nEOF\n")
+    lay = read_layer(q, tolerance_mm=0.001)
+    assert lay.area_mm2 == pytest.approx(math.pi * 2.0**2, rel=1e-3)

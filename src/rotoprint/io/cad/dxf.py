@@ -102,6 +102,17 @@ def _dxf_problem(exc: Exception) -> str:
 _EXTENT_HINT = " (check the coordinates and $INSUNITS or --units)"
 
 
+def _declares(p: Path, name: bytes, chunk_bytes: int = 1 << 20) -> bool:
+    """Whether the file's bytes hold ``name`` (read in chunks, never whole)."""
+    tail = b""
+    with open(p, "rb") as fh:
+        while block := fh.read(chunk_bytes):
+            if name in tail + block:
+                return True
+            tail = block[-(len(name) - 1):]
+    return False
+
+
 def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None) -> PlanarLayer:
     """Read a DXF file's model space into its exact region.
 
@@ -137,7 +148,9 @@ def read_dxf(path: str | Path, *, tolerance_mm: float, units: str | None = None)
     if units is not None:
         scale = length_unit_mm(units, path=p)
     else:
-        code = int(doc.header.get("$INSUNITS", 0) or 0)
+        # ezdxf gives a file without $INSUNITS (no HEADER section at all, as minimal R12 writers make) its
+        # own default, metres: only a $INSUNITS the file itself declares counts, else unitless (mm)
+        code = int(doc.header.get("$INSUNITS", 0) or 0) if _declares(p, b"$INSUNITS") else 0
         if code == 0:
             scale = 1.0
         elif code in INSUNITS_MM:
