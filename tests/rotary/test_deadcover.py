@@ -266,7 +266,7 @@ def test_thin_print_keeps_the_share_of_every_run_and_matches_its_formula(setting
     floor(i f + o): checked against that float64 expression in numpy on a real print with random
     shares, and over every run of firings of a track that prints throughout, the kept count is
     the share times the run within one."""
-    from rotoprint.rotary.equalise import _GOLDEN
+    from rotoprint.rotary._thin_kernels import GOLDEN as _GOLDEN
 
     head = setting[0]
     d = np.full((30, 40), 255, np.uint8)

@@ -43,6 +43,7 @@ from ..mesh import Mesh
 from ..slicing import slice_mesh
 from ..slicing._sections import Segments
 from . import _direct_kernels as _k
+from ._thin_kernels import thin_phases
 from .exact import firing_range, swathe_clock
 from .head import check_tilt, nozzle_layout
 from .options import RotarySliceOptions, options_from
@@ -370,7 +371,7 @@ class DirectSliceJob:
                 offs = np.mod(ts.nozzle * _GOLDEN + layer_index * _PLASTIC, 1.0)
             else:  # thin_print's pattern (its rule and offsets, pass index p_i), made while filling: tested identical
                 frac = self.shares[j][ts.nozzle]
-                offs = np.mod((ts.nozzle + 7919 * p_i) * _GOLDEN, 1.0)
+                offs = thin_phases(ts.nozzle, p_i)
             lev = fn(
                 xl0, yl0, xl1, yl1, ts.r_mm * ts.r_mm, ts.psi0_rad, ts.nozzle, frac, offs,
                 dphi=ts.dphi_rad, direction=self.plan.direction, i0=ts.first_firing, n_f=ts.firings,

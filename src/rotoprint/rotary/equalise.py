@@ -49,7 +49,6 @@ class ReachFloor:
             raise ConfigError(f"clock factor must be a whole number 1..64, got {self.clock_factor!r}")
 
 
-_GOLDEN = 0.6180339887498949
 #: Smallest share of its drops a track keeps under equalisation.
 EQUALISE_FLOOR = 0.5
 #: Smallest share of the full volume a grey-level site keeps under equalisation (its footprint,
