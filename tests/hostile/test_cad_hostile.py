@@ -135,6 +135,18 @@ def test_a_cut_short_layer_is_one_line_from_the_cli(tmp_path, name, cut, said):
     _refused(tmp_path, name, (CAD_COIL / name).read_bytes()[:cut], said)
 
 
+def test_an_excellon_rewind_stop_after_m30_is_read(tmp_path):
+    """Some CAM tools end a drill file with a rewind-stop '%' after M30: it is complete; without M30 it is not."""
+    from rotoprint.io.cad import read_layer
+
+    body = "M48\nMETRIC\nT1C1.0\n%\nT1\nX1.0Y1.0\n"
+    (tmp_path / "a.drl").write_text(body + "M30\n%\n\n")
+    (tmp_path / "b.drl").write_text(body + "M30\n")
+    a, b = (read_layer(tmp_path / n, tolerance_mm=0.001) for n in ("a.drl", "b.drl"))
+    assert a.region.area == b.region.area > 0.78
+    _refused(tmp_path, "c.drl", body + "%\n", "no M30 or M00 end statement at its end: the file is cut short")
+
+
 def _dxf(tmp_path, name: str, add) -> str:
     import ezdxf
 
