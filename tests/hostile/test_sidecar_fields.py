@@ -41,6 +41,8 @@ CASES = [
     (("head",), lambda t: t.update(nozzles="many"), "sidecar field 'head.nozzles' must be a whole number, got 'many'"),
     (("head",), lambda t: t.update(swathe_mm=-2.5), "sidecar field 'head.swathe_mm' must be greater than 0.0, got -2.5"),
     (("head",), _pop("row_separation_mm"), "sidecar field 'head.row_separation_mm' is missing (it is required)"),
+    # was "tilt 20 deg is at or beyond the maximum tilt 85.50 deg of this head": the head, not the tilt, is wrong
+    (("head",), lambda t: t.update(nozzles=1), "sidecar field swathes[0].nozzles is 764, more than the head has (head.nozzles 1)"),
     ((), lambda t: t.update(head=[1, 2]), "sidecar field 'head' must be a table, got a list"),
     (("swathes", 0), _pop("dphi_rad"), "swathes[0] has no key 'dphi_rad': the sidecar is incomplete"),
     (("swathes", 0), lambda t: t.update(pivot_radius_mm=-60), "sidecar field swathes[0].pivot_radius_mm must be > 0, got -60"),
