@@ -65,3 +65,20 @@ def test_a_bad_sidecar_field_is_one_line_in_words(printed, tmp_path, at, edit, s
     for raw in ("Input should", "Field required", "KeyError", "TypeError", "incomplete or invalid"):
         assert raw not in line, line
     assert tree(w) == before
+
+
+def test_a_passes_manifest_listing_one_print_twice_is_refused(printed, tmp_path):
+    """Two entries of one file would deposit one print twice and call it two passes."""
+    from rotoprint.rotary.interlace import PASSES_FORMAT
+
+    shutil.copytree(printed, tmp_path / "w")
+    w = tmp_path / "w"
+    (w / "m-passes.json").write_text(json.dumps({"format": PASSES_FORMAT, "files": ["p.json", "p.json"]}))
+    before = tree(w)
+    run = run_cli_bounded("simulate", "m-passes.json", "--out", "ov.png", cwd=w)
+    assert_refused(run, "m-passes.json:", "passes manifest field files lists p.json twice")
+    assert tree(w) == before
+    from rotoprint.rotary.interlace import read_passes
+
+    (w / "m-passes.json").write_text(json.dumps({"format": PASSES_FORMAT, "files": ["p.json", "q.json"]}))
+    assert read_passes(w / "m-passes.json") == [w / "p.json", w / "q.json"]
