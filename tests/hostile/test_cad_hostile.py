@@ -135,6 +135,18 @@ def test_a_cut_short_layer_is_one_line_from_the_cli(tmp_path, name, cut, said):
     _refused(tmp_path, name, (CAD_COIL / name).read_bytes()[:cut], said)
 
 
+def test_an_excellon_rewind_stop_after_m30_is_read(tmp_path):
+    """Some CAM tools end a drill file with a rewind-stop '%' after M30: it is complete; without M30 it is not."""
+    from rotoprint.io.cad import read_layer
+
+    body = "M48\nMETRIC\nT1C1.0\n%\nT1\nX1.0Y1.0\n"
+    (tmp_path / "a.drl").write_text(body + "M30\n%\n\n")
+    (tmp_path / "b.drl").write_text(body + "M30\n")
+    a, b = (read_layer(tmp_path / n, tolerance_mm=0.001) for n in ("a.drl", "b.drl"))
+    assert a.region.area == b.region.area > 0.78
+    _refused(tmp_path, "c.drl", body + "%\n", "no M30 or M00 end statement at its end: the file is cut short")
+
+
 def _dxf(tmp_path, name: str, add) -> str:
     import ezdxf
 
@@ -176,9 +188,37 @@ SVG_ROOT = 'width="10mm" height="10mm" viewBox="0 0 10 10"'
      "transform='matrix(nan 0 0 1 0 0)' of a <rect> holds a number that is not finite"),
     ('<rect width="1" height="1" transform="translate(1,1e999)" fill="black"/>',
      "transform='translate(1,1e999)' of a <rect> holds a number that is not finite"),
+    # each of these was left out of the layer without a word
+    ('<path d="M 1 1 L nan 5 L 5 5 Z" fill="black"/>', "<path> d='M 1 1 L nan 5 L 5 5 Z': character 9 ('nan 5 L 5 5 ') is not path data"),
+    ('<path id="t1" d="M 1 1 L 5 x 5 Z"/>', '<path id="t1"> d=\'M 1 1 L 5 x 5 Z\': character 11'),
+    ('<path d="L 1 1 2 2"/>', "path data starts with 'L', not a moveto"),
+    ('<path d="M 1 1 C 2 2 3 3 Z"/>', "'C' takes numbers in groups of 6, got 4"),
+    ('<path d="M 1 1 a 1 1 0 2 1 3 3"/>', "arc flag expected at character 15"),
+    ('<path d="M 1 1 L 1e308 5 L 5 5 Z"/>', "<path> has a point beyond the float range"),
+    ('<rect x="5" y="5" width="abc" height="3"/>', "<rect> width='abc' is not a length"),
+    ('<circle cx="5" cy="5" r="1e999"/>', "<circle> r='1e999' is not a length"),
+    ('<polygon points="5,5 6,q 7,7"/>', "<polygon> points='5,5 6,q 7,7': 'q' is not a number"),
+    ('<polyline points="5,5 6,6 7" stroke="black"/>', "an odd number of coordinates (5): the last point has no y"),
 ])
 def test_a_hostile_svg_element_is_one_line(tmp_path, body, said):
     _refused(tmp_path, "e.svg", _svg(SVG_ROOT, body), said)
+
+
+def test_svg_path_data_forms_and_empty_shapes(tmp_path):
+    """Legal path data in its terse forms reads as its long form; shapes that draw nothing are counted."""
+    from rotoprint.io.cad.svg import read_svg
+
+    long_ = '<path d="M 1 1 A 1 1 0 0 1 3 3 L 3 1 Z M 10 10 L 11.5 10.5 L 13 13 Z M 0.5 5.5 L 2 5.5 L 2 7 Z" fill="black"/>'
+    terse = '<path d="M1,1a1 1 0 012 2L3,1zM10 10 11.5 10.5 13 13zM.5 5.5 2 5.5 2 7z" fill="black"/>'
+    empty = '<path d=""/><polygon points="5,5"/><rect width="4" height="4" fill="none"/>'
+    areas = []
+    for i, body in enumerate((long_, terse, terse + empty)):
+        (tmp_path / f"{i}.svg").write_text(_svg(SVG_ROOT, body))
+        layer = read_svg(tmp_path / f"{i}.svg", tolerance_mm=0.001)
+        areas.append(layer.region.area)
+        assert layer.counts["empty"] == (3 if i == 2 else 0), layer.counts
+    assert areas[0] > 1.0
+    np.testing.assert_allclose(areas[1:], areas[0], rtol=1e-12)
 
 
 GERBER_HEAD = "%FSLAX46Y46*%\n%MOMM*%\n"

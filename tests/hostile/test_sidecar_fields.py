@@ -41,6 +41,8 @@ CASES = [
     (("head",), lambda t: t.update(nozzles="many"), "sidecar field 'head.nozzles' must be a whole number, got 'many'"),
     (("head",), lambda t: t.update(swathe_mm=-2.5), "sidecar field 'head.swathe_mm' must be greater than 0.0, got -2.5"),
     (("head",), _pop("row_separation_mm"), "sidecar field 'head.row_separation_mm' is missing (it is required)"),
+    # was "tilt 20 deg is at or beyond the maximum tilt 85.50 deg of this head": the head, not the tilt, is wrong
+    (("head",), lambda t: t.update(nozzles=1), "sidecar field swathes[0].nozzles is 764, more than the head has (head.nozzles 1)"),
     ((), lambda t: t.update(head=[1, 2]), "sidecar field 'head' must be a table, got a list"),
     (("swathes", 0), _pop("dphi_rad"), "swathes[0] has no key 'dphi_rad': the sidecar is incomplete"),
     (("swathes", 0), lambda t: t.update(pivot_radius_mm=-60), "sidecar field swathes[0].pivot_radius_mm must be > 0, got -60"),
@@ -63,3 +65,20 @@ def test_a_bad_sidecar_field_is_one_line_in_words(printed, tmp_path, at, edit, s
     for raw in ("Input should", "Field required", "KeyError", "TypeError", "incomplete or invalid"):
         assert raw not in line, line
     assert tree(w) == before
+
+
+def test_a_passes_manifest_listing_one_print_twice_is_refused(printed, tmp_path):
+    """Two entries of one file would deposit one print twice and call it two passes."""
+    from rotoprint.rotary.interlace import PASSES_FORMAT
+
+    shutil.copytree(printed, tmp_path / "w")
+    w = tmp_path / "w"
+    (w / "m-passes.json").write_text(json.dumps({"format": PASSES_FORMAT, "files": ["p.json", "p.json"]}))
+    before = tree(w)
+    run = run_cli_bounded("simulate", "m-passes.json", "--out", "ov.png", cwd=w)
+    assert_refused(run, "m-passes.json:", "passes manifest field files lists p.json twice")
+    assert tree(w) == before
+    from rotoprint.rotary.interlace import read_passes
+
+    (w / "m-passes.json").write_text(json.dumps({"format": PASSES_FORMAT, "files": ["p.json", "q.json"]}))
+    assert read_passes(w / "m-passes.json") == [w / "p.json", w / "q.json"]

@@ -160,10 +160,6 @@ def check_print_fields(side: dict, head: InkjetHead, sp: Path, *, what: str = "s
     place and ``"field"``), and ``flat`` names a swathe's fields without their ``swathes[j].``
     (a record of one swathe). Raises InputFileError naming ``sp``; KeyError if a field is missing."""
     tilt = _number(side, "tilt_deg", "", sp, what=what)
-    try:
-        check_tilt(head, tilt)
-    except RotoprintError as exc:
-        raise InputFileError(f"{what} tilt_deg: {exc.problem}", path=sp) from None
     _number(side, "mount_angle_deg", "", sp, rng=R.ANGLE_DEG, what=what)
     _number(side, "dpi_y", "", sp, positive=True, rng=R.DPI, what=what)
     if side["direction"] not in (1, -1) or isinstance(side["direction"], bool):
@@ -186,6 +182,10 @@ def check_print_fields(side: dict, head: InkjetHead, sp: Path, *, what: str = "s
         _number(d, "index", where, sp, rng=R.COUNT, what=what)
         _number(d, "first_firing_index", where, sp, rng=_FIRING_INDEX, what=what)
         firings = _number(d, "firings", where, sp, rng=R.Range(1, R.MAX_COUNT, integer=True), what=what)
+        n = d.get("nozzles")
+        if isinstance(n, int) and not isinstance(n, bool) and n > head.nozzles:
+            raise InputFileError(f"{what} {where}nozzles is {n}, more than the head has (head.nozzles {head.nozzles}): "
+                                 "the head does not match its images", path=sp)
         nozzles = _number(d, "nozzles", where, sp, rng=R.Range(1, head.nozzles, integer=True), what=what)
         _number(d, "enabled_nozzles", where, sp, rng=R.Range(0, head.nozzles, integer=True), what=what)
         runs = d.get("enabled_nozzle_runs")
@@ -203,6 +203,10 @@ def check_print_fields(side: dict, head: InkjetHead, sp: Path, *, what: str = "s
             raise InputFileError(f"{what} {where}band_mm must be [low, high] with high >= low, got {R.show_value(d['band_mm'])}", path=sp)
         pixels += firings * nozzles
     check_raster_fits(1, pixels, 2, what=f"{sp.name}: the swathe images")
+    try:  # after the swathes: a head that does not match its images (head.nozzles 1) is named as such first
+        check_tilt(head, tilt)
+    except RotoprintError as exc:
+        raise InputFileError(f"{what} tilt_deg: {exc.problem}", path=sp) from None
 
 
 def read_print(path: str | Path) -> tuple[RotaryPrint, dict, Path]:

@@ -987,9 +987,7 @@ def read_passes(path) -> list:
     from pathlib import Path
 
     from ..errors import InputFileError
-
     from ..io.inputs import read_json_file
-
     p = Path(path)
     data = read_json_file(p, what="passes manifest")
     if not isinstance(data, dict) or data.get("format") != PASSES_FORMAT:
@@ -997,4 +995,6 @@ def read_passes(path) -> list:
     files = data.get("files")
     if not isinstance(files, list) or not files or not all(isinstance(f, str) and "/" not in f and "\\" not in f for f in files):
         raise InputFileError("passes manifest field files must be a non-empty list of file names", path=p)
+    if len(set(files)) < len(files):  # one print deposited twice would pass for two passes
+        raise InputFileError(f"passes manifest field files lists {next(f for f in files if files.count(f) > 1)} twice", path=p)
     return [p.parent / f for f in files]

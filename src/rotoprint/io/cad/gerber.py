@@ -271,7 +271,10 @@ def _check_ends(path: Path, kind: str) -> None:
         size = fh.seek(0, 2)
         fh.seek(max(0, size - 256))
         tail = fh.read().rstrip()
-    last = tail.rsplit(b"\n", 1)[-1].strip()
+    lines = [ln.strip() for ln in tail.splitlines()]
+    while kind == "excellon" and len(lines) > 1 and lines[-1] in (b"%", b""):  # a rewind-stop '%' after M30
+        lines.pop()
+    last = lines[-1] if lines else b""
     if not any(last.endswith(e) for e in _ENDS[kind]):
         want = " or ".join(e.decode() for e in _ENDS[kind])
         raise CadError(f"no {want} end statement at its end: the file is cut short (truncated) or not fully written",

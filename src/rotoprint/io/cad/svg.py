@@ -13,7 +13,10 @@ overrides that (the pixel is then that unit). Y is flipped (SVG's Y runs down th
 Refused: ``width``/``height`` in a unit that is not a length, a page (``width``, ``height``,
 ``viewBox``) or a drawing beyond the layer bound (:data:`rotoprint.ranges.COORD_MM`; the message
 gives the size in mm it would be), transforms nested more than :data:`MAX_TRANSFORM_DEPTH`
-deep, elements nested more than :data:`MAX_ELEMENT_DEPTH` deep.
+deep, elements nested more than :data:`MAX_ELEMENT_DEPTH` deep, and a shape whose geometry
+cannot be read (malformed path data, a ``points`` list or a length that is not numbers, a NaN,
+a point beyond the layer bound: :mod:`._svgcheck`), naming the element. A shape that draws
+nothing (one point, empty ``d``) is counted in ``counts["empty"]``.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from shapely.geometry import LinearRing, LineString
 from ...errors import CadError
 from ..inputs import check_input_file
 from ...ranges import COORD_MM
+from ._svgcheck import check_shape_attributes, element_name
 from ._geometry import MAX_SPAN_MM, PlanarLayer, as_multipolygon, check_extent, fill_rings, length_unit_mm, segments_for_arc
 
 __all__ = ["read_svg", "MAX_TRANSFORM_DEPTH", "MAX_ELEMENT_DEPTH"]
@@ -39,6 +43,7 @@ MAX_FILE_BYTES = 64 * 1024 * 1024
 MAX_TRANSFORM_DEPTH = 32
 MAX_ELEMENT_DEPTH = 256
 _SVG_LENGTH = re.compile(r"^\s*([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*([a-zA-Z%]*)\s*$")
+_SVG_NS = "http://www.w3.org/2000/svg"
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 _NOT_FINITE = re.compile(r"(?<![a-zA-Z])(nan|inf(inity)?)(?![a-zA-Z])", re.IGNORECASE)
 _SVG_UNITS = {"", "px", "mm", "cm", "in", "pt", "pc", "q", "%", "em", "ex"}
@@ -107,6 +112,9 @@ def _precheck(path: Path, mm_per_px: float) -> None:
                                    "groups before reading", path=path)
                 if depth == 1:
                     _check_page(el, path, mm_per_px)
+                ns, _, tag = el.tag.rpartition("}")
+                if ns in ("", "{" + _SVG_NS):
+                    check_shape_attributes(tag, el.attrib, path)
             else:
                 depth -= 1
                 tdepth.pop()
@@ -195,6 +203,17 @@ def _stroke(points: np.ndarray, closed: bool, width: float, values: dict, tol: f
     return LineString(points).buffer(width / 2, quad_segs=qs, cap_style=cap, join_style=join, mitre_limit=limit)
 
 
+def _check_coordinates(el, subs, path: Path) -> None:
+    """A :class:`CadError` naming the element where a point (transforms applied) is not
+    finite: a coordinate of 1e308 times the page's scale overflows, and GEOS left the shape
+    out. A finite one beyond the layer bound is :func:`check_extent`'s (it gives the size)."""
+    for a, _ in subs:
+        if not np.all(np.isfinite(a)):
+            name = element_name(str(el.values.get("tag", type(el).__name__.lower())), el.values.get("id"))
+            raise CadError(f"{name} has a point beyond the float range (transforms applied); a layer must lie "
+                           f"{COORD_MM.text()}", path=path)
+
+
 def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None) -> PlanarLayer:
     """Read an SVG drawing's filled and stroked area into its exact region (mm, Y up).
 
@@ -231,7 +250,7 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
         raise CadError(f"not a readable SVG file: {exc}", path=p) from None
     try:
         parts = []
-        counts = {"fills": 0, "strokes": 0}
+        counts = {"fills": 0, "strokes": 0, "empty": 0}
         for el in doc.elements():
             if not isinstance(el, se.Shape) or isinstance(el, se.Text):
                 continue
@@ -243,9 +262,12 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
             path_ = se.Path(el)
             subs = [_flatten(s, tol) for s in path_.as_subpaths()]
             subs = [(a, c) for a, c in subs if len(a)]
+            _check_coordinates(el, subs, p)
             if not subs:
+                counts["empty"] += 1
                 continue
             fill = el.fill
+            drawn = len(parts)
             if fill is not None and fill.value is not None and fill.alpha != 0:
                 rule = "evenodd" if str(el.values.get("fill-rule", "nonzero")).strip() == "evenodd" else "nonzero"
                 reg = fill_rings([a for a, _ in subs], rule)
@@ -260,6 +282,8 @@ def read_svg(path: str | Path, *, tolerance_mm: float, units: str | None = None)
                     if not g.is_empty:
                         parts.append(g)
                 counts["strokes"] += 1
+            if len(parts) == drawn:  # a shape that draws nothing: no area filled, no stroke
+                counts["empty"] += 1
         region = as_multipolygon(shapely.union_all(parts)) if parts else as_multipolygon(shapely.Polygon())
         from shapely import affinity
 
