@@ -162,9 +162,12 @@ def track_fractions(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[flo
     if mode not in (False, True, "auto"):
         raise ConfigError(f"EQUALISE_RAISE must be False, True or 'auto', got {mode!r}")
 
+    memo: dict = {}  # what the two variants share (the footprint matrix, the first settling)
+
     def shares(raise_sparse: bool) -> list[list[np.ndarray]]:
         f = _equalise_profile(r_s, w_s, a_mm, plan, offsets_mm, lo_f, EQUALISE_TARGET_PERCENTILE, reach_mm=reach_mm,
-                              clock_factor=2 if reach is None else int(reach.clock_factor), raise_sparse=raise_sparse)
+                              clock_factor=2 if reach is None else int(reach.clock_factor), raise_sparse=raise_sparse,
+                              memo=memo)
         f_all = np.empty_like(f)
         f_all[order] = f
         out = [[np.zeros(head.nozzles) for _ in plan.swathes] for _ in offsets_mm]
@@ -252,7 +255,11 @@ def model_bin_deviation(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence
     edges = np.arange(math.ceil(lo), math.floor(hi) + 1, dtype=np.float64)
     if edges.size < 2:
         return 0.0
-    below = v @ _cap_cdf((edges[None, :] - r[:, None]) / a_mm)  # ink below each bin edge, (edges,)
+    x = (edges[None, :] - r[:, None]) / a_mm
+    cdf = (x >= 1.0).astype(np.float64)  # _cap_cdf is exactly 0 / 1 at and beyond -1 / 1: computed only between
+    near = np.abs(x) < 1.0
+    cdf[near] = _cap_cdf(x[near])
+    below = v @ cdf  # ink below each bin edge, (edges,)
     bins = np.diff(below)
     m = float(bins.mean())
     return float(np.max(np.abs(bins / m - 1.0))) if m > 0 else 0.0
@@ -271,47 +278,25 @@ _EQ_WINDOW_MM = 0.5
 
 def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
                       lo_f: float, target_percentile: float, *, reach_mm: float | None = None,
-                      clock_factor: int = 2, raise_sparse: bool = False) -> np.ndarray:
+                      clock_factor: int = 2, raise_sparse: bool = False, memo: dict | None = None) -> np.ndarray:
     """Shares ``(M,)`` of sorted tracks ``r_s`` (mm) with drops per mm ``w_s`` so that their radial
-    profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`)."""
-    import scipy.sparse as sps
+    profile on a uniform grid is as flat as the shares ``[lo_f, 1]`` allow (see :func:`track_fractions`).
 
-    step = _EQ_STEP_MM
-    g0 = float(r_s[0]) - a_mm
-    n_g = int(math.ceil((float(r_s[-1]) + a_mm - g0) / step)) + 1
-    reach = int(math.ceil(a_mm / step)) + 1
-    base = np.floor((r_s - g0) / step).astype(np.int64)
-    rows, cols, vals = [], [], []
-    tr = np.arange(r_s.size)
-    for s_ in range(-reach, reach + 1):
-        idx = base + s_
-        x = (g0 + idx * step - r_s) / a_mm
-        k = np.clip(1.0 - x * x, 0.0, None) ** 1.5
-        ok = (k > 0) & (idx >= 0) & (idx < n_g)
-        rows.append(tr[ok])
-        cols.append(idx[ok])
-        vals.append(k[ok])
-    K = sps.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(r_s.size, n_g))
-    k_sum = np.asarray(K.sum(axis=1)).ravel()
-    grid = g0 + np.arange(n_g) * step
-    # the band where every pass prints, a footprint in from either end (tracks there lack
-    # neighbours on one side)
-    lo_t = max(float(r_s[0]), plan.inner_radius_mm + max(0.0, max(offsets_mm))) + a_mm
-    hi_t = min(float(r_s[-1]), plan.outer_radius_mm + min(0.0, min(offsets_mm))) - a_mm
-    KT = K.T.tocsr()  # (n_g, M): the profile of shares, built once (each ``K.T`` is a new view)
-    t0 = KT @ w_s
-    win = max(1, int(round(_EQ_WINDOW_MM / step)))
-    c = np.concatenate([[0.0], np.cumsum(t0)])
-    centre = np.arange(n_g)
-    a_i, b_i = np.clip(centre - win // 2, 0, n_g), np.clip(centre + win // 2 + 1, 0, n_g)
-    smooth = (c[b_i] - c[a_i]) / np.maximum(b_i - a_i, 1)
-    mid = (grid - _EQ_WINDOW_MM / 2 >= lo_t) & (grid + _EQ_WINDOW_MM / 2 <= hi_t)
-    if not mid.any():
-        mid = (grid >= lo_t) & (grid <= hi_t)
-    if not mid.any():
-        mid[:] = True
-    pct = float(target_percentile)
-    target = float(np.percentile(smooth[mid], pct))
+    ``memo``: a dict shared by the calls for the two variants of one union (``raise_sparse``
+    False and True, the same other arguments): the footprint matrix, the target and the first
+    settling's footprint-scale updates (which the raise does not change) are made once.
+    """
+    from ._equalise_kernels import drop_round_jit, level_at_jit, settle_jit
+
+    memo = {} if memo is None else memo
+    if "band" not in memo:
+        memo.update(_profile_setup(r_s, w_s, a_mm, plan, offsets_mm, target_percentile))
+    band, start, k_sum, n_g = memo["band"], memo["start"], memo["k_sum"], memo["n_g"]
+    target, lo_t, hi_t = memo["target"], memo["lo_t"], memo["hi_t"]
+    a_i, b_i, printed, n_w, s_k = memo["a_i"], memo["b_i"], memo["printed"], memo["n_w"], memo["s_k"]
+    t = np.empty(n_g + band.shape[1])
+    c = np.empty(n_g + 1)
+    lev = np.empty(r_s.size)
     f = np.ones(r_s.size)
     hi_f = np.ones(r_s.size)
     drop_tracks = reach_mm is not None
@@ -331,25 +316,21 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
             out[on] = np.minimum(lo_f, 1.0 / m)
         return np.minimum(out, hi_f)
 
-    s_k = np.clip(np.floor((r_s - g0) / step).astype(np.int64), 0, n_g - 1)
     raise_k = bool(raise_sparse) & (r_s >= lo_t + _EQ_WINDOW_MM / 2) & (r_s <= hi_t - _EQ_WINDOW_MM / 2)
 
-    printed = (grid >= float(r_s[0])) & (grid <= float(r_s[-1]))
-    c_n = np.concatenate([[0], np.cumsum(printed)])
-    n_w = np.maximum(c_n[b_i] - c_n[a_i], 1)
-
-    def level_of(f: np.ndarray) -> np.ndarray:
-        """The running mean (over _EQ_WINDOW_MM, within the printed range) of the profile, ``(n_g,)``."""
-        c = np.concatenate([[0.0], np.cumsum(np.where(printed, KT @ (f * w_s), 0.0))])
-        return (c[b_i] - c[a_i]) / n_w
-
-    def settle(f: np.ndarray) -> np.ndarray:
-        """Multiplicative updates of the profile averaged over each track's footprint towards the target."""
+    def settle(f: np.ndarray, first: bool = False) -> np.ndarray:
+        """Multiplicative updates of the profile averaged over each track's footprint towards the
+        target (``_equalise_kernels.settle_jit``): ``f <- clip(f * T* / Tbar_k, floor_k, hi_k)``."""
         lo_k = floors()
-        for _ in range(EQUALISE_ITERATIONS):
-            t = KT @ (f * w_s)
-            seen = (K @ t) / np.maximum(k_sum, 1e-300)
-            f = np.clip(f * (target / np.maximum(seen, 1e-300)), lo_k, hi_f)
+        f = np.array(f, np.float64)  # the kernel updates in place
+        no_up = np.zeros(r_s.size, bool)
+        if first and "first" in memo:
+            f = memo["first"].copy()
+        else:
+            settle_jit(band, start, k_sum, w_s, target, lo_k, hi_f, EQUALISE_ITERATIONS, 0, printed, a_i, b_i, n_w,
+                       s_k, no_up, f, t, c, lev)
+            if first:
+                memo["first"] = f.copy()
         # the footprint-scale updates leave sparse stretches (tracks keeping every drop beside
         # thinned peaks) below the target on the mm scale: scale the shares by the mm-scale level
         # (down everywhere; up, where the level is below the target, only a window in from the
@@ -357,12 +338,11 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
         # gap a raise overshoots on the mm scale)
         c_out = np.concatenate([[0], np.cumsum(np.bincount(s_k[hi_f <= 0], minlength=n_g))])
         up = raise_k & ((c_out[b_i] - c_out[a_i])[s_k] == 0)
-        for _ in range(EQUALISE_ITERATIONS // 3):
-            g = target / np.maximum(level_of(f)[s_k], 1e-300)
-            f = np.clip(f * np.where(up, g, np.minimum(1.0, g)), lo_k, hi_f)
+        settle_jit(band, start, k_sum, w_s, target, lo_k, hi_f, 0, EQUALISE_ITERATIONS // 3, printed, a_i, b_i, n_w,
+                   s_k, up, f, t, c, lev)
         return f
 
-    f = settle(f)
+    f = settle(f, first=True)
     if drop_tracks:
         # where even the floors leave the mm-scale level above the target (tracks crowd at one end
         # of a steeply tilted head), whole tracks are left out, error-diffused by the excess, and
@@ -373,31 +353,78 @@ def _equalise_profile(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: Swath
         both = inside[1:] & inside[:-1]
         g_lim = float(gaps[both].max()) if both.any() else float(gaps.max())
         for _ in range(_DROP_ROUNDS):
-            need = 1.0 - target * (1.0 + _DROP_TOLERANCE) / np.maximum(level_of(f)[s_k], 1e-300)
+            level_at_jit(band, start, f, w_s, printed, a_i, b_i, n_w, s_k, t, c, lev)
+            need = 1.0 - target * (1.0 + _DROP_TOLERANCE) / np.maximum(lev, 1e-300)
             if not (need > 0).any():
                 break
-            on = np.flatnonzero(hi_f > 0)
-            n_on = on.size
-            nxt_r = np.full(r_s.size, np.inf)  # radius of the next kept track after each
-            nxt_r[on[:-1]] = r_s[on[1:]]
-            debt, last = 0.0, -np.inf
-            for k in on:
-                if need[k] > 0:
-                    debt += need[k]
-                else:
-                    debt = 0.0
-                if need[k] > 0 and debt >= 0.5 and nxt_r[k] - last <= g_lim:
-                    hi_f[k] = 0.0
-                    debt -= 1.0
-                else:
-                    last = r_s[k]
-            if raise_sparse and hi_f.sum() == n_on:
+            left_out = drop_round_jit(need, r_s, hi_f, g_lim)
+            if raise_sparse and left_out == 0:
                 # no track left out this round: with the raise, settling again only re-raises the
                 # same stretches (6 rounds of it were 80 % of the time at 20-45 deg); without it
                 # the rounds go on as before (later rounds may still leave tracks out)
                 break
             f = settle(np.where(hi_f > 0, np.maximum(f, 0.5), 0.0))
     return f
+
+
+def _profile_setup(r_s: np.ndarray, w_s: np.ndarray, a_mm: float, plan: SwathePlan, offsets_mm: Sequence[float],
+                   target_percentile: float) -> dict:
+    """What both variants of :func:`_equalise_profile` share: the footprint matrix ``K`` ``(M,
+    n_g)`` (CSR) of the sorted tracks on the grid, its row sums, the band where every pass
+    prints, the target and the running mean's windows."""
+    from ._equalise_kernels import profile_jit
+
+    step = _EQ_STEP_MM
+    g0 = float(r_s[0]) - a_mm
+    n_g = int(math.ceil((float(r_s[-1]) + a_mm - g0) / step)) + 1
+    reach = int(math.ceil(a_mm / step)) + 1
+    base = np.floor((r_s - g0) / step).astype(np.int64)
+    # the footprint matrix K (M, n_g): row k holds the cap profile at the grid points
+    # base_k + s (s in -reach..reach) it reaches; kept as a band (M, W) from each row's first
+    # column (what scipy.sparse's CSR of these entries holds, row by row, in the same order)
+    vals = np.empty((r_s.size, 2 * reach + 1))
+    oks = np.empty((r_s.size, 2 * reach + 1), bool)
+    for i, s_ in enumerate(range(-reach, reach + 1)):
+        idx = base + s_
+        x = (g0 + idx * step - r_s) / a_mm
+        k = np.clip(1.0 - x * x, 0.0, None) ** 1.5
+        vals[:, i] = k
+        oks[:, i] = (k > 0) & (idx >= 0) & (idx < n_g)
+    cnt = oks.sum(axis=1)
+    first = np.argmax(oks, axis=1)  # a row's entries are consecutive (the cap is > 0 on one interval)
+    wd = int(cnt.max())
+    data = vals[oks]  # row by row, ascending columns
+    indptr = np.concatenate([[0], np.cumsum(cnt)])
+    k_sum = np.zeros(r_s.size)
+    nz = np.flatnonzero(cnt)
+    k_sum[nz] = np.add.reduceat(data, indptr[nz])  # as scipy.sparse's K.sum(axis=1)
+    col = np.arange(wd)
+    band = np.where(col[None, :] < cnt[:, None], np.take_along_axis(vals, np.minimum(first[:, None] + col[None, :], 2 * reach), 1), 0.0)
+    start = base - reach + first
+    grid = g0 + np.arange(n_g) * step
+    # the band where every pass prints, a footprint in from either end (tracks there lack
+    # neighbours on one side)
+    lo_t = max(float(r_s[0]), plan.inner_radius_mm + max(0.0, max(offsets_mm))) + a_mm
+    hi_t = min(float(r_s[-1]), plan.outer_radius_mm + min(0.0, min(offsets_mm))) - a_mm
+    t0 = np.empty(n_g + wd)
+    profile_jit(band, start, np.ones(r_s.size), w_s, t0)  # the unthinned profile K^T w
+    t0 = t0[:n_g]
+    win = max(1, int(round(_EQ_WINDOW_MM / step)))
+    c = np.concatenate([[0.0], np.cumsum(t0)])
+    centre = np.arange(n_g)
+    a_i, b_i = np.clip(centre - win // 2, 0, n_g), np.clip(centre + win // 2 + 1, 0, n_g)
+    smooth = (c[b_i] - c[a_i]) / np.maximum(b_i - a_i, 1)
+    mid = (grid - _EQ_WINDOW_MM / 2 >= lo_t) & (grid + _EQ_WINDOW_MM / 2 <= hi_t)
+    if not mid.any():
+        mid = (grid >= lo_t) & (grid <= hi_t)
+    if not mid.any():
+        mid[:] = True
+    target = float(np.percentile(smooth[mid], float(target_percentile)))
+    printed = (grid >= float(r_s[0])) & (grid <= float(r_s[-1]))
+    c_n = np.concatenate([[0], np.cumsum(printed)])
+    return {"band": np.ascontiguousarray(band), "start": start, "k_sum": k_sum, "n_g": n_g, "target": target, "lo_t": lo_t, "hi_t": hi_t, "a_i": a_i, "b_i": b_i,
+            "printed": printed, "n_w": np.maximum(c_n[b_i] - c_n[a_i], 1),
+            "s_k": np.clip(np.floor((r_s - g0) / step).astype(np.int64), 0, n_g - 1)}
 
 
 #: :func:`even_line_shares` keeps every line's volume at or above this percentile of the lines'
