@@ -112,12 +112,19 @@ def sensitivity_table(prs, d, head, tilt) -> None:
 def _best(fn, k: int = 3, clock=time.perf_counter) -> float:
     """Best of ``k`` wall times (or of ``clock``: ``time.process_time`` for the CPU time, steadier
     on a shared machine; the kernels are single-threaded), the exact transform's map cache
-    emptied before each (a pass at a new pivot or clock builds its maps: that is its cost)."""
+    emptied before each (a pass at a new pivot or clock builds its maps: that is its cost).
+
+    Steady state: ``gc.collect()`` before each timed call, so that a cyclic collection owed to
+    earlier work (the shares' Python objects, the previous rows) is not charged to the call timed
+    (measured: without it the first ~5 calls after ``track_fractions`` ran up to 2 x slower)."""
+    import gc
+
     from rotoprint.rotary.exact import exact_maps
 
     best = float("inf")
     for _ in range(k):
         exact_maps.cache_clear()
+        gc.collect()
         t = clock()
         fn()
         best = min(best, clock() - t)
