@@ -18,7 +18,7 @@ one layer of a real mesh (``slice_rotary``, the planned and the equalised clock 
 
     PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only [--cpu]] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
                                                   [--default-only] [--dead-only | --live-only] [--no-phases] [--raise-sparse]
-                                                  [--raise=off|on|auto] [--edge-restore[=ZONE_UM,COEFFICIENT]]
+                                                  [--raise=off|on|auto] [--edge-restore[=ZONE_UM,COEFFICIENT] | --no-edge-restore]
                                                   [--no-sensitivity | --sensitivity-only]
 
 ``--cpu``: the cost table's times are CPU times (``time.process_time``; steadier on a shared machine).
@@ -27,9 +27,9 @@ overlap), then the cost table. ``--default-only``: only the default print's two 
 with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / without the 5 dead
 nozzles (of those the other options keep). ``--no-phases``: without the rows with angular phases and
 edge overlap. ``--raise-sparse``: the equalisation with ``equalise.EQUALISE_RAISE = True``; ``--raise=``
-off / on / auto sets it to False / True / "auto" (the default). ``--edge-restore``: the equalised prints
-with ``PassOptions(edge_restore=EdgeRestore(ZONE_UM, COEFFICIENT))`` (default 50 um, 0.3: thinned-out
-drops near the design's edges restored, ``rotary/edgecomp.py``).
+off / on / auto sets it to False / True / "auto" (the default). ``--edge-restore=ZONE_UM,COEFFICIENT``: the equalised prints
+with ``PassOptions(edge_restore=EdgeRestore(ZONE_UM, COEFFICIENT))`` (the default ``EdgeRestore()``: 50 um, 0.3,
+thinned-out drops near the design's edges restored, ``rotary/edgecomp.py``); ``--no-edge-restore``: without.
 
 The last column is a secondary figure, never the acceptance one: the levelled 1 mm bins' largest
 deviation counting only bins with at least 1/4 of the median bin's interior area (the deposit
@@ -244,12 +244,14 @@ def main() -> None:
             import rotoprint.rotary.equalise as _eq
 
             _eq.EQUALISE_RAISE = True if a == "--raise-sparse" else raise_opt[a.split("=", 1)[1]]
-    edge = None
+    edge = {}  # PassOptions' default (the edge restore on); --no-edge-restore: off
     for a in sys.argv[1:]:
+        if a == "--no-edge-restore":
+            edge = {"edge_restore": None}
         if a == "--edge-restore" or a.startswith("--edge-restore="):
             from rotoprint.rotary.edgecomp import EdgeRestore
 
-            edge = EdgeRestore(*(float(x) for x in a.split("=", 1)[1].split(","))) if "=" in a else EdgeRestore()
+            edge = {"edge_restore": EdgeRestore(*(float(x) for x in a.split("=", 1)[1].split(","))) if "=" in a else EdgeRestore()}
     sens_only, sens = "--sensitivity-only" in sys.argv, "--no-sensitivity" not in sys.argv
     if sens_only:
         tilt = next((t for t in tilts if t != 0.0), tilts[0])
@@ -305,7 +307,7 @@ def main() -> None:
                     with tempfile.TemporaryDirectory() as td:
                         m = transform_passes(d, head, pl, Path(td) / "p.png", PassOptions(RotarySetup(tilt_deg=tilt), passes=passes, equalise=eq,
                                                                                           phases=inter, edge_overlap=inter,
-                                                                                          edge_restore=edge if eq else None))
+                                                                                          **edge))
                         prs = [read_print(q)[0] for q in read_passes(Path(td) / "p-passes.json")]
                 except GeometryError as exc:
                     print(f"| {tilt:g} | {label} | auto (<= 4) | {exc.problem} |", flush=True)

@@ -131,3 +131,28 @@ def test_edge_restore_flattens_the_levelled_sliver_bins_of_a_band(head):
     assert max(map(abs, s1)) < 0.7 * max(map(abs, s0)), (s0, s1)
     assert w1 <= 0.01 and w0 <= 0.01, (w0, w1)
     assert n0 < n1 < 1.01 * n0
+
+
+@pytest.mark.parametrize("tilt, dead, q", [(0.0, (), 0), (20.0, (3, 100, 401), 2), (45.0, (), 1), (70.0, (7, 300), 3)])
+def test_transform_restored_is_the_restore_of_the_unthinned_print(head, tilt, dead, q):
+    """transform_restored (fused thinning + a transform of the edge zone only) makes the very print
+    restore_near_edges(full, thin_print(full)) makes: several tilts, dead nozzles, passes, the
+    radial zone and the all-edges one; shares with tracks left out and kept whole."""
+    from rotoprint.rotary.edgecomp import transform_restored
+    from rotoprint.rotary.testimage import test_design
+
+    d = test_design(300)
+    pl = Placement(300, 300, PX, PX, inner_radius_mm=60.0)
+    hd = head.model_copy(update={"dead_nozzles": dead})
+    st = RotarySetup(tilt_deg=tilt, dpi_y=1440.0, pivot_offset_mm=0.01 * q)
+    full = transform_exact(d, hd, pl, st)
+    rng = np.random.default_rng(q)
+    shares = [np.clip(rng.uniform(0.2, 1.3, hd.nozzles), 0.0, 1.0) for _ in full.swathes]
+    for f in shares:
+        f[rng.integers(0, hd.nozzles, 30)] = 0.0
+    for er in (EdgeRestore(), EdgeRestore(zone_um=120.0, radial_only=False)):
+        want = restore_near_edges(full, thin_print(full, shares, pass_index=q), d, shares, options=er, pass_index=q)
+        got = transform_restored(d, hd, pl, st, shares, options=er, pass_index=q)
+        assert all(np.array_equal(a.levels, b.levels) for a, b in zip(want.swathes, got.swathes))
+        assert sum(int(np.count_nonzero(a.levels)) for a in want.swathes) > \
+            sum(int(np.count_nonzero(a.levels)) for a in thin_print(full, shares, pass_index=q).swathes)

@@ -239,19 +239,28 @@ def test_transform_passes_cli_and_simulate_union(run_cli, tmp_path):
     drops = [sum(s["drops"] for s in json.loads((tmp_path / f).read_text())["swathes"]) for f in plain["files"]]
     n_eq = sum(sum(s["drops"] for s in sd["swathes"]) for sd in sides)
     assert sum(drops) < n_eq < 2 * sum(drops)  # the equalised print: twice the firings, some of them thinned out
-    assert "edge_restore" not in eq
-    # --edge-restore: the equalised print with thinned-out drops restored near the design's radial edges, recorded
+    assert "edge_restore" not in plain
+    # the edge restore is the default (thinned-out drops restored near the design's radial edges, recorded); --edge-restore
+    # asks for the same print, --no-edge-restore for the thinning alone
+    assert eq["edge_restore"] == man["edge_restore"] == {"zone_um": 50.0, "coefficient": pytest.approx(0.3), "radial_only": True}
     code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
                            "--passes", "4", "--edge-restore", "--out", tmp_path / "er.png", "-q")
     assert code == 0, err
+    code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--design-dpi", "360",
+                           "--passes", "4", "--no-edge-restore", "--out", tmp_path / "nr.png", "-q")
+    assert code == 0, err
     er = json.loads((tmp_path / "er-passes.json").read_text())
-    assert er["edge_restore"] == {"zone_um": 50.0, "coefficient": pytest.approx(0.3), "radial_only": True}
-    assert er["pass_plan"] == pp and er["dpi_y"] == man["dpi_y"]
-    n_er = sum(sum(s["drops"] for s in json.loads((tmp_path / f).read_text())["swathes"]) for f in er["files"])
-    assert n_eq < n_er < 1.1 * n_eq
+    nr = json.loads((tmp_path / "nr-passes.json").read_text())
+    assert "edge_restore" not in nr and nr["pass_plan"] == pp and nr["dpi_y"] == man["dpi_y"]
+    assert {k: v for k, v in er.items() if k not in ("files", "rotoprint_output")} == \
+        {k: v for k, v in eq.items() if k not in ("files", "rotoprint_output")}
+    imgs = {k: [q.read_bytes() for q in sorted(tmp_path.glob(f"{k}-p*.png"))] for k in ("er", "eq")}
+    assert imgs["er"] == imgs["eq"] and len(imgs["er"]) >= 4
+    n_nr = sum(sum(s["drops"] for s in json.loads((tmp_path / f).read_text())["swathes"]) for f in nr["files"])
+    assert n_nr < n_eq < 1.1 * n_nr
     for bad, msg in ((("--passes", "0"), "passes"), (("--passes", "x"), "passes"), (("--equalise",), "--equalise needs --passes"),
                      (("--no-equalise",), "--no-equalise needs --passes"),
-                     (("--edge-restore",), "--edge-restore needs --passes"),
+                     (("--edge-restore",), "--edge-restore needs --passes"), (("--no-edge-restore",), "--no-edge-restore needs --passes"),
                      (("--passes", "2", "--no-equalise", "--edge-restore"), "--edge-restore needs the equalised"),
                      (("--passes", "2", "--method", "paper"), "exact")):
         code, _, err = run_cli("transform", p, "--device", "omnidot760", "--tilt", "20", "--radius", "60", "--out", tmp_path / "b.png", *bad)

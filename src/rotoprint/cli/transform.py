@@ -34,9 +34,11 @@ def transform_command(
                                         "N > 1 writes PRINT-p1.png ... and PRINT-passes.json.")] = "1",
     equalise: Annotated[bool | None, typer.Option("--equalise/--no-equalise", help="With --passes: thin dense tracks so every radius gets the same volume per area "
                                                   "(the default); --no-equalise: the plain print, every track keeps every drop.")] = None,
-    edge_restore: Annotated[bool, typer.Option("--edge-restore", help="With equalised --passes (binary heads): restore some thinned-out drops within 50 um "
-                                               "(at most a design pixel) of the design's edges met along the radius, where levelling would thin "
-                                               "the film (rotary/edgecomp.py).")] = False,
+    edge_restore: Annotated[bool | None, typer.Option("--edge-restore/--no-edge-restore",
+                                                      help="With equalised --passes (binary heads): restore some thinned-out drops within 50 um "
+                                                      "(at most a design pixel) of the design's edges met along the radius, where levelling would thin "
+                                                      "the film (rotary/edgecomp.py). The default of equalised passes on binary heads (off with --no-equalise or "
+                                                      "a grey-level head); --no-edge-restore: the thinning alone.")] = None,
     json_out: JsonOpt = False,
     quiet: QuietOpt = False,
     force: ForceOpt = False,
@@ -86,12 +88,9 @@ def transform_command(
         if edge_restore and dev.head.grey_levels > 1:
             raise ConfigError(f"--edge-restore needs a binary head; {dev.name}'s has {dev.head.grey_levels} grey levels "
                               "(its equalisation spreads ink by drop size, not by thinning)")
-        from ..rotary.edgecomp import EDGE_ZONE_UM, EdgeRestore
-
-        # the zone: 50 um, or one design pixel where the pixels are finer (the radial look-up's reach)
-        zone_um = min(EDGE_ZONE_UM, 1000.0 * min(pl.pitch_x_mm, pl.pitch_y_mm))
+        # the default EdgeRestore(): a zone of 50 um, or one design pixel where the pixels are finer (the radial look-up's reach)
         popts = PassOptions(setup=RotarySetup(**kw), passes=passes, equalise=equalise is not False,
-                            edge_restore=EdgeRestore(zone_um=zone_um) if edge_restore else None)
+                            **({"edge_restore": None} if edge_restore is False else {}))
         manifest = transform_passes(design, dev, pl, out, popts, design_info=info, force=force, inputs=inputs)
         if json_out:
             print_json(manifest)
@@ -107,8 +106,9 @@ def transform_command(
             for f in manifest["files"]:
                 console.print(f"  {f}")
         return
-    if equalise is not None or edge_restore:
-        raise ConfigError(f"--{'edge-restore' if edge_restore else ('' if equalise else 'no-') + 'equalise'} needs --passes (N or auto)")
+    if equalise is not None or edge_restore is not None:
+        flag = ("" if edge_restore else "no-") + "edge-restore" if edge_restore is not None else ("" if equalise else "no-") + "equalise"
+        raise ConfigError(f"--{flag} needs --passes (N or auto)")
     if method == "exact":
         from ..rotary.exact import transform_exact
 

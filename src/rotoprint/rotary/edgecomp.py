@@ -12,7 +12,11 @@ edge met along the platform radius, :attr:`EdgeRestore.radial_only`) are restore
 that a track keeping the share ``f`` keeps ``min(1, (1 + c) f)`` there (``c`` =
 :attr:`EdgeRestore.coefficient`: the same relative gain at every radius, though the equalisation
 thins the inner tracks more), by an ordered pattern on each track's firing index (as the
-thinning's). Opt-in: :attr:`~rotoprint.rotary.interlace.PassOptions.edge_restore`.
+thinning's). On by default in the equalised passes of binary heads
+(:attr:`~rotoprint.rotary.interlace.PassOptions.edge_restore`), made by :func:`transform_restored`:
+the fused thinned transform of the whole design plus an unthinned one of the design masked to the
+zone's pixels (:func:`edge_zone_mask`), the same print as :func:`restore_near_edges` of the
+unthinned one without making it.
 """
 
 from __future__ import annotations
@@ -25,7 +29,8 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["EDGE_ZONE_UM", "EDGE_COEFFICIENT", "EdgeRestore", "edge_distance_um", "radial_edge_near", "restore_near_edges"]
+__all__ = ["EDGE_ZONE_UM", "EDGE_COEFFICIENT", "EdgeRestore", "edge_distance_um", "edge_zone_mask", "radial_edge_near",
+           "restore_near_edges", "transform_restored"]
 
 #: Width of the zone inside the design's edge where thinned-out drops are restored, um.
 EDGE_ZONE_UM = 50.0
@@ -40,8 +45,10 @@ class EdgeRestore:
 
     Parameters
     ----------
-    zone_um : float
-        Zone inside the design's edge, um (0 < zone <= 1000).
+    zone_um : float, optional
+        Zone inside the design's edge, um (0 < zone <= 1000). None (the default): :data:`EDGE_ZONE_UM`,
+        or one design pixel (the smaller pitch) where the pixels are finer and ``radial_only`` (the
+        radial look-up's reach), :meth:`resolved` by the placement.
     coefficient : float
         Relative gain ``c`` of a thinned track's drops in the zone, (0, 1]: share ``f`` -> ``min(1, (1 + c) f)``.
     radial_only : bool
@@ -51,15 +58,22 @@ class EdgeRestore:
         (:func:`edge_distance_um`).
     """
 
-    zone_um: float = EDGE_ZONE_UM
+    zone_um: float | None = None
     coefficient: float = EDGE_COEFFICIENT
     radial_only: bool = True
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.zone_um, (int, float)) and math.isfinite(self.zone_um) and 0.0 < self.zone_um <= 1000.0):
+        if self.zone_um is not None and not (isinstance(self.zone_um, (int, float)) and math.isfinite(self.zone_um) and 0.0 < self.zone_um <= 1000.0):
             raise ConfigError(f"edge zone must be in (0, 1000] um, got {self.zone_um!r}")
         if not (isinstance(self.coefficient, (int, float)) and math.isfinite(self.coefficient) and 0.0 < self.coefficient <= 1.0):
             raise ConfigError(f"edge coefficient must be in (0, 1], got {self.coefficient!r}")
+
+    def resolved(self, placement) -> "EdgeRestore":
+        """These options with the zone given (``zone_um=None``: 50 um, at most a design pixel when ``radial_only``)."""
+        if self.zone_um is not None:
+            return self
+        zone = min(EDGE_ZONE_UM, 1000.0 * min(placement.pitch_x_mm, placement.pitch_y_mm)) if self.radial_only else EDGE_ZONE_UM
+        return dataclasses.replace(self, zone_um=zone)
 
     def thin(self, pr, shares, design: np.ndarray, *, pass_index: int = 0):
         """``pr`` thinned by ``shares`` (:func:`~rotoprint.rotary.equalise.thin_print`), then
@@ -203,21 +217,31 @@ def restore_near_edges(full, thinned, design: np.ndarray, shares, *, options: Ed
     ConfigError
         Prints that do not match.
     """
-    from .simulate import design_mask, place_drops
-
-    opts = options or EdgeRestore()
+    opts = (options or EdgeRestore()).resolved(full.placement)
     if len(shares) != len(full.swathes) or any(np.shape(f) != (full.head.nozzles,) for f in shares):
         raise ConfigError("edge restore needs one share per nozzle for every swathe")
     if len(full.swathes) != len(thinned.swathes) or any(a.levels.shape != b.levels.shape or a.first_firing != b.first_firing
                                                          for a, b in zip(full.swathes, thinned.swathes)):
         raise ConfigError("edge restore needs the print before and after thinning, swathe for swathe")
-    lost = dataclasses.replace(full, swathes=tuple(dataclasses.replace(a, levels=np.where(b.levels == 0, a.levels, 0).astype(np.uint8))
+    return _restore_lost(thinned, _lost(full, thinned), design, shares, opts, pass_index)
+
+
+def _lost(full, thinned):
+    """``full``'s drops that ``thinned`` has not (their ``full`` levels), swathe for swathe."""
+    return dataclasses.replace(full, swathes=tuple(dataclasses.replace(a, levels=np.where(b.levels == 0, a.levels, 0).astype(np.uint8))
                                                    for a, b in zip(full.swathes, thinned.swathes)))
+
+
+def _restore_lost(thinned, lost, design: np.ndarray, shares, opts: EdgeRestore, pass_index: int):
+    """``thinned`` with the drops of ``lost`` (thinned-out drops, levels as printed unthinned) that
+    the rule of :func:`restore_near_edges` gives back (``opts`` resolved)."""
+    from .simulate import design_mask, place_drops
+
     dr = place_drops(lost)
     if len(dr.nozzle) == 0:
         return thinned
-    pl = full.placement
-    mask = design_mask(np.asarray(design), full.head.grey_levels)
+    pl = lost.placement
+    mask = design_mask(np.asarray(design), lost.head.grey_levels)
     if opts.radial_only:
         near = radial_edge_near(mask, pl, dr.col, dr.row, opts.zone_um)
     else:
@@ -225,13 +249,13 @@ def restore_near_edges(full, thinned, design: np.ndarray, shares, *, options: Ed
         near = (near > 0.0) & (near <= opts.zone_um)
     k, i = dr.nozzle, dr.firing.astype(np.float64)
     o = np.mod((k + 7919 * int(pass_index)) * _GOLDEN2, 1.0)
-    pos = {sw.index: j for j, sw in enumerate(full.swathes)}
+    pos = {sw.index: j for j, sw in enumerate(lost.swathes)}
     f = np.stack([np.asarray(x, np.float64) for x in shares])[np.array([pos[int(x)] for x in np.unique(dr.swathe)])[
         np.searchsorted(np.unique(dr.swathe), dr.swathe)], k]
     s_ = np.where(f < 1.0, np.minimum(1.0, float(opts.coefficient) * f / np.maximum(1.0 - f, 1e-300)), 0.0)
     back = near & (np.floor((i + 1.0) * s_ + o) > np.floor(i * s_ + o))
     out = []
-    for a, b in zip(full.swathes, thinned.swathes):
+    for a, b in zip(lost.swathes, thinned.swathes):
         sel = back & (dr.swathe == a.index)
         if not sel.any():
             out.append(b)
@@ -241,3 +265,86 @@ def restore_near_edges(full, thinned, design: np.ndarray, shares, *, options: Ed
         lev[rows, cols] = a.levels[rows, cols]
         out.append(dataclasses.replace(b, levels=lev))
     return dataclasses.replace(thinned, swathes=tuple(out))
+
+
+def edge_zone_mask(mask: np.ndarray, placement, options: EdgeRestore | None = None) -> np.ndarray:
+    """The design pixels a restored drop can be sampled from, with one pixel to spare.
+
+    A site :func:`radial_edge_near` (or :func:`edge_distance_um`) can count lies in a printing pixel
+    with an empty one (or the image's surround) within ``n = ceil(zone / pitch)`` pixels along each
+    axis (``n = 1`` for the radial zone, at most a pixel); this mask holds those within ``n + 1``,
+    so that a drop whose landing point (:func:`~rotoprint.rotary.simulate.place_drops`) and sampled
+    pixel (the exact transform's) differ by less than a pixel is in it either way.
+
+    Parameters
+    ----------
+    mask : (H, W) bool
+        The design's printing pixels (:func:`~rotoprint.rotary.simulate.design_mask`).
+    placement : Placement
+    options : EdgeRestore, optional
+
+    Returns
+    -------
+    (H, W) bool
+    """
+    opts = (options or EdgeRestore()).resolved(placement)
+    m = np.asarray(mask, bool)
+    h, w = m.shape
+    reach = 1e-3 * float(opts.zone_um)
+    ni = 1 + (1 if opts.radial_only else int(math.ceil(reach / placement.pitch_y_mm - 1e-9)))
+    nj = 1 + (1 if opts.radial_only else int(math.ceil(reach / placement.pitch_x_mm - 1e-9)))
+    empty = np.ones((h + 2 * ni, w + 2 * nj), np.int32)
+    empty[ni:ni + h, nj:nj + w] = ~m
+    sat = np.zeros((h + 2 * ni + 1, w + 2 * nj + 1), np.int64)
+    sat[1:, 1:] = empty.cumsum(0).cumsum(1)
+    box = sat[2 * ni + 1:, 2 * nj + 1:] - sat[:h, 2 * nj + 1:] - sat[2 * ni + 1:, :w] + sat[:h, :w]
+    return m & (box > 0)
+
+
+def transform_restored(design: np.ndarray, head, placement, setup, shares, *, options: EdgeRestore | None = None,
+                       pass_index: int = 0):
+    """One equalised pass with the edge restore: the print :func:`restore_near_edges` makes of
+    ``transform_exact(design, head, placement, setup)`` and its :func:`~rotoprint.rotary.equalise.thin_print`
+    by ``shares``, without the unthinned print of the whole design.
+
+    The thinned print is sampled thinning (``transform_exact(..., thin=ThinShares(shares, pass_index))``);
+    the drops it left out near the edges come from a second exact transform of the design masked to
+    :func:`edge_zone_mask`, its tracks kept whole where the share is in (0, 1) (the others have no drop
+    to restore) and none elsewhere; binary designs only (a grey design is sampled bilinear: masking it
+    would change the samples beside the zone), a grey one is transformed whole and thinned (as
+    :meth:`EdgeRestore.thin`).
+
+    Parameters
+    ----------
+    design : (H, W) uint8
+    head : InkjetHead
+        A binary head.
+    placement : Placement
+    setup : RotarySetup
+        The pass's setting (clock, pivot offset, mount angle, ...).
+    shares : sequence (swathe) of (N,) float64
+        The pass's shares (:func:`~rotoprint.rotary.interlace.track_fractions`).
+    options : EdgeRestore, optional
+    pass_index : int
+
+    Returns
+    -------
+    RotaryPrint
+        The thinned pass with the restored drops.
+    """
+    from .exact import ThinShares, transform_exact
+    from .printdata import design_kind
+    from .simulate import design_mask
+
+    opts = (options or EdgeRestore()).resolved(placement)
+    design = np.asarray(design)
+    if design_kind(design) != "binary":
+        return opts.thin(transform_exact(design, head, placement, setup), shares, design, pass_index=pass_index)
+    thinned = transform_exact(design, head, placement, setup, kind="binary", thin=ThinShares(shares, pass_index))
+    if len(shares) != len(thinned.swathes) or any(np.shape(f) != (head.nozzles,) for f in shares):
+        raise ConfigError("edge restore needs one share per nozzle for every swathe")
+    zone = edge_zone_mask(design_mask(design, head.grey_levels), placement, opts)
+    whole = [np.where((np.asarray(f) > 0.0) & (np.asarray(f) < 1.0), 1.0, 0.0) for f in shares]
+    near = transform_exact(np.where(zone, design, 0).astype(np.uint8), head, placement, setup, kind="binary",
+                           thin=ThinShares(whole, pass_index))
+    return _restore_lost(thinned, _lost(near, thinned), design, shares, opts, pass_index)

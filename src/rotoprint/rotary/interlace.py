@@ -68,6 +68,7 @@ import numpy as np
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, GeometryError
 from ..ranges import PASSES, show_value
+from .edgecomp import EdgeRestore, transform_restored
 from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
@@ -767,7 +768,8 @@ class PassOptions:
         Off by default: on the full test design it opened a pinhole at tilt 0 and lowered the levelled
         thinnest at tilt 20 (0.393 -> 0.360), though it takes out the dead rings (``docs/rotary.md``).
     edge_restore : EdgeRestore, optional
-        With ``equalise`` (binary head): thinned-out drops near the design's edges restored (:mod:`~rotoprint.rotary.edgecomp`). Off (None) by default.
+        With ``equalise`` (binary head): thinned-out drops near the design's edges restored (:mod:`~rotoprint.rotary.edgecomp`,
+        :func:`~rotoprint.rotary.edgecomp.transform_restored`); the manifest's ``edge_restore`` records it. On by default; None: off.
     """
 
     setup: RotarySetup
@@ -781,7 +783,7 @@ class PassOptions:
     dead_cover: bool = True
     dead_reserve: bool = False
     even_lines: bool = False
-    edge_restore: EdgeRestore | None = None  # noqa: F821 (rotary.edgecomp; the annotation is not evaluated)
+    edge_restore: EdgeRestore | None = EdgeRestore()
 
     def __post_init__(self) -> None:
         parse_passes(self.passes)
@@ -941,18 +943,17 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         angles, achieved = phase_angles(sp, pp.phases, dpi_y=clock, ref_radius_mm=st.ref_radius_mm)
     else:
         angles, achieved = tuple(0.0 for _ in pp.offsets_mm), np.zeros((pp.passes, len(sp.swathes)))
-    prints = []
+    prints, restore = [], options.edge_restore.resolved(placement) if options.edge_restore and equalise and not grey else None
     for q, off in enumerate(pp.offsets_mm):
         pst = dataclasses.replace(st, dpi_y=clock, pivot_offset_mm=off, swathe_overlap_mm=overlap, swathe_seam_mm=seam,
                                   mount_angle_deg=float(st.mount_angle_deg) + angles[q])
         thin = fracs is not None and not grey and not (dead_cover is not None and thin_landing)  # thin_print's, while sampling
-        pr = transform_exact(design, head, placement, pst, thin=ThinShares(fracs[q], q) if thin and options.edge_restore is None else None)
+        pr = transform_exact(design, head, placement, pst, thin=ThinShares(fracs[q], q) if thin else None) if restore is None \
+            else transform_restored(design, head, placement, pst, fracs[q], options=restore, pass_index=q)  # + the edge zone's drops
         if grey:
             from .halftone import halftone_print
 
             pr = halftone_print(pr, fracs[q])
-        elif thin and options.edge_restore is not None:  # the edge compensation restores from the unthinned print
-            pr = options.edge_restore.thin(pr, fracs[q], design, pass_index=q)
         sw = tuple(dataclasses.replace(s, extra={**s.extra, "pass": q, "passes": pp.passes, "pass_offset_mm": off,
                                                  "pass_phase": float(achieved[q, j]), "pass_phase_angle_deg": angles[q]})
                    for j, s in enumerate(pr.swathes))
@@ -976,8 +977,7 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
         "phase_angles_deg": list(angles),
         "phases_by_swathe": [[float(x) for x in row] for row in achieved],
     }
-    restored = options.edge_restore is not None and fracs is not None and not grey and not thin_landing  # applied: recorded
-    manifest.update({k: v for k, v in (("dead_cover", dead_cover), ("edge_restore", dataclasses.asdict(options.edge_restore) if restored else None)) if v is not None})
+    manifest.update({k: v for k, v in (("dead_cover", dead_cover), ("edge_restore", restore and dataclasses.asdict(restore))) if v is not None})
     return device_name, prints, manifest
 
 
