@@ -67,8 +67,8 @@ GOLDEN_NATIVE = {
     "layer-folder": ("a7387385431f11fad6a75c3f1655d0c5721d3b034f209090b5cf3ed906dc52ca", 10),
     "sl1": ("8ab11667833cbd09409bbe35e638ce26203024f3a353cea8f535959258d13370", 1),
     "rotary-slices": ("334c6cf8e3fe3f562642fc295b6b1b5b4dc5a88776df3ab32daf1b205e24b80b", 26),
-    "build-coil-no-check": ("738b0361d7333ce4cc23bcf1f60eddba8999c1af7d94e16b6bf6a3af7f449d6b", 737),
-    "build-gas": ("e2e0fdf6b8625d3be760efb350c46d1d1a82565017d9c78efd73cbe83f78f767", 407),
+    "build-coil-no-check": ("0fe1e44c7c3e2d8a3197ea4f7cede84b65933c5fe2bd9b69858b5ff03d9b79e9", 737),
+    "build-gas": ("768a97c882cfbce1fb2dca8366a27d5d106546d5b0cddc071265e649fc5e7b19", 407),
 }
 
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")
