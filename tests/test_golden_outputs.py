@@ -59,8 +59,8 @@ GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
     "sl1": ("b311c72eeac6b5ed945ace7361c8769099a0cb81de94450dbccbe527e60ba2a6", 1),
     "rotary-slices": ("0c5d921fee18ebb8ca445ce77fcda3ee991fa6d4ea0e6bc896818305206c442c", 26),
-    "build-coil-no-check": ("43acdccb15ae09a30672422b876f179cb89af31247d10d79431019c6b725754d", 737),
-    "build-gas": ("a2ebf06eca48caefa7a3d5576415e4f223276c11bb323b8e096af4be7baf4c01", 407),
+    "build-coil-no-check": ("829ef0aa4b2acabaab6601210f4d0acef9cc3b080d3b149cf9e0305aebfbd5af", 737),
+    "build-gas": ("828dd9736c34d38791a703ff35dab47174ce13b64936e7ca811763440b18cc61", 407),
 }
 
 GOLDEN_NATIVE = {

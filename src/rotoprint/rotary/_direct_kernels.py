@@ -467,7 +467,7 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
     for m in range(n_tr):
         cursor[m] = start[m] + m
     gf = np.empty(FILL_TILE + 1, np.float64)
-    for r0 in range(0, n_f, FILL_TILE):
+    for r0 in range(0, n_f if not thinned else 0, FILL_TILE):  # (with ``thinned`` pass 4 wrote every thinned track)
         r1 = min(r0 + FILL_TILE, n_f)
         for m in range(n_tr):
             z = cursor[m]
