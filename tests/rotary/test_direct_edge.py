@@ -150,3 +150,37 @@ def test_zone_on_a_real_layer_matches_shapely(shared_meshes):
     # jit and numpy zones agree on this layer
     ts = job.tracks[0]
     assert np.array_equal(_zone(job, seg, ts), _zone(job, seg, ts, backend="numpy"))
+
+
+def test_the_build_restores_edges_by_default_and_printer_edge_restore_false_does_not():
+    from rotoprint.process import parse_job
+    from rotoprint.process.plan import plan_job
+
+    def plan(**printer):
+        d = {"job": {"name": "small", "layer_height_mm": 0.05},
+             "printer": {"device": "omnidot760", "tilt_deg": 20.0, **printer, "heads": [{"name": "H1", "ink": "ammonium_sulphate"},
+                                                                          {"name": "H2", "ink": "calcium_chloride", "mount_angle_deg": 90.0},
+                                                                          {"name": "H3", "ink": "silver_nitrate", "mount_angle_deg": 180.0},
+                                                                          {"name": "H4", "ink": "ascorbate", "mount_angle_deg": 270.0}]},
+             "placement": {"inner_radius_mm": 60.0},
+             "parts": [{"name": "b", "material": "plaster", "priority": 1,
+                        "shape": {"kind": "box", "size_mm": [3, 2, 0.05], "origin_mm": [0, 0, 0]}},
+                       {"name": "c", "material": "silver", "priority": 3,
+                        "shape": {"kind": "box", "size_mm": [0.8, 0.8, 0.05], "origin_mm": [1, 0.6, 0]}}]}
+        return plan_job(parse_job(d, base_dir=".", source="small.toml"))
+
+    on, off = plan(), plan(edge_restore=False)
+    h_on, h_off = on.head("ammonium_sulphate"), off.head("ammonium_sulphate")
+    assert h_on.interlace["edge_restore"]["offsets_um"] == [-50.0, 50.0] and h_off.interlace["edge_restore"] is None
+    secs = on.sections(0)
+    n_on = n_off = 0
+    for q in range(h_on.passes):
+        a = off.material_print("plaster", h_off, secs, 0, pass_index=q)
+        b = on.material_print("plaster", h_on, secs, 0, pass_index=q)
+        inside = on.material_print("plaster", h_on, secs, 0, thinned=False, pass_index=q)
+        for x, y, z in zip(a.swathes, b.swathes, inside.swathes):
+            A, B, Z = x.levels > 0, y.levels > 0, z.levels > 0
+            assert (A <= B).all() and (B <= Z).all()  # more drops, none inside the silver part (Z: plaster minus it)
+        n_on += sum(int(y.levels.astype(bool).sum()) for y in b.swathes)
+        n_off += sum(int(x.levels.astype(bool).sum()) for x in a.swathes)
+    assert n_on > n_off, (n_on, n_off)
