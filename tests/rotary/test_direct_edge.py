@@ -152,7 +152,7 @@ def test_zone_on_a_real_layer_matches_shapely(shared_meshes):
     assert np.array_equal(_zone(job, seg, ts), _zone(job, seg, ts, backend="numpy"))
 
 
-def test_the_build_restores_edges_by_default_and_printer_edge_restore_false_does_not():
+def test_the_build_restores_edges_with_printer_edge_restore_true_and_not_by_default():
     from rotoprint.process import parse_job
     from rotoprint.process.plan import plan_job
 
@@ -169,7 +169,7 @@ def test_the_build_restores_edges_by_default_and_printer_edge_restore_false_does
                         "shape": {"kind": "box", "size_mm": [0.8, 0.8, 0.05], "origin_mm": [1, 0.6, 0]}}]}
         return plan_job(parse_job(d, base_dir=".", source="small.toml"))
 
-    on, off = plan(), plan(edge_restore=False)
+    on, off = plan(edge_restore=True), plan()
     h_on, h_off = on.head("ammonium_sulphate"), off.head("ammonium_sulphate")
     assert h_on.interlace["edge_restore"]["offsets_um"] == [-50.0, 50.0] and h_off.interlace["edge_restore"] is None
     secs = on.sections(0)

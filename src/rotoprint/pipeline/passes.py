@@ -27,11 +27,10 @@ def slice_rotary_passes(mesh, device, out_dir, options, *, passes: str | int = "
         (:func:`~rotoprint.rotary.direct.union_pass_shares`: the transform path's
         ``track_fractions``, with the dead-track cover where the head has dead nozzles),
         computed once and printed by each pass at the clock made ``EQUALISE_CLOCK_FACTOR``
-        times finer, and on a binary head with the edge restore of
-        :class:`~rotoprint.rotary.edgecomp.EdgeRestore` (its defaults: thinned-out drops inside the
-        section within 50 um of an edge met along the radius come back, as ``transform --passes
-        --equalise`` does on the image route; :meth:`~rotoprint.rotary.direct.DirectSliceJob.with_shares`);
-        False: every track keeps every drop (plain passes).
+        times finer (without the edge restore of :class:`~rotoprint.rotary.edgecomp.EdgeRestore`,
+        which ``transform --passes`` applies by default: on the direct route it is opt-in,
+        :meth:`~rotoprint.rotary.direct.DirectSliceJob.with_shares` and the build's
+        ``printer.edge_restore``); False: every track keeps every drop (plain passes).
     passes : int or 'auto'
     reference_images : bool
         Also write each layer's Cartesian design image.
@@ -52,7 +51,6 @@ def slice_rotary_passes(mesh, device, out_dir, options, *, passes: str | int = "
     from ..errors import GeometryError
     from ..io.atomic import write_owned_file
     from ..rotary.deposit import DepositOptions
-    from ..rotary.edgecomp import EdgeRestore
     from ..rotary.direct import PartPlacement, slice_rotary, union_pass_shares
     from ..rotary.interlace import PASSES_FORMAT, parse_passes, plan_passes
     from ..rotary.options import RotarySliceOptions, options_from
@@ -75,7 +73,9 @@ def slice_rotary_passes(mesh, device, out_dir, options, *, passes: str | int = "
     if opts.equalise:  # the union's shares, once for the plan (on the slicer's own swathes)
         job0 = slice_rotary(mesh, device, dataclasses.replace(opts, dpi_y=clock, equalise=False))
         shares, clock, eq = union_pass_shares(head, job0.plan, pp.offsets_mm, dpi_y=clock, ref_radius_mm=opts.ref_radius_mm)
-        edge = EdgeRestore() if head.grey_levels == 1 else None  # as the transform route's default
+        # the edge restore is not the default here: on the coil demo's build it did not even the levelled
+        # bins (docs/benchmarks.md, branch edged13); slice_rotary / with_shares and printer.edge_restore give it
+        edge = None
     out = Path(out_dir)
     folders = [out.with_name(f"{out.name}-p{q + 1}") for q in range(pp.passes)]
     for q, (off, folder) in enumerate(zip(pp.offsets_mm, folders)):

@@ -24,17 +24,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._direct_kernels import direct_fill_numpy
 
 __all__ = ["edge_restore_numpy"]
 
 
-def edge_restore_numpy(part, cuts, r_mm, psi0, cols, gain, phase, d_mm, *, dphi, direction, i0, n_f, fill, level, out):
+def edge_restore_numpy(part, cuts, r_mm, psi0, cols, gain, phase, d_mm, *, dphi, direction, i0, n_f, fill, level, out, fill_numpy):
     """Restore the zone's drops of thinned tracks on ``out`` in place; returns the drops written.
 
     The reference of the jit fill's pass 6 (``_direct_kernels._restore_edges``, the same result):
-    the inside of every real and virtual track from :func:`~._direct_kernels.direct_fill_numpy`,
-    as images.
+    the inside of every real and virtual track from ``fill_numpy`` (:func:`~._direct_kernels.direct_fill_numpy`,
+    given by its caller: the kernels module imports this one), as images.
 
     Parameters
     ----------
@@ -66,7 +65,7 @@ def edge_restore_numpy(part, cuts, r_mm, psi0, cols, gain, phase, d_mm, *, dphi,
 
     def inside(seg):
         s = np.asarray(seg, np.float64).reshape(4, -1)
-        img = direct_fill_numpy(*s, rad[order] ** 2, ang[order], np.arange(n_all), np.ones(n_all), np.zeros(n_all), dphi=dphi,
+        img = fill_numpy(*s, rad[order] ** 2, ang[order], np.arange(n_all), np.ones(n_all), np.zeros(n_all), dphi=dphi,
                                 direction=direction, i0=i0, n_f=n_f, n_cols=n_all, fill=fill, level=1)
         back = np.empty_like(img, dtype=bool)
         back[:, order] = img > 0

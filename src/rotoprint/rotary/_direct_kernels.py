@@ -568,7 +568,8 @@ def direct_fill_numpy(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, d
         thin = np.asarray(thin, np.int64)
         r2 = np.asarray(r2, np.float64)
         edge_restore_numpy(np.stack([sx0, sy0, sx1, sy1]), cuts, np.sqrt(r2[thin]), np.asarray(psi0)[thin], np.asarray(cols)[thin],
-                           gain, phase, d_mm, dphi=dphi, direction=direction, i0=i0, n_f=n_f, fill=fill, level=level, out=out)
+                           gain, phase, d_mm, dphi=dphi, direction=direction, i0=i0, n_f=n_f, fill=fill, level=level, out=out,
+                           fill_numpy=direct_fill_numpy)
         return out
     sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
     n_tr = r2.shape[0]
