@@ -59,16 +59,16 @@ GOLDEN = {
     "layer-folder": ("efefa84fde2d3d4fb9c3ee33644c68f05da19e6641fd34c54412fddf705c7150", 10),
     "sl1": ("b311c72eeac6b5ed945ace7361c8769099a0cb81de94450dbccbe527e60ba2a6", 1),
     "rotary-slices": ("0c5d921fee18ebb8ca445ce77fcda3ee991fa6d4ea0e6bc896818305206c442c", 26),
-    "build-coil-no-check": ("43acdccb15ae09a30672422b876f179cb89af31247d10d79431019c6b725754d", 737),
-    "build-gas": ("a2ebf06eca48caefa7a3d5576415e4f223276c11bb323b8e096af4be7baf4c01", 407),
+    "build-coil-no-check": ("deed21f46b3d1c0d85e9e7f82f5a1de6f7ba034607d21722b060e86c7c3f1b16", 737),
+    "build-gas": ("9eca65e4b66f50d5f22cf721140691276140135b0ed4d91671816904d21abb9e", 407),
 }
 
 GOLDEN_NATIVE = {
     "layer-folder": ("a7387385431f11fad6a75c3f1655d0c5721d3b034f209090b5cf3ed906dc52ca", 10),
     "sl1": ("8ab11667833cbd09409bbe35e638ce26203024f3a353cea8f535959258d13370", 1),
     "rotary-slices": ("334c6cf8e3fe3f562642fc295b6b1b5b4dc5a88776df3ab32daf1b205e24b80b", 26),
-    "build-coil-no-check": ("738b0361d7333ce4cc23bcf1f60eddba8999c1af7d94e16b6bf6a3af7f449d6b", 737),
-    "build-gas": ("e2e0fdf6b8625d3be760efb350c46d1d1a82565017d9c78efd73cbe83f78f767", 407),
+    "build-coil-no-check": ("7626f88451d209d2b35bee3a3500f81bd48d739cab676a5ba948ca61833e037e", 737),
+    "build-gas": ("4ea43b8ce132581edaaee466d43014e9ff3ce63a7488d37734f56e03c4c9f883", 407),
 }
 
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")

@@ -27,7 +27,10 @@ def slice_rotary_passes(mesh, device, out_dir, options, *, passes: str | int = "
         (:func:`~rotoprint.rotary.direct.union_pass_shares`: the transform path's
         ``track_fractions``, with the dead-track cover where the head has dead nozzles),
         computed once and printed by each pass at the clock made ``EQUALISE_CLOCK_FACTOR``
-        times finer; False: every track keeps every drop (plain passes).
+        times finer (without the edge restore of :class:`~rotoprint.rotary.edgecomp.EdgeRestore`,
+        which ``transform --passes`` applies by default: on the direct route it is opt-in,
+        :meth:`~rotoprint.rotary.direct.DirectSliceJob.with_shares` and the build's
+        ``printer.edge_restore``); False: every track keeps every drop (plain passes).
     passes : int or 'auto'
     reference_images : bool
         Also write each layer's Cartesian design image.
@@ -66,10 +69,13 @@ def slice_rotary_passes(mesh, device, out_dir, options, *, passes: str | int = "
                       mount_angle_deg=0.0, direction=int(opts.direction), max_swathes=opts.max_swathes)
     pp = plan_passes(head, sp, footprint_um=DepositOptions().full_footprint_um(head), passes=n)
     clock = pp.dpi_y if opts.dpi_y is None else float(opts.dpi_y)
-    shares, eq = None, None
+    shares, eq, edge = None, None, None
     if opts.equalise:  # the union's shares, once for the plan (on the slicer's own swathes)
         job0 = slice_rotary(mesh, device, dataclasses.replace(opts, dpi_y=clock, equalise=False))
         shares, clock, eq = union_pass_shares(head, job0.plan, pp.offsets_mm, dpi_y=clock, ref_radius_mm=opts.ref_radius_mm)
+        # the edge restore is not the default here: on the coil demo's build it did not even the levelled
+        # bins (docs/benchmarks.md, branch edged13); slice_rotary / with_shares and printer.edge_restore give it
+        edge = None
     out = Path(out_dir)
     folders = [out.with_name(f"{out.name}-p{q + 1}") for q in range(pp.passes)]
     for q, (off, folder) in enumerate(zip(pp.offsets_mm, folders)):
@@ -77,18 +83,20 @@ def slice_rotary_passes(mesh, device, out_dir, options, *, passes: str | int = "
         if shares is not None:
             if len(job.plan.swathes) != len(shares[q]):
                 raise GeometryError(f"pass {q + 1} plans {len(job.plan.swathes)} swathes, its shares {len(shares[q])}")
-            job = job.with_shares(shares[q], pass_index=q)
+            job = job.with_shares(shares[q], pass_index=q, edge_restore=edge)
         rec = {"layer_height_mm": opts.layer_height_mm, "tilt_deg": opts.tilt_deg, "radius_mm": opts.inner_radius_mm,
                "angle_deg": opts.angle_deg, "direction": opts.direction, "ref_radius_mm": opts.ref_radius_mm,
                "max_swathes": opts.max_swathes, "fill": opts.fill, "gap_radius_mm": opts.gap_radius_mm,
                "reference_images": reference_images, "pass": q, "passes": pp.passes, "pass_offset_mm": off, "dpi_y": clock,
-               **(record or {}), "equalise": "union shares" if shares is not None else False}
+               **(record or {}), "equalise": "union shares" if shares is not None else False,
+               "edge_restore": job.edge_restore_record()}
         mesh_info = {"path": str(getattr(mesh, "source", None) or ""), "triangles": int(mesh.faces.shape[0])}
         write_rotary_slices(job, folder, device_name=device.name, options=rec, mesh_info=mesh_info,
                             reference_images=reference_images, run=run)
     manifest = {"format": PASSES_FORMAT, "version": 1, "device": device.name, "tilt_deg": float(opts.tilt_deg), "dpi_y": clock,
                 "equalise": "thinning" if shares is not None else None,
                 "union_shares": {k: v for k, v in eq.items() if k != "dead_cover"} if eq is not None else None,
+                "edge_restore": job.edge_restore_record(),
                 "pass_plan": pp.to_json(), "folders": [f.name for f in folders],
                 "files": [], "layer_sidecars": "FOLDER/layer_NNNNN.json in each folder: the passes of layer NNNNN"}
     if eq is not None and eq["dead_cover"] is not None:

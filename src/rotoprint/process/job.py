@@ -127,12 +127,18 @@ class PrinterSpec(_Strict):
     ``equalise`` (default true): with more than one pass every track keeps its share of the
     union-equalised film (:func:`rotoprint.rotary.direct.union_pass_shares`, the clock made
     2 x the plan's); with one pass the tracks are thinned to the lowest drops per mm^2; false:
-    every drop."""
+    every drop. ``edge_restore`` (default false; with ``equalise`` on a binary head): of the
+    drops the equalisation thins out, those inside a material's region within 50 um of an edge
+    met along the platform radius come back at 1.3 x the track's share
+    (:class:`rotoprint.rotary.edgecomp.EdgeRestore`, as ``transform --passes`` does), so the
+    levelled film's 1 mm bins beside the edges keep their ink. Opt-in: on the coil demo it did
+    not even the levelled bins (silver layer 8 1.17 -> 3.21 %, ``docs/benchmarks.md``)."""
 
     device: str = "omnidot760"
     tilt_deg: Annotated[float, R.field(R.TILT_DEG)] = 0.0
     direction: int = 1
     equalise: bool = True
+    edge_restore: bool = False
     passes: int | Literal["auto"] = "auto"
     max_swathes: Annotated[int, R.field(R.SWATHES)] | None = None
     clock: ClockSpec = ClockSpec()

@@ -51,6 +51,7 @@ from ..devices import InkjetDevice, load_device
 from ..errors import ConfigError, RotoprintError
 from ..mesh import Mesh
 from ..rotary.direct import DirectSliceJob, PartPlacement, rasterize_section, slice_rotary
+from ..rotary.edgecomp import EdgeRestore
 from ..rotary.interlace import PassPlan
 from ..rotary.placement import Placement
 from ..rotary.printdata import RotaryPrint
@@ -364,8 +365,9 @@ class BuildPlan:
             if part.material != material:
                 continue
             seg = sections[part.name]
-            pr = lat.print_from_segments(seg, layer_index=index)
             blocks = [sections[q] for q in self._higher(part) if len(sections[q])]
+            # the edge restore's region is the part minus the higher-priority parts (their drops go below)
+            pr = lat.print_from_segments(seg, layer_index=index, cut=blocks)
             lv = [s.levels.copy() for s in pr.swathes]
             for q in blocks:
                 ins = inside.print_from_segments(q, layer_index=index)
@@ -689,25 +691,31 @@ def plan_job(job: ResolvedJob, *, backend: str = "jit") -> BuildPlan:
         if hs.ink not in used_inks:
             continue
         tilt = sp.printer.tilt_deg if hs.tilt_deg is None else hs.tilt_deg
+        # the edge restore of the thinned tracks (printer.edge_restore: on where equalised on a binary head)
+        edge = EdgeRestore() if sp.printer.edge_restore and sp.printer.equalise and device.head.grey_levels == 1 else None
         common = dict(layer_height_mm=sp.job.layer_height_mm, tilt_deg=tilt, inner_radius_mm=sp.placement.inner_radius_mm,
                       angle_deg=sp.placement.angle_deg - hs.mount_angle_deg, ref_radius_mm=clk.ref_radius_mm,
                       direction=sp.printer.direction, max_swathes=sp.printer.max_swathes, equalise=sp.printer.equalise,
                       backend=backend)
         try:
-            lat = slice_rotary(union, device, dpi_y=clk.dpi_y, **common)
+            lat = slice_rotary(union, device, dpi_y=clk.dpi_y, edge_restore=edge, **common)
             if sp.printer.passes == 1:
                 lats, pp, offsets = [lat], None, (0.0,)
-                info = {"passes": 1, "clock": "job" if clk.dpi_y is not None else "head", "dpi_y": lat.dpi_y}
+                info = {"passes": 1, "clock": "job" if clk.dpi_y is not None else "head", "dpi_y": lat.dpi_y,
+                        "edge_restore": lat.edge_restore_record()}
             else:
                 if tilt not in interlace_cache:
                     interlace_cache[tilt] = _interlace(union, device, lat, common, sp, warnings)
                 pp, clock, info, shares = interlace_cache[tilt]
                 offsets = pp.offsets_mm
                 if shares is None:
-                    lats = [slice_rotary(union, device, dpi_y=clock, pivot_offset_mm=o, **common) for o in offsets]
+                    lats = [slice_rotary(union, device, dpi_y=clock, pivot_offset_mm=o, edge_restore=edge, **common)
+                            for o in offsets]
+                    info = {**info, "edge_restore": lats[0].edge_restore_record()}
                 else:  # the union's shares replace the per-pass equalisation
                     lats = [slice_rotary(union, device, dpi_y=clock, pivot_offset_mm=o, **{**common, "equalise": False},
-                                         shares=shares[q], pass_index=q) for q, o in enumerate(offsets)]
+                                         shares=shares[q], pass_index=q, edge_restore=edge) for q, o in enumerate(offsets)]
+                    info = {**info, "edge_restore": lats[0].edge_restore_record()}
         except RotoprintError as exc:
             fld = "printer.tilt_deg" if hs.tilt_deg is None else f"printer.heads[{j}].tilt_deg"
             if "tilt" not in exc.problem:

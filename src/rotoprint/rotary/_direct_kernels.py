@@ -182,8 +182,11 @@ def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev,
         row = nxt
 
 
-@njit(cache=True, nogil=True)
-def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction, i0, n_f, evenodd, level, out):  # pragma: no cover - jit
+@njit(cache=True, nogil=True, inline="always")
+def _track_spans(sx0, sy0, sx1, sy1, r2, psi0, dphi, direction, i0, n_f, evenodd):  # pragma: no cover - jit
+    """The inside spans of every track (passes 1-3 of the fill): track ``m``'s spans are
+    ``sp_lo[z] .. sp_hi[z] - 1`` (firing rows, sorted, disjoint) for ``z`` in ``start[m] + m ..
+    sp_end[m] - 1``. ``r2`` ascending; the rules of the module doc."""
     n_seg = sx0.shape[0]
     n_tr = r2.shape[0]
     lo_idx = np.empty(n_seg, np.int64)
@@ -288,6 +291,160 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
                 w += sgn[q]
                 prev = i
         sp_end[m] = ns
+    return sp_lo, sp_hi, sp_end, start
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _isect(alo, ahi, na, blo, bhi, nb, olo, ohi):  # pragma: no cover - jit
+    """Intersection of two sorted disjoint half-open span lists into ``olo, ohi``; returns its length."""
+    i = 0
+    j = 0
+    n = 0
+    while i < na and j < nb:
+        lo = alo[i] if alo[i] > blo[j] else blo[j]
+        hi = ahi[i] if ahi[i] < bhi[j] else bhi[j]
+        if hi > lo:
+            olo[n] = lo
+            ohi[n] = hi
+            n += 1
+        if ahi[i] < bhi[j]:
+            i += 1
+        else:
+            j += 1
+    return n
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _diff(alo, ahi, na, blo, bhi, nb, olo, ohi):  # pragma: no cover - jit
+    """``a`` minus ``b`` (sorted disjoint half-open span lists) into ``olo, ohi``; returns its length."""
+    n = 0
+    j = 0
+    for i in range(na):
+        lo = alo[i]
+        hi = ahi[i]
+        while j < nb and bhi[j] <= lo:
+            j += 1
+        q = j
+        while lo < hi and q < nb and blo[q] < hi:
+            if blo[q] > lo:
+                olo[n] = lo
+                ohi[n] = blo[q]
+                n += 1
+            if bhi[q] > lo:
+                lo = bhi[q]
+            q += 1
+        if hi > lo:
+            olo[n] = lo
+            ohi[n] = hi
+            n += 1
+    return n
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _region(t, lo, hi, end, start, c_lo, c_hi, c_end, c_start, n_cut, olo, ohi, tlo, thi):  # pragma: no cover - jit
+    """Track ``t``'s inside spans minus every cut's, into ``olo, ohi``; returns their number."""
+    z0 = start[t] + t
+    n = end[t] - z0
+    for z in range(n):
+        olo[z] = lo[z0 + z]
+        ohi[z] = hi[z0 + z]
+    for g in range(n_cut):
+        if n == 0:
+            break
+        w0 = c_start[g, t] + t
+        nb = c_end[g, t] - w0
+        if nb == 0:
+            continue
+        n = _diff(olo, ohi, n, c_lo[g, w0:], c_hi[g, w0:], nb, tlo, thi)
+        for z in range(n):
+            olo[z] = tlo[z]
+            ohi[z] = thi[z]
+    return n
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _restore_edges(sp_lo, sp_hi, sp_end, start, sx0, cx0, cy0, cx1, cy1, cut_at, r2, psi0, cols, edge_m, edge_v, gain, phase,
+                   dphi, direction, i0, n_f, evenodd, level, out):  # pragma: no cover - jit
+    """Pass 6, the edge restore (:mod:`._direct_edge`): thinned track ``edge_m[t]``'s firings inside
+    the region (its spans minus every cut's) where one of its virtual tracks ``edge_v[t]`` is not,
+    written where the restore pattern (``gain[t]``, ``phase[t]``) fires. Returns the drops written."""
+    n_t = edge_m.shape[0]
+    n_s = edge_v.shape[1]
+    n_tr = r2.shape[0]
+    n_cut = cut_at.shape[0] - 1
+    cap = 1
+    for g in range(n_cut):  # the cuts' spans on every track ((cut, span) arrays; sizes first: cuts are few and small)
+        a = cut_at[g]
+        b = cut_at[g + 1]
+        l1, h1, e1, s1 = _track_spans(cx0[a:b], cy0[a:b], cx1[a:b], cy1[a:b], r2, psi0, dphi, direction, i0, n_f, evenodd)
+        cap = max(cap, l1.shape[0])
+    c_lo = np.zeros((n_cut, cap), np.int64)
+    c_hi = np.zeros((n_cut, cap), np.int64)
+    c_end = np.zeros((n_cut, n_tr), np.int64)
+    c_start = np.zeros((n_cut, n_tr), np.int64)
+    for g in range(n_cut):
+        a = cut_at[g]
+        b = cut_at[g + 1]
+        l1, h1, e1, s1 = _track_spans(cx0[a:b], cy0[a:b], cx1[a:b], cy1[a:b], r2, psi0, dphi, direction, i0, n_f, evenodd)
+        c_lo[g, :l1.shape[0]] = l1
+        c_hi[g, :l1.shape[0]] = h1
+        c_end[g] = e1
+        c_start[g] = s1[:n_tr]
+    # work lists: a track's spans number at most its crossings + 1, a difference adds one per cut span
+    w = 2 * (sp_lo.shape[0] + n_cut * cap) + 4
+    a_lo = np.empty(w, np.int64)
+    a_hi = np.empty(w, np.int64)
+    b_lo = np.empty(w, np.int64)
+    b_hi = np.empty(w, np.int64)
+    t_lo = np.empty(w, np.int64)
+    t_hi = np.empty(w, np.int64)
+    u_lo = np.empty(w, np.int64)
+    u_hi = np.empty(w, np.int64)
+    gf = np.empty(FILL_TILE + 1, np.float64)
+    restored = 0
+    for t in range(n_t):
+        g_t = gain[t]
+        if not g_t > 0.0:
+            continue
+        m = edge_m[t]
+        n_a = _region(m, sp_lo, sp_hi, sp_end, start, c_lo, c_hi, c_end, c_start, n_cut, a_lo, a_hi, t_lo, t_hi)
+        if n_a == 0:
+            continue
+        # the region spans of m inside every virtual track's region
+        for z in range(n_a):
+            u_lo[z] = a_lo[z]
+            u_hi[z] = a_hi[z]
+        n_u = n_a
+        for s in range(n_s):
+            if n_u == 0:
+                break
+            n_b = _region(edge_v[t, s], sp_lo, sp_hi, sp_end, start, c_lo, c_hi, c_end, c_start, n_cut, b_lo, b_hi, t_lo, t_hi)
+            n_u = _isect(u_lo, u_hi, n_u, b_lo, b_hi, n_b, t_lo, t_hi)
+            for z in range(n_u):
+                u_lo[z] = t_lo[z]
+                u_hi[z] = t_hi[z]
+        # the zone: the region spans of m minus those; the restore pattern on it, one floor per firing
+        n_z = _diff(a_lo, a_hi, n_a, u_lo, u_hi, n_u, b_lo, b_hi)
+        col = cols[m]
+        o = phase[t]
+        for z in range(n_z):
+            r = b_lo[z]
+            while r < b_hi[z]:
+                n = min(FILL_TILE, b_hi[z] - r)
+                thin_floors_jit(gf, float(r + i0), n, g_t, o)
+                for q in range(n):
+                    if gf[q + 1] > gf[q] and out[r + q, col] != level:
+                        out[r + q, col] = level
+                        restored += 1
+                r += n
+    return restored
+
+
+@njit(cache=True, nogil=True)
+def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction, i0, n_f, evenodd, level, out,
+                 cx0, cy0, cx1, cy1, cut_at, edge_m, edge_v, gain, phase):  # pragma: no cover - jit
+    n_tr = r2.shape[0]
+    sp_lo, sp_hi, sp_end, start = _track_spans(sx0, sy0, sx1, sy1, r2, psi0, dphi, direction, i0, n_f, evenodd)
     # pass 4: a scanline sweep (_scanline_fill) of the tracks kept whole (frac >= 1) and the thinned
     # ones (0 < frac < 1) unless two thinned tracks share an image column (then pass 5 writes those):
     # each row that holds ink is written whole from a row state (byte stores down columns cost 2-4 x more)
@@ -310,7 +467,7 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
     for m in range(n_tr):
         cursor[m] = start[m] + m
     gf = np.empty(FILL_TILE + 1, np.float64)
-    for r0 in range(0, n_f, FILL_TILE):
+    for r0 in range(0, n_f if not thinned else 0, FILL_TILE):  # (with ``thinned`` pass 4 wrote every thinned track)
         r1 = min(r0 + FILL_TILE, n_f)
         for m in range(n_tr):
             z = cursor[m]
@@ -318,7 +475,7 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
             if z == end:
                 continue
             f = frac[m]
-            if f >= 1.0 or thinned:
+            if f >= 1.0 or thinned or not f > 0.0:
                 continue
             col = cols[m]
             o = offs[m]
@@ -334,6 +491,9 @@ def _direct_fill(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi, direction
                     break
                 z += 1
             cursor[m] = z
+    if edge_m.shape[0]:
+        _restore_edges(sp_lo, sp_hi, sp_end, start, sx0, cx0, cy0, cx1, cy1, cut_at, r2, psi0, cols, edge_m, edge_v, gain, phase,
+                       dphi, direction, i0, n_f, evenodd, level, out)
     return out
 
 
@@ -342,21 +502,75 @@ def _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs):
     return (*f64[:6], np.ascontiguousarray(cols, dtype=np.int64), f64[6], f64[7])
 
 
-def direct_fill_jit(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, direction, i0, n_f, n_cols, fill, level):
+def _cut_arrays(cuts):
+    """Cut sections ``[(4, S_g)]`` as four concatenated ``(sum S_g,)`` arrays and the ``(G + 1,)`` group bounds."""
+    cuts = [np.asarray(c, np.float64).reshape(4, -1) for c in cuts]
+    at = np.zeros(len(cuts) + 1, np.int64)
+    at[1:] = np.cumsum([c.shape[1] for c in cuts], dtype=np.int64)
+    cat = np.concatenate(cuts, axis=1) if cuts else np.zeros((4, 0))
+    return [np.ascontiguousarray(x) for x in cat], at
+
+
+def _with_virtual(r2, psi0, cols, frac, offs, edge):
+    """The track arrays with the edge restore's virtual tracks merged in by radius (share 0: never
+    written), the restore's indices into them and its (cut, edge_m, edge_v, gain, phase) arguments."""
+    cuts, thin, d_mm, gain, phase = edge
+    thin = np.asarray(thin, np.int64)
+    d_mm = np.asarray(d_mm, np.float64)
+    n, n_t, n_s = r2.size, thin.size, d_mm.size
+    rv = np.sqrt(r2[thin])[:, None] + d_mm[None, :]
+    rr = np.concatenate([r2, (rv * rv).ravel()])
+    order = np.argsort(rr, kind="stable")
+    inv = np.empty_like(order)
+    inv[order] = np.arange(order.size)
+    def cat(a, fill=None):
+        return np.ascontiguousarray(np.concatenate([a, np.repeat(a[thin], n_s) if fill is None else np.full(n_t * n_s, fill)])[order])
+    arrays = (np.ascontiguousarray(rr[order]), cat(psi0), cat(cols), cat(frac, 0.0), cat(offs, 0.0))
+    c, at = _cut_arrays(cuts)
+    return arrays, (*c, at, np.ascontiguousarray(inv[thin]), np.ascontiguousarray(inv[n:].reshape(n_t, n_s)),
+                    np.ascontiguousarray(gain, np.float64), np.ascontiguousarray(phase, np.float64))
+
+
+_NO_EDGE = (np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(1, np.int64), np.zeros(0, np.int64),
+            np.zeros((0, 1), np.int64), np.zeros(0), np.zeros(0))
+
+
+def direct_fill_jit(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, direction, i0, n_f, n_cols, fill, level, edge=None):
     """``(n_f, n_cols) uint8`` print image of one swathe (see the module doc for the rules).
 
     ``sx0..sy1``: ``(S,) float64`` segment ends in the local frame; ``r2``: ``(M,) float64``
     squared track radii, ascending; ``psi0``: ``(M,)`` local angle of each track's nozzle at
     firing 0; ``cols``: ``(M,) int64`` the image column (nozzle) of each track; ``frac``,
     ``offs``: ``(M,)`` thinning (1.0 keeps every drop). Row ``b`` is firing ``i0 + b``.
+    ``edge``: the edge restore (:mod:`._direct_edge`), ``(cuts, thin, d_mm, gain, phase)``: cut
+    sections ``[(4, S_g) float64]`` (local ``x0, y0, x1, y1``), the ``(T,) int64`` indices of the
+    tracks restored (thinned), the ``(S,)`` radial offsets (mm) looked at, the ``(T,)`` restore
+    rates and phases; None: no restore.
     """
     out = np.zeros((n_f, n_cols), np.uint8)
     args = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
-    return _direct_fill(*args, float(dphi), int(direction), int(i0), int(n_f), fill == "evenodd", np.uint8(level), out)
+    rest = _NO_EDGE
+    if edge is not None and np.size(edge[1]):
+        tracks, rest = _with_virtual(*args[4:], edge)
+        args = (*args[:4], *tracks)
+    return _direct_fill(*args, float(dphi), int(direction), int(i0), int(n_f), fill == "evenodd", np.uint8(level), out, *rest)
 
 
-def direct_fill_numpy(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, direction, i0, n_f, n_cols, fill, level):
-    """The pure-numpy reference of :func:`direct_fill_jit` (same contract, same result)."""
+def direct_fill_numpy(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, direction, i0, n_f, n_cols, fill, level, edge=None):
+    """The pure-numpy reference of :func:`direct_fill_jit` (same contract, same result; the edge
+    restore by :func:`._direct_edge.edge_restore_numpy`)."""
+    if edge is not None and np.size(edge[1]):
+        from ._direct_edge import edge_restore_numpy
+
+        out = direct_fill_numpy(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, dphi=dphi, direction=direction, i0=i0, n_f=n_f,
+                                n_cols=n_cols, fill=fill, level=level)
+        cuts, thin, d_mm, gain, phase = edge
+        thin = np.asarray(thin, np.int64)
+        r2 = np.asarray(r2, np.float64)
+        edge_restore_numpy(np.stack([sx0, sy0, sx1, sy1]), cuts, np.sqrt(r2[thin]), np.asarray(psi0)[thin], np.asarray(cols)[thin],
+                           gain, phase, d_mm, dphi=dphi, direction=direction, i0=i0, n_f=n_f, fill=fill, level=level, out=out,
+                           fill_numpy=direct_fill_numpy)
+        return out
     sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
     n_tr = r2.shape[0]
     out = np.zeros((n_f, n_cols), np.uint8)

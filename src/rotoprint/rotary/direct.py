@@ -57,6 +57,7 @@ __all__ = [
     "DirectSliceJob",
     "slice_rotary",
     "union_pass_shares",
+    "edge_offsets_mm",
     "rasterize_section",
     "rotary_layer_files",
     "rotary_manifest",
@@ -74,6 +75,10 @@ _GOLDEN = 0.6180339887498949
 _PLASTIC = 0.7548776662466927
 #: Step of :func:`~rotoprint.rotary.equalise.thin_print`'s pass index per layer with union shares.
 _SHARE_LAYER_STEP = 64
+#: Radial step (um) at most between the offsets the edge restore looks at (:func:`edge_offsets_mm`):
+#: 50 um, so the default zone is looked at on ``r +- 50 um`` only, as edgecomp's test on the image
+#: route (measured, docs/benchmarks.md: each finer step adds about a tenth of the fill's time).
+EDGE_STEP_UM = 50.0
 
 
 @dataclass(frozen=True)
@@ -277,7 +282,7 @@ class DirectSliceJob:
 
     def __init__(self, job, head, part: PartPlacement, design: Placement, plan: SwathePlan, tracks: tuple[TrackSet, ...], *,
                  options: RotarySliceOptions, dpi_y: float, shares: tuple[np.ndarray, ...] | None = None,
-                 pass_index: int = 0) -> None:
+                 pass_index: int = 0, edge_restore=None) -> None:
         self.slice_job = job
         self.head = head
         self.part = part
@@ -302,8 +307,14 @@ class DirectSliceJob:
             if len(self.shares) != len(tracks) or any(f.shape != (head.nozzles,) for f in self.shares):
                 raise ConfigError(f"shares must give one ({head.nozzles},) array per swathe ({len(tracks)})")
         self._frac = tuple((a / top) if equalise else np.ones_like(a) for a in apd)
+        #: the edge restore of the thinned tracks (:class:`~rotoprint.rotary.edgecomp.EdgeRestore`), or None
+        self.edge_restore = _edge_options(edge_restore)
+        if self.edge_restore is not None and not (equalise or self.shares is not None):
+            raise ConfigError("edge restore needs thinned tracks: equalise, or the union's shares (with_shares)")
+        #: the radial offsets (mm) the edge restore looks at: ``+-zone * s / n`` (:func:`edge_offsets_mm`)
+        self.edge_offsets_mm = None if self.edge_restore is None else edge_offsets_mm(self.edge_restore.zone_um)
 
-    def with_shares(self, shares, *, pass_index: int = 0) -> DirectSliceJob:
+    def with_shares(self, shares, *, pass_index: int = 0, edge_restore=None) -> DirectSliceJob:
         """This job printing interlaced pass ``pass_index`` with the union's shares.
 
         Parameters
@@ -316,6 +327,11 @@ class DirectSliceJob:
             ``pass_index + P * layer``, ``P`` = 64, so the pattern moves from layer to layer),
             by the fill kernel while it fills (8 x faster on the coil demo; tested identical).
         pass_index : int
+        edge_restore : EdgeRestore or dict, optional
+            Of the drops the shares thin out, those inside the section within ``zone_um`` of an
+            edge met along the platform radius come back at the gain of
+            :func:`~rotoprint.rotary.edgecomp.restore_near_edges` (its rule, zone and pattern;
+            see :mod:`._direct_edge`), made while filling; None: the thinned print as it is.
 
         Returns
         -------
@@ -323,7 +339,7 @@ class DirectSliceJob:
             Sharing the slicer, lattice and options (``equalise`` must be off: the shares replace it).
         """
         return DirectSliceJob(self.slice_job, self.head, self.part, self.design, self.plan, self.tracks, options=self.options,
-                              dpi_y=self.dpi_y, shares=shares, pass_index=pass_index)
+                              dpi_y=self.dpi_y, shares=shares, pass_index=pass_index, edge_restore=edge_restore)
 
     @property
     def layers(self):
@@ -335,6 +351,8 @@ class DirectSliceJob:
         d = {**self.options.as_dict(), "dpi_y": self.dpi_y}
         if self.shares is not None:  # so a worker rebuilds the same pass (``slice_rotary(..., shares=, pass_index=)``)
             d.update(shares=[f.tolist() for f in self.shares], pass_index=self.pass_index)
+        if self.edge_restore is not None:
+            d.update(edge_restore=dataclasses.asdict(self.edge_restore))
         return d
 
     def __len__(self) -> int:
@@ -356,10 +374,20 @@ class DirectSliceJob:
     def segments(self, index: int):
         return self.slice_job.segments(index)
 
-    def print_from_segments(self, seg: Segments, *, layer_index: int = 0) -> RotaryPrint:
-        """The print of one cross-section (model-XY segments)."""
+    def print_from_segments(self, seg: Segments, *, layer_index: int = 0, cut=()) -> RotaryPrint:
+        """The print of one cross-section (model-XY segments).
+
+        ``cut``: sections (Segments) whose inside is not part of the design for the edge restore
+        (the build's higher-priority parts, whose drops it removes afterwards): their edges are
+        the design's edges too. Without an edge restore it changes nothing."""
         xl0, yl0 = self.part.model_to_local(seg.start[:, 0], seg.start[:, 1])
         xl1, yl1 = self.part.model_to_local(seg.end[:, 0], seg.end[:, 1])
+        cuts = []
+        if self.edge_restore is not None:
+            for c in cut:
+                if len(c):
+                    cuts.append(np.stack([*self.part.model_to_local(c.start[:, 0], c.start[:, 1]),
+                                          *self.part.model_to_local(c.end[:, 0], c.end[:, 1])]))
         if xl0.size and (min(xl0.min(), xl1.min()) <= 0.0):
             raise GeometryError("the cross-section reaches the axis of rotation; use a larger --radius")
         fn = _k.KERNELS[self.backend]
@@ -376,6 +404,7 @@ class DirectSliceJob:
                 xl0, yl0, xl1, yl1, ts.r_mm * ts.r_mm, ts.psi0_rad, ts.nozzle, frac, offs,
                 dphi=ts.dphi_rad, direction=self.plan.direction, i0=ts.first_firing, n_f=ts.firings,
                 n_cols=self.head.nozzles, fill=self.fill, level=self.head.grey_levels,
+                edge=self._edge_spec(ts, frac, p_i, cuts),
             )
             if dead.size:
                 lev[:, dead] = 0
@@ -391,6 +420,23 @@ class DirectSliceJob:
             direction=self.plan.direction, dpi_y=self.dpi_y, placement=self.design, swathes=tuple(out), design_kind="binary",
         )
         return pr
+
+    def _edge_spec(self, ts: TrackSet, frac: np.ndarray, p_i: int, cuts) -> tuple | None:
+        """The fill's ``edge`` argument for one swathe (:func:`._direct_kernels.direct_fill_jit`):
+        the rule of :func:`~rotoprint.rotary.edgecomp.restore_near_edges` on its thinned tracks
+        (gain ``min(1, c f / (1 - f))``, phases ``((k + 7919 p) * GOLDEN2) mod 1``, ``p`` the
+        thinning's pass index), or None."""
+        if self.edge_restore is None:
+            return None
+        from .edgecomp import _GOLDEN2
+
+        thin = np.flatnonzero((frac > 0.0) & (frac < 1.0))
+        if not thin.size:
+            return None
+        f = frac[thin]
+        gain = np.minimum(1.0, float(self.edge_restore.coefficient) * f / (1.0 - f))
+        phase = np.mod((ts.nozzle[thin] + 7919 * int(p_i)) * _GOLDEN2, 1.0)
+        return cuts, thin, self.edge_offsets_mm, gain, phase
 
     def layer(self, index: int) -> RotaryPrint:
         """Layer ``index``'s print (one swathe image per radial swathe)."""
@@ -409,6 +455,14 @@ class DirectSliceJob:
         for i in range(len(self)):
             yield self.layer(i)
 
+    def edge_restore_record(self) -> dict | None:
+        """The edge restore for the manifests (its options, the rule, the radial offsets looked at), or None."""
+        if self.edge_restore is None:
+            return None
+        return {**dataclasses.asdict(self.edge_restore), "offsets_um": [round(1e3 * d, 6) for d in self.edge_offsets_mm],
+                "rule": "thinned-out drops inside the section whose site has a point outside at r +- d, |d| <= zone "
+                        "(looked at on the offsets), restored by edgecomp's pattern to min(1, (1 + c) f)"}
+
     def to_json(self) -> dict:
         return {
             "tilt_deg": self.plan.tilt_deg,
@@ -419,6 +473,7 @@ class DirectSliceJob:
             "placement": self.part.to_json(),
             "design_grid": self.design.to_json(),
             "equalise": "union shares" if self.shares is not None else self.equalise,
+            **({} if self.edge_restore is None else {"edge_restore": self.edge_restore_record()}),
             "density_spread": {"without_equalisation": self.density_spread(equalised=False),
                                "with_equalisation": self.density_spread(equalised=True)},
             "swathes": [
@@ -437,7 +492,7 @@ class DirectSliceJob:
 
 
 def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, *, shares=None, pass_index: int = 0,
-                 **keywords) -> DirectSliceJob:
+                 edge_restore=None, **keywords) -> DirectSliceJob:
     """Plan direct rotary slicing of ``mesh`` for an inkjet ``device``.
 
     Parameters
@@ -449,8 +504,10 @@ def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, 
         Layer height, tilt, the part's inner radius and angle, the clock (``dpi_y``,
         ``ref_radius_mm``), direction, swathe limit, density equalisation, fill, gap radius,
         kernel (see :class:`~rotoprint.rotary.options.RotarySliceOptions`).
-    shares, pass_index
-        Interlaced pass ``pass_index`` printed with the union's shares (:meth:`DirectSliceJob.with_shares`).
+    shares, pass_index, edge_restore
+        Interlaced pass ``pass_index`` printed with the union's shares, its edge restore
+        (:meth:`DirectSliceJob.with_shares`; with ``equalise`` and no shares, the edge restore
+        of the equalised tracks).
     **keywords
         Its fields by name (``layer_height_mm=0.1, tilt_deg=20.0, inner_radius_mm=60.0``),
         replacing those of ``options``.
@@ -519,8 +576,37 @@ def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, 
             )
         )
     log.debug("direct rotary slicing: %d layers, %d swathe(s)", len(job), len(tracks))
+    if shares is None:
+        return DirectSliceJob(job, head, part, design, plan, tuple(tracks), options=opts, dpi_y=dpi_y, edge_restore=edge_restore)
     out = DirectSliceJob(job, head, part, design, plan, tuple(tracks), options=opts, dpi_y=dpi_y)
-    return out if shares is None else out.with_shares(shares, pass_index=pass_index)
+    return out.with_shares(shares, pass_index=pass_index, edge_restore=edge_restore)
+
+
+def edge_offsets_mm(zone_um: float, step_um: float | None = None) -> np.ndarray:
+    """``(2 n,) float64``: the radial offsets (mm) the direct slicer's edge restore looks at,
+    ``+-zone * s / n`` for ``s = 1 .. n``, ``n = ceil(zone / step)`` (``step`` default
+    :data:`EDGE_STEP_UM`): an outside stretch at least ``zone / n`` wide along the radius within
+    the zone is seen."""
+    step = EDGE_STEP_UM if step_um is None else float(step_um)
+    if not (math.isfinite(step) and step > 0):
+        raise ConfigError(f"edge sample step must be > 0 um, got {step_um!r}")
+    n = max(1, math.ceil(float(zone_um) / step - 1e-9))
+    d = 1e-3 * float(zone_um) * np.arange(1, n + 1) / n
+    return np.concatenate([-d[::-1], d])
+
+
+def _edge_options(edge_restore):
+    from .edgecomp import EdgeRestore
+
+    if edge_restore is None or isinstance(edge_restore, EdgeRestore):
+        er = edge_restore
+    elif isinstance(edge_restore, dict):  # from rotary_options' JSON
+        er = EdgeRestore(**edge_restore)
+    else:
+        raise ConfigError(f"edge_restore must be an EdgeRestore, got {type(edge_restore).__name__}")
+    if er is not None and not er.radial_only:
+        raise ConfigError("the direct slicer's edge restore looks along the platform radius only (radial_only=True)")
+    return er
 
 
 def union_pass_shares(head, plan: SwathePlan, offsets_mm, *, dpi_y: float, ref_radius_mm: float | None = None,
