@@ -606,6 +606,10 @@ def _edge_options(edge_restore):
         raise ConfigError(f"edge_restore must be an EdgeRestore, got {type(edge_restore).__name__}")
     if er is not None and not er.radial_only:
         raise ConfigError("the direct slicer's edge restore looks along the platform radius only (radial_only=True)")
+    if er is not None and er.zone_um is None:  # the exact section has no pixel: the zone is edgecomp's 50 um
+        from .edgecomp import EDGE_ZONE_UM
+
+        er = dataclasses.replace(er, zone_um=EDGE_ZONE_UM)
     return er
 
 
