@@ -293,12 +293,15 @@ def edge_zone_mask(mask: np.ndarray, placement, options: EdgeRestore | None = No
     reach = 1e-3 * float(opts.zone_um)
     ni = 1 + (1 if opts.radial_only else int(math.ceil(reach / placement.pitch_y_mm - 1e-9)))
     nj = 1 + (1 if opts.radial_only else int(math.ceil(reach / placement.pitch_x_mm - 1e-9)))
-    empty = np.ones((h + 2 * ni, w + 2 * nj), np.int32)
+    empty = np.ones((h + 2 * ni, w + 2 * nj), bool)  # outside the image counts as empty
     empty[ni:ni + h, nj:nj + w] = ~m
-    sat = np.zeros((h + 2 * ni + 1, w + 2 * nj + 1), np.int64)
-    sat[1:, 1:] = empty.cumsum(0).cumsum(1)
-    box = sat[2 * ni + 1:, 2 * nj + 1:] - sat[:h, 2 * nj + 1:] - sat[2 * ni + 1:, :w] + sat[:h, :w]
-    return m & (box > 0)
+    rows = np.zeros((h, w + 2 * nj), bool)  # an empty pixel within ni rows (separable box: ORs of shifted views)
+    for di in range(2 * ni + 1):
+        rows |= empty[di:di + h]
+    box = np.zeros((h, w), bool)
+    for dj in range(2 * nj + 1):
+        box |= rows[:, dj:dj + w]
+    return m & box
 
 
 def transform_restored(design: np.ndarray, head, placement, setup, shares, *, options: EdgeRestore | None = None,
