@@ -428,14 +428,12 @@ class DirectSliceJob:
         thinning's pass index), or None."""
         if self.edge_restore is None:
             return None
-        from .edgecomp import _GOLDEN2
+        from .edgecomp import restore_pattern
 
         thin = np.flatnonzero((frac > 0.0) & (frac < 1.0))
         if not thin.size:
             return None
-        f = frac[thin]
-        gain = np.minimum(1.0, float(self.edge_restore.coefficient) * f / (1.0 - f))
-        phase = np.mod((ts.nozzle[thin] + 7919 * int(p_i)) * _GOLDEN2, 1.0)
+        gain, phase = restore_pattern(ts.nozzle[thin], frac[thin], self.edge_restore.coefficient, p_i)
         return cuts, thin, self.edge_offsets_mm, gain, phase
 
     def layer(self, index: int) -> RotaryPrint:

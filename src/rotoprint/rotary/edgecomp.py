@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["EDGE_ZONE_UM", "EDGE_COEFFICIENT", "EdgeRestore", "edge_distance_um", "edge_zone_mask", "radial_edge_near",
+__all__ = ["EDGE_ZONE_UM", "EDGE_COEFFICIENT", "EdgeRestore", "edge_distance_um", "edge_zone_mask", "radial_edge_near", "restore_pattern",
            "restore_near_edges", "transform_restored"]
 
 #: Width of the zone inside the design's edge where thinned-out drops are restored, um.
@@ -226,6 +226,19 @@ def restore_near_edges(full, thinned, design: np.ndarray, shares, *, options: Ed
     return _restore_lost(thinned, _lost(full, thinned), design, shares, opts, pass_index)
 
 
+def restore_pattern(nozzle: np.ndarray, share: np.ndarray, coefficient: float, pass_index: int) -> tuple[np.ndarray, np.ndarray]:
+    """The restore's ordered pattern for drops of ``nozzle`` on tracks keeping ``share``: firing
+    ``i`` of a thinned-out drop comes back where ``floor((i + 1) s + o) > floor(i s + o)``.
+
+    Returns ``(s, o)``, float64 like ``share``: the share of the thinned-out drops restored,
+    ``min(1, c f / (1 - f))`` (so the track keeps ``min(1, (1 + c) f)``; 0 where ``f >= 1``), and
+    the phase ``((k + 7919 p) (2 - golden ratio)) mod 1``. Shared by the image route and the direct
+    slicer's fill (:mod:`rotoprint.rotary.direct`)."""
+    f = np.asarray(share, np.float64)
+    s = np.where(f < 1.0, np.minimum(1.0, float(coefficient) * f / np.maximum(1.0 - f, 1e-300)), 0.0)
+    return s, np.mod((nozzle + 7919 * int(pass_index)) * _GOLDEN2, 1.0)
+
+
 def _lost(full, thinned):
     """``full``'s drops that ``thinned`` has not (their ``full`` levels), swathe for swathe."""
     return dataclasses.replace(full, swathes=tuple(dataclasses.replace(a, levels=np.where(b.levels == 0, a.levels, 0).astype(np.uint8))
@@ -248,11 +261,10 @@ def _restore_lost(thinned, lost, design: np.ndarray, shares, opts: EdgeRestore, 
         near = edge_distance_um(mask, dr.col, dr.row, pl.pitch_x_mm, pl.pitch_y_mm, opts.zone_um)
         near = (near > 0.0) & (near <= opts.zone_um)
     k, i = dr.nozzle, dr.firing.astype(np.float64)
-    o = np.mod((k + 7919 * int(pass_index)) * _GOLDEN2, 1.0)
     pos = {sw.index: j for j, sw in enumerate(lost.swathes)}
     f = np.stack([np.asarray(x, np.float64) for x in shares])[np.array([pos[int(x)] for x in np.unique(dr.swathe)])[
         np.searchsorted(np.unique(dr.swathe), dr.swathe)], k]
-    s_ = np.where(f < 1.0, np.minimum(1.0, float(opts.coefficient) * f / np.maximum(1.0 - f, 1e-300)), 0.0)
+    s_, o = restore_pattern(k, f, opts.coefficient, pass_index)
     back = near & (np.floor((i + 1.0) * s_ + o) > np.floor(i * s_ + o))
     out = []
     for a, b in zip(lost.swathes, thinned.swathes):
