@@ -73,6 +73,7 @@ from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
 # the equalisation lives in its own module; its names stay importable from here
+from . import _interlace_kernels as _ik
 from .equalise import (EQUALISE_CLOCK_FACTOR, EQUALISE_FLOOR, EQUALISE_ITERATIONS, EQUALISE_MIN_SHARE,  # noqa: F401
                        EQUALISE_TARGET_PERCENTILE, GREY_FLOOR, ReachFloor, even_line_shares, thin_print, track_fractions)
 
@@ -234,14 +235,15 @@ def union_radii(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float],
     return np.sort(np.concatenate(parts)) if parts else np.zeros(0)
 
 
-def _gap_score(r: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, np.ndarray]:
-    """Largest gap and sum of squared gaps of sorted rows ``(C, M)`` over ``[lo, hi]``."""
-    inside = (r >= lo) & (r <= hi)
-    rr = np.where(inside, r, np.nan)
-    rr = np.sort(rr, axis=1)
-    g = np.diff(rr, axis=1)
-    g = np.where(np.isfinite(g), g, 0.0)
-    return g.max(axis=1), (g * g).sum(axis=1)
+def _max_gap(rest: np.ndarray, rows: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Largest gap over ``[lo, hi]`` of the union of ``rest`` (sorted, inside) with each row of ``rows`` ``(C, M)``: ``(C,)``."""
+    out = np.empty(rows.shape[0])
+    _ik.max_gaps_jit(rest, np.ascontiguousarray(rows, np.float64), float(lo), float(hi), out)
+    return out
+
+
+def _inside_sorted(r: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    return np.sort(r[(r >= lo) & (r <= hi)])
 
 
 @dataclass(frozen=True)
@@ -390,7 +392,19 @@ def plan_passes(
         return np.concatenate(rows, axis=1)  # (C, M)
 
     base = radii(0.0)
-    g1, _ = _gap_score(base, lo, hi)
+    g1 = _max_gap(np.zeros(0), base, lo, hi)
+    # the same tracks flat for the candidates' kernel: positions and the band each prints in
+    all_xy = np.concatenate(xys) if xys else np.zeros((0, 2))
+    bands = [(-np.inf, np.inf) if plan.overlap_mm <= 0 else (sw.band_mm[0] - 1e-9, sw.band_mm[1]) for sw in plan.swathes]
+    band_lo = np.concatenate([np.full(len(xy), bands[j][0]) for j, xy in enumerate(xys)]) if xys else np.zeros(0)
+    band_hi = np.concatenate([np.full(len(xy), bands[j][1]) for j, xy in enumerate(xys)]) if xys else np.zeros(0)
+
+    def candidate_gaps(rest: np.ndarray, cand: np.ndarray) -> np.ndarray:
+        """``_max_gap(rest, radii(cand), lo, hi)`` in one kernel."""
+        out = np.empty(cand.shape[0])
+        _ik.candidate_gaps_jit(rest, np.ascontiguousarray(all_xy[:, 0]), np.ascontiguousarray(all_xy[:, 1]), band_lo, band_hi,
+                               float(e[0]), float(e[1]), np.ascontiguousarray(cand, np.float64), float(lo), float(hi), out)
+        return out
     d_mm = footprint_um * 1e-3
     a_mm = 0.5 * d_mm
     period = head.rows * head.pitch_mm  # the tracks of one row repeat after about this
@@ -420,14 +434,13 @@ def plan_passes(
         local = (c[:, hi_i] - c[:, lo_i]) / (hi_i - lo_i)
         return np.mean((t / np.maximum(local, 1e-300) - 1.0) ** 2, axis=1)
 
-    def score(t: np.ndarray) -> np.ndarray:
+    def score(t: np.ndarray, fixed: np.ndarray | None = None) -> np.ndarray:
         """Shortfall of the profile below PROFILE_TARGET x its local mean (over _LOCAL_MEAN_MM:
-        the 1/r trend of one clock per swathe is not the offsets' to change), rows ``(C, G)``."""
-        c = np.cumsum(np.pad(t, ((0, 0), (1, 0))), axis=1)
-        i = np.arange(t.shape[1])
-        lo_i, hi_i = np.maximum(0, i - win), np.minimum(t.shape[1], i + win + 1)
-        local = (c[:, hi_i] - c[:, lo_i]) / (hi_i - lo_i)
-        return np.mean(np.maximum(0.0, 1.0 - t / np.maximum(PROFILE_TARGET * local, 1e-300)) ** 2, axis=1)
+        the 1/r trend of one clock per swathe is not the offsets' to change), rows ``(C, G)``
+        (plus ``fixed``, ``(G,)``, when given); the terms by a kernel, their mean by numpy."""
+        terms = np.empty(t.shape)
+        _ik.shortfall_terms_jit(np.zeros(t.shape[1]) if fixed is None else fixed, np.ascontiguousarray(t), win, PROFILE_TARGET, terms)
+        return np.mean(terms, axis=1)
 
     inside0 = np.sort(base[0][(base[0] >= lo) & (base[0] <= hi)])
     pitch = float((inside0[-1] - inside0[0]) / (inside0.size - 1)) if inside0.size > 1 else head.pitch_mm
@@ -464,22 +477,20 @@ def plan_passes(
             for q in range(1, n):
                 # rounds over the whole row period, then one finer round about each offset
                 cand = b0[q] + (coarse if rnd < _ROUNDS else np.mod(offs[q] - b0[q] + np.linspace(-step, step, 33), period))
-                rest = np.concatenate([radii(offs[p])[0] for p in range(n) if p != q])
-                r = np.concatenate([np.broadcast_to(rest, (cand.size, rest.size)), radii(cand)], axis=1)
-                gmax, _ = _gap_score(r, lo, hi)
+                rest = _inside_sorted(np.concatenate([radii(offs[p])[0] for p in range(n) if p != q]), lo, hi)
+                gmax = candidate_gaps(rest, cand)
                 # the largest gap first (to _GAP_QUANTUM_UM); among equal ones the profile (measured
                 # on the test design: the profile first gives larger gaps and no thinner film)
                 g_q = np.round(gmax * 1e3 / _GAP_QUANTUM_UM)
                 tie = np.flatnonzero(g_q == g_q.min())
                 fixed = sum((profile(offs[p]) for p in range(n) if p != q), np.zeros(n_grid))
-                pen = score(fixed[None, :] + np.stack([profile(c) for c in cand[tie]]))
+                pen = score(np.stack([profile(c) for c in cand[tie]]), fixed)
                 key = [tie[int(np.argmin(pen))]]
                 offs[q] = float(cand[key[0]])
         return offs
 
     def largest_gap(offs: list[float]) -> float:
-        r = np.concatenate([radii(o)[0] for o in offs])[None, :]
-        return float(_gap_score(r, lo, hi)[0][0])
+        return float(_max_gap(np.zeros(0), np.concatenate([radii(o)[0] for o in offs])[None, :], lo, hi)[0])
 
     def row_pitch() -> float:
         """Median radial spacing of neighbouring tracks of one row (swathe 0, offset 0), mm."""
@@ -671,6 +682,7 @@ def _pass_profile(xys: list[np.ndarray], refs: list[float], e: np.ndarray, offse
     step = _PROFILE_STEP_MM
     t = np.zeros(n_grid)
     reach = int(math.ceil(a_mm / step)) + 1
+    shifts = np.arange(-reach, reach + 1)[:, None]
     for j, (xy, r_ref) in enumerate(zip(xys, refs)):
         if not xy.size:
             continue
@@ -678,13 +690,9 @@ def _pass_profile(xys: list[np.ndarray], refs: list[float], e: np.ndarray, offse
         if plan is not None:
             r = r[_in_band(plan, j, r)]
         w = r_ref / r
-        base = np.floor((r - grid0) / step).astype(np.int64)
-        for s_ in range(-reach, reach + 1):
-            idx = base + s_
-            x = (grid0 + idx * step - r) / a_mm
-            k = w * np.clip(1.0 - x * x, 0.0, None) ** 1.5
-            ok = (idx >= 0) & (idx < n_grid) & (k > 0)
-            t += np.bincount(idx[ok], weights=k[ok], minlength=n_grid)
+        idx = np.floor((r - grid0) / step).astype(np.int64) + shifts  # (S, M): the grid points near each track
+        x = (grid0 + idx * step - r) / a_mm
+        _ik.profile_add_jit(t, idx, w * np.clip(1.0 - x * x, 0.0, None) ** 1.5)  # t += bincount of each row in turn
     return t
 
 

@@ -1,0 +1,176 @@
+"""The loops of :func:`rotoprint.rotary.interlace.plan_passes` (numba kernels).
+
+The pass planner judges thousands of candidate offsets; per candidate it needs the largest gap
+between neighbouring tracks of the union of the passes and the radial film profile of one
+pass's tracks. Both kernels give the numpy expressions' results bit for bit:
+
+- :func:`max_gaps_jit`: the largest difference between neighbouring sorted radii inside
+  ``[lo, hi]`` is a difference of the same two floats whichever way the radii are ordered, so a
+  merge of the fixed passes' sorted radii with each candidate's sorted radii gives numpy's
+  ``max(diff(sort(...)))`` exactly (no sum is involved);
+- :func:`profile_add_jit`: ``numpy.bincount`` with weights sums each bin from 0.0 in input
+  order; the kernel sums each row's touched bins in a scratch array in the same order, then
+  adds each bin's sum to the profile once, as ``t += bincount(...)`` does. The weights (a
+  power, which numpy may compute with other rounding than the C library) stay numpy's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["max_gaps_jit", "max_gaps_numpy", "profile_add_jit", "profile_add_numpy"]
+
+
+@njit(cache=True, nogil=True)
+def max_gaps_jit(rest, rows, lo, hi, out):  # pragma: no cover - jit
+    """``out[c]``: the largest gap between neighbouring values of ``rest`` and ``rows[c]`` inside ``[lo, hi]``.
+
+    rest : (R,) float64, sorted, every value inside ``[lo, hi]``; rows : (C, M) float64 (NaN:
+    absent); out : (C,) float64. Fewer than two values inside: 0.0.
+    """
+    n_c, m = rows.shape
+    n_r = rest.shape[0]
+    buf = np.empty(m, np.float64)
+    for c in range(n_c):
+        n = 0
+        for i in range(m):
+            v = rows[c, i]
+            if v >= lo and v <= hi:
+                buf[n] = v
+                n += 1
+        s = np.sort(buf[:n])
+        i = 0
+        j = 0
+        prev = 0.0
+        have = False
+        g = 0.0
+        while i < n_r or j < n:
+            if j >= n or (i < n_r and rest[i] <= s[j]):
+                v = rest[i]
+                i += 1
+            else:
+                v = s[j]
+                j += 1
+            if have and v - prev > g:
+                g = v - prev
+            prev = v
+            have = True
+        out[c] = g
+
+
+def max_gaps_numpy(rest, rows, lo, hi):
+    """:func:`max_gaps_jit` in numpy (the reference): ``(C,) float64``."""
+    r = np.concatenate([np.broadcast_to(rest, (rows.shape[0], rest.shape[0])), rows], axis=1)
+    rr = np.sort(np.where((r >= lo) & (r <= hi), r, np.nan), axis=1)
+    if rr.shape[1] < 2:
+        return np.zeros(rr.shape[0])
+    g = np.diff(rr, axis=1)
+    return np.where(np.isfinite(g), g, 0.0).max(axis=1)
+
+
+@njit(cache=True, nogil=True)
+def profile_add_jit(t, idx, k):  # pragma: no cover - jit
+    """``t += bincount(idx[s][ok], k[s][ok], minlength=len(t))`` for each row ``s`` in turn,
+    ``ok`` where ``0 <= idx < len(t)`` and ``k > 0``.
+
+    t : (G,) float64, updated; idx : (S, M) int64; k : (S, M) float64.
+    """
+    n_g = t.shape[0]
+    n_s, m = idx.shape
+    acc = np.zeros(n_g, np.float64)
+    for s in range(n_s):
+        for i in range(m):
+            b = idx[s, i]
+            if b >= 0 and b < n_g and k[s, i] > 0:
+                acc[b] += k[s, i]
+        for i in range(m):
+            b = idx[s, i]
+            if b >= 0 and b < n_g and k[s, i] > 0:
+                t[b] += acc[b]  # the bin's whole sum, once: later hits of the bin add 0.0
+                acc[b] = 0.0
+
+
+def profile_add_numpy(t, idx, k):
+    """:func:`profile_add_jit` in numpy (the reference)."""
+    for s in range(idx.shape[0]):
+        ok = (idx[s] >= 0) & (idx[s] < t.shape[0]) & (k[s] > 0)
+        t += np.bincount(idx[s][ok], weights=k[s][ok], minlength=t.shape[0])
+    return t
+
+
+@njit(cache=True, nogil=True)
+def shortfall_terms_jit(fixed, profiles, win, target, out):  # pragma: no cover - jit
+    """The terms :func:`rotoprint.rotary.interlace.plan_passes`' ``score`` averages, elementwise
+    as numpy computes them: for ``t = fixed + profiles[c]``, its running sum ``C`` (``C[0] = 0``,
+    ``C[i + 1] = C[i] + t[i]``, as ``cumsum`` of the padded row), the local mean ``(C[hi_i] -
+    C[lo_i]) / (hi_i - lo_i)`` over ``lo_i = max(0, i - win)``, ``hi_i = min(G, i + win + 1)``,
+    and ``out[c, i] = max(0, 1 - t_i / max(target * local_i, 1e-300)) ** 2``.
+
+    fixed : (G,) float64; profiles, out : (P, G) float64.
+    """
+    n_p, n_g = profiles.shape
+    t = np.empty(n_g, np.float64)
+    c = np.empty(n_g + 1, np.float64)
+    for p in range(n_p):
+        c[0] = 0.0
+        for i in range(n_g):
+            t[i] = fixed[i] + profiles[p, i]
+            c[i + 1] = c[i] + t[i]
+        for i in range(n_g):
+            lo = max(0, i - win)
+            hi = min(n_g, i + win + 1)
+            local = (c[hi] - c[lo]) / float(hi - lo)
+            v = 1.0 - t[i] / max(target * local, 1e-300)
+            v = max(0.0, v)
+            out[p, i] = v * v
+
+
+@njit(cache=True, nogil=True)
+def candidate_gaps_jit(rest, x, y, band_lo, band_hi, ex, ey, cand, lo, hi, out):  # pragma: no cover - jit
+    """:func:`max_gaps_jit` of the tracks of one pass at each candidate offset: ``out[c]`` the
+    largest gap over ``[lo, hi]`` of ``rest`` with the radii ``hypot(x + d ex, y + d ey)``
+    (``d = cand[c]``) of the tracks inside their band (``band_lo <= r < band_hi``), as the
+    planner's ``radii`` computes them (the same float operations).
+
+    rest : (R,) float64, sorted, inside; x, y, band_lo, band_hi : (M,) float64; cand, out : (C,) float64.
+    The tracks' order is kept from one candidate to the next and re-sorted by insertion (the
+    offsets move the radii little and alike: nearly sorted).
+    """
+    m = x.shape[0]
+    n_r = rest.shape[0]
+    order = np.arange(m)
+    key = np.empty(m, np.float64)
+    inf = np.inf
+    for c in range(cand.shape[0]):
+        d = cand[c]
+        dx = d * ex
+        dy = d * ey
+        for k in range(m):
+            r = np.hypot(x[k] + dx, y[k] + dy)
+            key[k] = r if (r >= band_lo[k] and r < band_hi[k] and r >= lo and r <= hi) else inf
+        for i in range(1, m):  # insertion sort of order by key
+            o = order[i]
+            v = key[o]
+            j = i - 1
+            while j >= 0 and key[order[j]] > v:
+                order[j + 1] = order[j]
+                j -= 1
+            order[j + 1] = o
+        i = 0
+        j = 0
+        prev = 0.0
+        have = False
+        g = 0.0
+        while i < n_r or (j < m and key[order[j]] < inf):
+            if not (j < m and key[order[j]] < inf) or (i < n_r and rest[i] <= key[order[j]]):
+                v = rest[i]
+                i += 1
+            else:
+                v = key[order[j]]
+                j += 1
+            if have and v - prev > g:
+                g = v - prev
+            prev = v
+            have = True
+        out[c] = g
