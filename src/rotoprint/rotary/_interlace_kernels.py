@@ -22,6 +22,29 @@ from numba import njit
 __all__ = ["max_gaps_jit", "max_gaps_numpy", "profile_add_jit", "profile_add_numpy"]
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _merged_max_gap(rest, s, n):  # pragma: no cover - jit
+    # the largest difference of neighbours in the merge of sorted rest and sorted s[:n] (0.0 below two values)
+    n_r = rest.shape[0]
+    i = 0
+    j = 0
+    prev = 0.0
+    have = False
+    g = 0.0
+    while i < n_r or j < n:
+        if j >= n or (i < n_r and rest[i] <= s[j]):
+            v = rest[i]
+            i += 1
+        else:
+            v = s[j]
+            j += 1
+        if have and v - prev > g:
+            g = v - prev
+        prev = v
+        have = True
+    return g
+
+
 @njit(cache=True, nogil=True)
 def max_gaps_jit(rest, rows, lo, hi, out):  # pragma: no cover - jit
     """``out[c]``: the largest gap between neighbouring values of ``rest`` and ``rows[c]`` inside ``[lo, hi]``.
@@ -30,7 +53,6 @@ def max_gaps_jit(rest, rows, lo, hi, out):  # pragma: no cover - jit
     absent); out : (C,) float64. Fewer than two values inside: 0.0.
     """
     n_c, m = rows.shape
-    n_r = rest.shape[0]
     buf = np.empty(m, np.float64)
     for c in range(n_c):
         n = 0
@@ -39,24 +61,7 @@ def max_gaps_jit(rest, rows, lo, hi, out):  # pragma: no cover - jit
             if v >= lo and v <= hi:
                 buf[n] = v
                 n += 1
-        s = np.sort(buf[:n])
-        i = 0
-        j = 0
-        prev = 0.0
-        have = False
-        g = 0.0
-        while i < n_r or j < n:
-            if j >= n or (i < n_r and rest[i] <= s[j]):
-                v = rest[i]
-                i += 1
-            else:
-                v = s[j]
-                j += 1
-            if have and v - prev > g:
-                g = v - prev
-            prev = v
-            have = True
-        out[c] = g
+        out[c] = _merged_max_gap(rest, np.sort(buf[:n]), n)
 
 
 def max_gaps_numpy(rest, rows, lo, hi):
@@ -138,9 +143,9 @@ def candidate_gaps_jit(rest, x, y, band_lo, band_hi, ex, ey, cand, lo, hi, out):
     offsets move the radii little and alike: nearly sorted).
     """
     m = x.shape[0]
-    n_r = rest.shape[0]
     order = np.arange(m)
     key = np.empty(m, np.float64)
+    srt = np.empty(m, np.float64)
     inf = np.inf
     for c in range(cand.shape[0]):
         d = cand[c]
@@ -157,20 +162,8 @@ def candidate_gaps_jit(rest, x, y, band_lo, band_hi, ex, ey, cand, lo, hi, out):
                 order[j + 1] = order[j]
                 j -= 1
             order[j + 1] = o
-        i = 0
-        j = 0
-        prev = 0.0
-        have = False
-        g = 0.0
-        while i < n_r or (j < m and key[order[j]] < inf):
-            if not (j < m and key[order[j]] < inf) or (i < n_r and rest[i] <= key[order[j]]):
-                v = rest[i]
-                i += 1
-            else:
-                v = key[order[j]]
-                j += 1
-            if have and v - prev > g:
-                g = v - prev
-            prev = v
-            have = True
-        out[c] = g
+        n = 0
+        while n < m and key[order[n]] < inf:
+            srt[n] = key[order[n]]
+            n += 1
+        out[c] = _merged_max_gap(rest, srt, n)
