@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["max_gaps_jit", "max_gaps_numpy", "profile_add_jit", "profile_add_numpy"]
+__all__ = ["max_gap", "inside_sorted", "max_gaps_jit", "max_gaps_numpy", "profile_add_jit", "profile_add_numpy"]
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -167,3 +167,15 @@ def candidate_gaps_jit(rest, x, y, band_lo, band_hi, ex, ey, cand, lo, hi, out):
             srt[n] = key[order[n]]
             n += 1
         out[c] = _merged_max_gap(rest, srt, n)
+
+
+def max_gap(rest, rows, lo, hi):
+    """Largest gap over ``[lo, hi]`` of the union of ``rest`` (sorted, inside) with each row of ``rows`` ``(C, M)``: ``(C,) float64``."""
+    out = np.empty(rows.shape[0])
+    max_gaps_jit(rest, np.ascontiguousarray(rows, np.float64), float(lo), float(hi), out)
+    return out
+
+
+def inside_sorted(r, lo, hi):
+    """The values of ``r`` inside ``[lo, hi]``, sorted."""
+    return np.sort(r[(r >= lo) & (r <= hi)])

@@ -235,17 +235,6 @@ def union_radii(head: InkjetHead, plan: SwathePlan, offsets_mm: Sequence[float],
     return np.sort(np.concatenate(parts)) if parts else np.zeros(0)
 
 
-def _max_gap(rest: np.ndarray, rows: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """Largest gap over ``[lo, hi]`` of the union of ``rest`` (sorted, inside) with each row of ``rows`` ``(C, M)``: ``(C,)``."""
-    out = np.empty(rows.shape[0])
-    _ik.max_gaps_jit(rest, np.ascontiguousarray(rows, np.float64), float(lo), float(hi), out)
-    return out
-
-
-def _inside_sorted(r: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    return np.sort(r[(r >= lo) & (r <= hi)])
-
-
 @dataclass(frozen=True)
 class PassPlan:
     """Interlaced passes of one layer (lengths in mm).
@@ -392,7 +381,7 @@ def plan_passes(
         return np.concatenate(rows, axis=1)  # (C, M)
 
     base = radii(0.0)
-    g1 = _max_gap(np.zeros(0), base, lo, hi)
+    g1 = _ik.max_gap(np.zeros(0), base, lo, hi)
     # the same tracks flat for the candidates' kernel: positions and the band each prints in
     all_xy = np.concatenate(xys) if xys else np.zeros((0, 2))
     bands = [(-np.inf, np.inf) if plan.overlap_mm <= 0 else (sw.band_mm[0] - 1e-9, sw.band_mm[1]) for sw in plan.swathes]
@@ -400,7 +389,7 @@ def plan_passes(
     band_hi = np.concatenate([np.full(len(xy), bands[j][1]) for j, xy in enumerate(xys)]) if xys else np.zeros(0)
 
     def candidate_gaps(rest: np.ndarray, cand: np.ndarray) -> np.ndarray:
-        """``_max_gap(rest, radii(cand), lo, hi)`` in one kernel."""
+        """``_ik.max_gap(rest, radii(cand), lo, hi)`` in one kernel."""
         out = np.empty(cand.shape[0])
         _ik.candidate_gaps_jit(rest, np.ascontiguousarray(all_xy[:, 0]), np.ascontiguousarray(all_xy[:, 1]), band_lo, band_hi,
                                float(e[0]), float(e[1]), np.ascontiguousarray(cand, np.float64), float(lo), float(hi), out)
@@ -477,7 +466,7 @@ def plan_passes(
             for q in range(1, n):
                 # rounds over the whole row period, then one finer round about each offset
                 cand = b0[q] + (coarse if rnd < _ROUNDS else np.mod(offs[q] - b0[q] + np.linspace(-step, step, 33), period))
-                rest = _inside_sorted(np.concatenate([radii(offs[p])[0] for p in range(n) if p != q]), lo, hi)
+                rest = _ik.inside_sorted(np.concatenate([radii(offs[p])[0] for p in range(n) if p != q]), lo, hi)
                 gmax = candidate_gaps(rest, cand)
                 # the largest gap first (to _GAP_QUANTUM_UM); among equal ones the profile (measured
                 # on the test design: the profile first gives larger gaps and no thinner film)
@@ -490,7 +479,7 @@ def plan_passes(
         return offs
 
     def largest_gap(offs: list[float]) -> float:
-        return float(_max_gap(np.zeros(0), np.concatenate([radii(o)[0] for o in offs])[None, :], lo, hi)[0])
+        return float(_ik.max_gap(np.zeros(0), np.concatenate([radii(o)[0] for o in offs])[None, :], lo, hi)[0])
 
     def row_pitch() -> float:
         """Median radial spacing of neighbouring tracks of one row (swathe 0, offset 0), mm."""
