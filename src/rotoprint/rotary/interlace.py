@@ -384,6 +384,7 @@ def plan_passes(
     g1 = _ik.max_gap(np.zeros(0), base, lo, hi)
     # the same tracks flat for the candidates' kernel: positions and the band each prints in
     all_xy = np.concatenate(xys) if xys else np.zeros((0, 2))
+    all_x, all_y = np.ascontiguousarray(all_xy[:, 0]), np.ascontiguousarray(all_xy[:, 1])
     bands = [(-np.inf, np.inf) if plan.overlap_mm <= 0 else (sw.band_mm[0] - 1e-9, sw.band_mm[1]) for sw in plan.swathes]
     band_lo = np.concatenate([np.full(len(xy), bands[j][0]) for j, xy in enumerate(xys)]) if xys else np.zeros(0)
     band_hi = np.concatenate([np.full(len(xy), bands[j][1]) for j, xy in enumerate(xys)]) if xys else np.zeros(0)
@@ -391,7 +392,7 @@ def plan_passes(
     def candidate_gaps(rest: np.ndarray, cand: np.ndarray) -> np.ndarray:
         """``_ik.max_gap(rest, radii(cand), lo, hi)`` in one kernel."""
         out = np.empty(cand.shape[0])
-        _ik.candidate_gaps_jit(rest, np.ascontiguousarray(all_xy[:, 0]), np.ascontiguousarray(all_xy[:, 1]), band_lo, band_hi,
+        _ik.candidate_gaps_jit(rest, all_x, all_y, band_lo, band_hi,
                                float(e[0]), float(e[1]), np.ascontiguousarray(cand, np.float64), float(lo), float(hi), out)
         return out
     d_mm = footprint_um * 1e-3
