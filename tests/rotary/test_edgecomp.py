@@ -156,3 +156,62 @@ def test_transform_restored_is_the_restore_of_the_unthinned_print(head, tilt, de
         assert all(np.array_equal(a.levels, b.levels) for a, b in zip(want.swathes, got.swathes))
         assert sum(int(np.count_nonzero(a.levels)) for a in want.swathes) > \
             sum(int(np.count_nonzero(a.levels)) for a in thin_print(full, shares, pass_index=q).swathes)
+
+
+@pytest.mark.parametrize("tilt, angle", [(0.0, 0.0), (20.0, 15.0), (70.0, -30.0)])
+def test_restore_candidates_kernel_matches_its_numpy_reference(head, tilt, angle):
+    """The jit sweep of the track windows finds the numpy reference's candidates, in the same
+    order: shares 0, 1 and between, dead nozzles (rate 0), a rotated placement, several swathes."""
+    from rotoprint.rotary import _edgecomp_kernels as ek
+    from rotoprint.rotary._exact_kernels import claim_rows
+    from rotoprint.rotary._thin_kernels import thin_phases
+    from rotoprint.rotary.edgecomp import edge_zone, restore_pattern
+    from rotoprint.rotary.exact import exact_maps
+    from rotoprint.rotary.testimage import test_design
+
+    d = test_design(240)
+    pl = Placement(240, 240, PX, PX, inner_radius_mm=60.0, angle_deg=angle)
+    z = edge_zone(d, head, pl, EdgeRestore())
+    maps = exact_maps(head, pl, RotarySetup(tilt_deg=tilt, dpi_y=1440.0, pivot_offset_mm=0.013))
+    rng = np.random.default_rng(int(tilt))
+    found = 0
+    for q, sm in enumerate(maps.swathes):
+        f = np.clip(rng.uniform(-0.2, 1.2, head.nozzles), 0.0, 1.0)
+        gain, o = restore_pattern(np.arange(head.nozzles), f, 0.5, q)
+        gain[rng.integers(0, head.nozzles, 20)] = 0.0
+        w = sm.windows
+        args = (*w.coefficients, w.nozzle, w.row, w.count, w.cos_row, w.sin_row, w.width, w.height, z.zone_flat, z.zone_blocks,
+                f, thin_phases(head.nozzles, q), gain, o, int(sm.first_firing), claim_rows(w.cos_row, w.sin_row))
+        cap = int(w.count.sum())
+        got = [np.empty(cap, np.int64), np.empty(cap, np.int64)]
+        want = [np.empty(cap, np.int64), np.empty(cap, np.int64)]
+        m = ek.restore_candidates_jit(*args, *got)
+        assert m == ek.restore_candidates_numpy(*args, *want)
+        assert np.array_equal(got[0][:m], want[0][:m]) and np.array_equal(got[1][:m], want[1][:m])
+        found += m
+    assert found > 100
+
+
+def test_transform_restored_takes_the_layers_edge_zone(head):
+    """One edge zone serves every pass of a layer (the same print as without it); a zone made for
+    another design size or other options is refused; a grey design has none."""
+    from rotoprint.rotary.edgecomp import edge_zone, transform_restored
+    from rotoprint.rotary.testimage import test_design
+
+    d = test_design(200)
+    pl = Placement(200, 200, PX, PX, inner_radius_mm=60.0)
+    st = RotarySetup(tilt_deg=20.0, dpi_y=1440.0)
+    shares = [np.full(head.nozzles, 0.45) for _ in transform_exact(d, head, pl, st).swathes]
+    z = edge_zone(d, head, pl, EdgeRestore())
+    a = transform_restored(d, head, pl, st, shares, pass_index=1)
+    b = transform_restored(d, head, pl, st, shares, pass_index=1, zone=z)
+    assert all(np.array_equal(x.levels, y.levels) for x, y in zip(a.swathes, b.swathes))
+    c = transform_restored(d, head, pl, dataclasses.replace(st, backend="numpy"), shares, pass_index=1, zone=z)  # the reference kernels
+    assert all(np.array_equal(x.levels, y.levels) for x, y in zip(a.swathes, c.swathes))
+    with pytest.raises(ConfigError, match="another design or other options"):
+        transform_restored(d, head, pl, st, shares, options=EdgeRestore(zone_um=30.0), zone=z)
+    small = test_design(100)
+    with pytest.raises(ConfigError, match="another design"):
+        transform_restored(small, head, Placement(100, 100, PX, PX, inner_radius_mm=60.0), st, shares, zone=z)
+    grey = np.where(d > 0, np.where(np.arange(200) % 2 == 0, 255, 128), 0).astype(np.uint8)  # two ink values
+    assert edge_zone(grey, head, pl) is None

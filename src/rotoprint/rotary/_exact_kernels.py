@@ -570,15 +570,20 @@ def windows_sample_thin_numba(coef, nozzle, row, count, cos_r, sin_r, width, hei
     if sat is None:
         sat = ink_blocks(flat, width, height)
     level = np.uint8(flat.max() if level is None else level)
-    # the platform's turn per firing row, from the first two rows: a piece's sagitta bound holds while its arc
-    # turns at most pi (a window's arc inside the design always does); pieces turning more than pi / 2 make no claim
-    dphi = abs(math.atan2(cos_r[0] * sin_r[1] - sin_r[0] * cos_r[1], cos_r[0] * cos_r[1] + sin_r[0] * sin_r[1])) \
-        if cos_r.shape[0] > 1 else 0.0
-    claim_rows = int(min(0.5 * math.pi / dphi, 2.0**40)) if dphi > 0 else 2**40
     _windows_sample_thin_nb(*coef, nozzle, row, count, cos_r, sin_r, width, height, flat, out, SAMPLE_TILE,
                             np.ascontiguousarray(f, np.float64), np.ascontiguousarray(o, np.float64), int(first_firing),
-                            sat, level, claim_rows)
+                            sat, level, claim_rows(cos_r, sin_r))
     return out
+
+
+def claim_rows(cos_r, sin_r) -> int:
+    """The longest piece of firing rows (``cos_r``, ``sin_r``: ``(F,) float64``) whose ink blocks
+    :func:`_ink_state` may claim: the platform's turn per firing row, from the first two rows; a
+    piece's sagitta bound holds while its arc turns at most pi (a window's arc inside the design
+    always does); pieces turning more than pi / 2 make no claim."""
+    dphi = abs(math.atan2(cos_r[0] * sin_r[1] - sin_r[0] * cos_r[1], cos_r[0] * cos_r[1] + sin_r[0] * sin_r[1])) \
+        if cos_r.shape[0] > 1 else 0.0
+    return int(min(0.5 * math.pi / dphi, 2.0**40)) if dphi > 0 else 2**40
 
 
 def windows_sample_thin_numpy(coef, nozzle, row, count, cos_r, sin_r, width, height, flat, out, f, o, first_firing, sat=None, level=None):

@@ -14,9 +14,11 @@ that a track keeping the share ``f`` keeps ``min(1, (1 + c) f)`` there (``c`` =
 thins the inner tracks more), by an ordered pattern on each track's firing index (as the
 thinning's). On by default in the equalised passes of binary heads
 (:attr:`~rotoprint.rotary.interlace.PassOptions.edge_restore`), made by :func:`transform_restored`:
-the fused thinned transform of the whole design plus an unthinned one of the design masked to the
-zone's pixels (:func:`edge_zone_mask`), the same print as :func:`restore_near_edges` of the
-unthinned one without making it.
+the fused thinned transform of the whole design, then one sweep of the pass's track windows for
+the thinned-out drops that the pattern restores and that are sampled from the zone's pixels
+(:func:`edge_zone_mask`; ``_edgecomp_kernels``), whose landing points alone are tested against
+the edge: the same print as :func:`restore_near_edges` of the unthinned one without making it.
+What the restore needs of the design (:class:`EdgeZone`) is made once for all the passes of a layer.
 """
 
 from __future__ import annotations
@@ -29,8 +31,8 @@ import numpy as np
 
 from ..errors import ConfigError
 
-__all__ = ["EDGE_ZONE_UM", "EDGE_COEFFICIENT", "EdgeRestore", "edge_distance_um", "edge_zone_mask", "radial_edge_near", "restore_pattern",
-           "restore_near_edges", "transform_restored"]
+__all__ = ["EDGE_ZONE_UM", "EDGE_COEFFICIENT", "EdgeRestore", "EdgeZone", "design_rim", "edge_distance_um", "edge_zone", "edge_zone_mask",
+           "radial_edge_near", "restore_pattern", "restore_near_edges", "transform_restored"]
 
 #: Width of the zone inside the design's edge where thinned-out drops are restored, um.
 EDGE_ZONE_UM = 50.0
@@ -131,7 +133,8 @@ def edge_distance_um(mask: np.ndarray, col: np.ndarray, row: np.ndarray, pitch_x
     return out
 
 
-def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarray, zone_um: float) -> np.ndarray:
+def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarray, zone_um: float, *,
+                     rim: np.ndarray | None = None) -> np.ndarray:
     """Sites inside the design with an edge within ``zone_um`` along the platform radius.
 
     Parameters
@@ -144,6 +147,8 @@ def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarr
     zone_um : float
         At most the smaller pixel pitch (then the design at ``+-zone_um`` along the radius
         tells it: an empty stretch is at least a pixel wide).
+    rim : (H, W) bool, optional
+        :func:`design_rim` of ``mask`` (made here when not given).
 
     Returns
     -------
@@ -165,9 +170,7 @@ def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarr
     col, row = np.asarray(col, np.float64), np.asarray(row, np.float64)
     # only a printing pixel with an empty one among its 8 neighbours can hold a site within a
     # pixel of an edge: the rest is not looked at again
-    pad = np.zeros((h + 2, w + 2), bool)
-    pad[1:-1, 1:-1] = m
-    rim = m & ~np.logical_and.reduce([pad[1 + di:h + 1 + di, 1 + dj:w + 1 + dj] for di in (-1, 0, 1) for dj in (-1, 0, 1)])
+    rim = design_rim(m) if rim is None else rim
     i, j = np.floor(row).astype(np.int64), np.floor(col).astype(np.int64)
     ok = (i >= 0) & (i < h) & (j >= 0) & (j < w)
     cand = np.zeros(col.size, bool)
@@ -182,6 +185,16 @@ def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarr
     near = np.zeros(col.size, bool)
     near[idx[hit]] = True
     return near
+
+
+def design_rim(mask: np.ndarray) -> np.ndarray:
+    """``(H, W) bool``: the printing pixels of ``mask`` ``(H, W) bool`` with an empty one (or the
+    image's surround) among their 8 neighbours."""
+    m = np.asarray(mask, bool)
+    h, w = m.shape
+    pad = np.zeros((h + 2, w + 2), bool)
+    pad[1:-1, 1:-1] = m
+    return m & ~np.logical_and.reduce([pad[1 + di:h + 1 + di, 1 + dj:w + 1 + dj] for di in (-1, 0, 1) for dj in (-1, 0, 1)])
 
 
 def restore_near_edges(full, thinned, design: np.ndarray, shares, *, options: EdgeRestore | None = None, pass_index: int = 0):
@@ -316,18 +329,69 @@ def edge_zone_mask(mask: np.ndarray, placement, options: EdgeRestore | None = No
     return m & box
 
 
+@dataclass(frozen=True, eq=False)
+class EdgeZone:
+    """What the edge restore needs of a binary design, made once for all the passes of a layer
+    (:func:`edge_zone`).
+
+    Attributes
+    ----------
+    shape : (int, int)
+        The design's ``(H, W)``.
+    mask, rim : (H, W) bool
+        The printing pixels (:func:`~rotoprint.rotary.simulate.design_mask`) and those of them
+        beside an empty one (:func:`design_rim`).
+    level : int
+        The drop level of the design's ink.
+    zone_flat : (H W + 1,) uint8
+        The design masked to :func:`edge_zone_mask`, as levels, with the 0 "no drop" sentinel.
+    zone_blocks : (2, ceil(H / 8) + 1, ceil(W / 8) + 1) int32
+        Its ink blocks (:func:`~rotoprint.rotary._exact_kernels.ink_blocks`).
+    options : EdgeRestore
+        Resolved for the placement.
+    """
+
+    shape: tuple
+    mask: np.ndarray
+    rim: np.ndarray
+    level: int
+    zone_flat: np.ndarray
+    zone_blocks: np.ndarray
+    options: EdgeRestore
+
+
+def edge_zone(design: np.ndarray, head, placement, options: EdgeRestore | None = None) -> EdgeZone | None:
+    """The :class:`EdgeZone` of ``design`` ``(H, W) uint8`` for ``head`` (binary), or None when the
+    design is grey (:func:`transform_restored` thins a grey design whole)."""
+    from ._exact_kernels import BINARY_LEVELS, ink_blocks
+    from .printdata import design_kind, design_levels
+    from .simulate import design_mask
+
+    opts = (options or EdgeRestore()).resolved(placement)
+    design = np.ascontiguousarray(design)
+    if design_kind(design) != "binary":
+        return None
+    mask = design_mask(design, head.grey_levels)
+    level = int(design_levels(np.array([255], np.uint8), head.grey_levels, kind="binary")[0])
+    zone_flat, _ = BINARY_LEVELS["jit"](np.where(edge_zone_mask(mask, placement, opts), design, 0).astype(np.uint8), level)
+    h, w = design.shape
+    return EdgeZone(shape=(h, w), mask=mask, rim=design_rim(mask) if opts.radial_only else mask, level=level, zone_flat=zone_flat,
+                    zone_blocks=ink_blocks(zone_flat, w, h), options=opts)
+
+
 def transform_restored(design: np.ndarray, head, placement, setup, shares, *, options: EdgeRestore | None = None,
-                       pass_index: int = 0):
+                       pass_index: int = 0, zone: EdgeZone | None = None):
     """One equalised pass with the edge restore: the print :func:`restore_near_edges` makes of
     ``transform_exact(design, head, placement, setup)`` and its :func:`~rotoprint.rotary.equalise.thin_print`
     by ``shares``, without the unthinned print of the whole design.
 
     The thinned print is sampled thinning (``transform_exact(..., thin=ThinShares(shares, pass_index))``);
-    the drops it left out near the edges come from a second exact transform of the design masked to
-    :func:`edge_zone_mask`, its tracks kept whole where the share is in (0, 1) (the others have no drop
-    to restore) and none elsewhere; binary designs only (a grey design is sampled bilinear: masking it
-    would change the samples beside the zone), a grey one is transformed whole and thinned (as
-    :meth:`EdgeRestore.thin`).
+    the drops it left out that the restore's pattern gives back and that are sampled from the
+    zone's pixels (:func:`edge_zone_mask`) are found in one sweep of the pass's track windows
+    (:func:`~rotoprint.rotary._edgecomp_kernels.restore_candidates_jit`), and only their landing
+    points are tested against the design's edge (as :func:`restore_near_edges` tests every lost
+    drop's). Binary designs only (a grey design is sampled bilinear: masking it would change the
+    samples beside the zone), a grey one is transformed whole and thinned (as :meth:`EdgeRestore.thin`).
 
     Parameters
     ----------
@@ -341,25 +405,53 @@ def transform_restored(design: np.ndarray, head, placement, setup, shares, *, op
         The pass's shares (:func:`~rotoprint.rotary.interlace.track_fractions`).
     options : EdgeRestore, optional
     pass_index : int
+    zone : EdgeZone, optional
+        :func:`edge_zone` of this design, head, placement and options (made here when not given;
+        the passes of a layer share one).
 
     Returns
     -------
     RotaryPrint
         The thinned pass with the restored drops.
     """
-    from .exact import ThinShares, transform_exact
-    from .printdata import design_kind
-    from .simulate import design_mask
+    from . import _edgecomp_kernels as _ek
+    from ._exact_kernels import claim_rows
+    from ._thin_kernels import thin_phases
+    from .exact import ThinShares, exact_maps, transform_exact
+    from .simulate import landing_xy
 
     opts = (options or EdgeRestore()).resolved(placement)
     design = np.asarray(design)
-    if design_kind(design) != "binary":
+    z = edge_zone(design, head, placement, opts) if zone is None else zone
+    if z is not None and (z.shape != design.shape or z.options != opts):
+        raise ConfigError("edge restore: the edge zone was made for another design or other options")
+    if z is None:
         return opts.thin(transform_exact(design, head, placement, setup), shares, design, pass_index=pass_index)
     thinned = transform_exact(design, head, placement, setup, kind="binary", thin=ThinShares(shares, pass_index))
     if len(shares) != len(thinned.swathes) or any(np.shape(f) != (head.nozzles,) for f in shares):
         raise ConfigError("edge restore needs one share per nozzle for every swathe")
-    zone = edge_zone_mask(design_mask(design, head.grey_levels), placement, opts)
-    whole = [np.where((np.asarray(f) > 0.0) & (np.asarray(f) < 1.0), 1.0, 0.0) for f in shares]
-    near = transform_exact(np.where(zone, design, 0).astype(np.uint8), head, placement, setup, kind="binary",
-                           thin=ThinShares(whole, pass_index))
-    return _restore_lost(thinned, _lost(near, thinned), design, shares, opts, pass_index)
+    maps = exact_maps(head, placement, setup)  # the maps the thinned print was sampled through (cached)
+    kern = _ek.restore_candidates_jit if maps.backend == "jit" else _ek.restore_candidates_numpy
+    nozzles = np.arange(head.nozzles)
+    p = thin_phases(head.nozzles, pass_index)
+    dead = np.array(head.dead_nozzles, dtype=np.int64)
+    for sm, sw, f in zip(maps.swathes, thinned.swathes, shares):
+        f = np.ascontiguousarray(f, np.float64)
+        gain, o = restore_pattern(nozzles, f, opts.coefficient, pass_index)  # gain 0 unless 0 < f < 1 (c > 0)
+        gain[dead] = 0.0  # a dead nozzle has no drop to restore
+        w = sm.windows
+        cap = int(w.count.sum())
+        rows, ks = np.empty(cap, np.int64), np.empty(cap, np.int64)
+        m = kern(*w.coefficients, w.nozzle, w.row, w.count, w.cos_row, w.sin_row, w.width, w.height, z.zone_flat, z.zone_blocks,
+                 f, p, gain, o, int(sm.first_firing), claim_rows(w.cos_row, w.sin_row), rows, ks)
+        if m == 0:
+            continue
+        rows, ks = rows[:m], ks[:m]
+        col, row = placement.to_design(*landing_xy(thinned, sw, ks, rows + sw.first_firing))
+        if opts.radial_only:
+            near = radial_edge_near(z.mask, placement, col, row, opts.zone_um, rim=z.rim)
+        else:
+            near = edge_distance_um(z.mask, col, row, placement.pitch_x_mm, placement.pitch_y_mm, opts.zone_um)
+            near = (near > 0.0) & (near <= opts.zone_um)
+        sw.levels[rows[near], ks[near]] = z.level
+    return thinned

@@ -68,7 +68,7 @@ import numpy as np
 from ..devices.models import InkjetHead
 from ..errors import ConfigError, GeometryError
 from ..ranges import PASSES, show_value
-from .edgecomp import EdgeRestore, transform_restored
+from .edgecomp import EdgeRestore, edge_zone, transform_restored
 from .head import nozzle_layout
 from .options import RotarySetup
 from .swathes import SwathePlan, pass_enabled
@@ -942,12 +942,13 @@ def pass_prints(design: np.ndarray, device, placement, options: PassOptions) -> 
     else:
         angles, achieved = tuple(0.0 for _ in pp.offsets_mm), np.zeros((pp.passes, len(sp.swathes)))
     prints, restore = [], options.edge_restore.resolved(placement) if options.edge_restore and equalise and not grey else None
+    zone = edge_zone(design, head, placement, restore) if restore is not None else None  # once for all the passes
     for q, off in enumerate(pp.offsets_mm):
         pst = dataclasses.replace(st, dpi_y=clock, pivot_offset_mm=off, swathe_overlap_mm=overlap, swathe_seam_mm=seam,
                                   mount_angle_deg=float(st.mount_angle_deg) + angles[q])
         thin = fracs is not None and not grey and not (dead_cover is not None and thin_landing)  # thin_print's, while sampling
         pr = transform_exact(design, head, placement, pst, thin=ThinShares(fracs[q], q) if thin else None) if restore is None \
-            else transform_restored(design, head, placement, pst, fracs[q], options=restore, pass_index=q)  # + the edge zone's drops
+            else transform_restored(design, head, placement, pst, fracs[q], options=restore, pass_index=q, zone=zone)  # + the zone's drops
         if grey:
             from .halftone import halftone_print
 

@@ -36,7 +36,7 @@ from ..errors import ConfigError, ImageError
 from .head import Mount, nozzle_layout
 from .printdata import RotaryPrint, design_kind, design_levels
 
-__all__ = ["Drops", "FiringClock", "SimulationReport", "Simulation", "place_drops", "simulate", "render_overlay", "design_mask"]
+__all__ = ["Drops", "FiringClock", "SimulationReport", "Simulation", "place_drops", "landing_xy", "simulate", "render_overlay", "design_mask"]
 
 
 @dataclass(frozen=True)
@@ -128,12 +128,8 @@ def place_drops(pr: RotaryPrint, *, jitter_um: float = 0.0, dead_nozzles: tuple[
             lev = lev.copy()
             lev[:, list(dead_nozzles)] = 0
         b, k = np.nonzero(lev)
-        lay = nozzle_layout(pr.head, Mount(sw.pivot_radius_mm, tilt_deg=pr.tilt_deg, mount_angle_deg=pr.mount_angle_deg, direction=pr.direction))
         i = b.astype(np.int64) + sw.first_firing
-        clk = clocks.get(sw.index) if clocks else None
-        ang = lay.phi_rad[k] - pr.direction * (i * sw.dphi_rad if clk is None else clk.turn_rad(i))
-        x = lay.r_mm[k] * np.cos(ang)
-        y = lay.r_mm[k] * np.sin(ang)
+        x, y = landing_xy(pr, sw, k, i, clocks.get(sw.index) if clocks else None)
         if jitter_um > 0:
             x = x + rng.normal(0.0, jitter_um * 1e-3, x.size)
             y = y + rng.normal(0.0, jitter_um * 1e-3, y.size)
@@ -145,6 +141,15 @@ def place_drops(pr: RotaryPrint, *, jitter_um: float = 0.0, dead_nozzles: tuple[
         lv, s, k, i = np.zeros(0, np.uint8), np.zeros(0, np.int16), np.zeros(0, np.int64), np.zeros(0, np.int64)
     col, row = pr.placement.to_design(x, y)
     return Drops(x_mm=x, y_mm=y, col=col, row=row, level=lv, swathe=s, nozzle=k, firing=i)
+
+
+def landing_xy(pr: RotaryPrint, sw, nozzle: np.ndarray, firing: np.ndarray, clock: FiringClock | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Platform ``(x, y)`` mm, each ``(M,) float64``, of the drops of swathe ``sw`` of ``pr`` fired by
+    ``nozzle`` at absolute ``firing`` (``(M,) int64`` each): the forward formula of :func:`place_drops`
+    (``clock``: the angle each firing really fires at, instead of ``i * dphi_rad``)."""
+    lay = nozzle_layout(pr.head, Mount(sw.pivot_radius_mm, tilt_deg=pr.tilt_deg, mount_angle_deg=pr.mount_angle_deg, direction=pr.direction))
+    ang = lay.phi_rad[nozzle] - pr.direction * (firing * sw.dphi_rad if clock is None else clock.turn_rad(firing))
+    return lay.r_mm[nozzle] * np.cos(ang), lay.r_mm[nozzle] * np.sin(ang)
 
 
 def design_mask(design: np.ndarray, grey_levels: int) -> np.ndarray:
