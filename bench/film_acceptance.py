@@ -16,12 +16,15 @@ at the equalised clock, thinned while sampled, its shares timed apart) over the 
 at the native clock (today's print of a layer), best of 5, and the same for direct slicing of
 one layer of a real mesh (``slice_rotary``, the planned and the equalised clock vs native).
 
-    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only [--cpu]] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
+    PYTHONPATH=src python bench/film_acceptance.py [SIZE_PX] [TILTS] [--cost-only | --passes-cost-only] [--cpu] [--strip=ROWS] [--equalised-only] [--quick] [--no-level]
                                                   [--default-only] [--dead-only | --live-only] [--no-phases] [--raise-sparse]
                                                   [--raise=off|on|auto] [--edge-restore[=ZONE_UM,COEFFICIENT] | --no-edge-restore]
                                                   [--no-sensitivity | --sensitivity-only]
 
-``--cpu``: the cost table's times are CPU times (``time.process_time``; steadier on a shared machine).
+``--cpu``: the cost tables' times are the calling thread's CPU times (``time.thread_time``; steadier on a
+shared machine; not ``process_time``, which also counts an OpenBLAS worker spinning after a matrix product).
+``--passes-cost-only``: only the last table: the default print's passes as ``pass_prints`` makes them (maps,
+thinned sampling and edge restore of every pass; the per-layer shares, dead cover and edge zone; the planner).
 ``--equalised-only``: only the equalised rows (the default; with the 5 dead nozzles; with phases and
 overlap), then the cost table. ``--default-only``: only the default print's two rows (without and
 with the dead nozzles). ``--dead-only`` / ``--live-only``: only the rows with / without the 5 dead
@@ -110,7 +113,7 @@ def sensitivity_table(prs, d, head, tilt) -> None:
 
 
 def _best(fn, k: int = 3, clock=time.perf_counter) -> float:
-    """Best of ``k`` wall times (or of ``clock``: ``time.process_time`` for the CPU time, steadier
+    """Best of ``k`` wall times (or of ``clock``: ``time.thread_time`` for the CPU time, steadier
     on a shared machine; the kernels are single-threaded), the exact transform's map cache
     emptied before each (a pass at a new pivot or clock builds its maps: that is its cost).
 
@@ -142,7 +145,7 @@ def default_shares(head, sp, pp, tilt: float) -> list:
 
 def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
     """The cost floor: a pass's firing images at the planned clock over today's at native (best of ``k``
-    times of ``clock``: wall, or ``time.process_time`` with ``--cpu``).
+    times of ``clock``: wall, or ``time.thread_time`` with ``--cpu``).
 
     The default (equalised) pass is charged its maps and its thinned images (``transform_exact(...,
     thin=ThinShares)``, as ``pass_prints`` prints it); the shares (``track_fractions``, computed once
@@ -220,6 +223,69 @@ def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
         print(row, flush=True)
 
 
+def pass_prints_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
+    """The default print's passes as :func:`~rotoprint.rotary.interlace.pass_prints` makes them
+    (equalised, the dead-track cover, the edge restore: ``PassOptions()``), without and with the 5
+    seeded dead nozzles, against today's layer (the exact transform at the head's native clock).
+
+    Per pass: ``transform_restored`` of every pass (its maps at the pass's pivot, the thinned
+    sampling, the edge restore), the mean over the passes of one call, best of ``k`` calls (the
+    exact maps' cache emptied before each). Per layer, charged 1 / P to each pass: the shares
+    (``track_fractions``), the dead-track cover (``cover_dead_tracks``) and the edge zone
+    (``edge_zone``); the planner (``plan_passes``) is the rest of the whole call."""
+    import gc
+
+    import rotoprint.rotary.deadcover as dc
+    import rotoprint.rotary.interlace as il
+    from rotoprint.rotary.exact import exact_maps
+    from rotoprint.rotary.interlace import pass_prints
+
+    print()
+    print("| tilt deg | nozzles | passes | native transform s | one pass's images (maps + thinned + edge restore) s | ratio | "
+          "per-layer shares + dead cover + edge zone / P s | ratio with them | whole pass_prints / P s | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    r_in, r_out = pl.radial_range_mm()
+    for tilt in tilts:
+        sp = plan_swathes(head, tilt_deg=tilt, inner_radius_mm=r_in, outer_radius_mm=r_out)  # the film rows' seeded dead nozzles
+        dead = tuple(sorted(int(x) for x in np.random.default_rng(14).choice(np.flatnonzero(sp.swathes[0].enabled), 5, replace=False)))
+        t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt), k, clock)
+        for label, hd in (("all live", head), ("5 dead", head.model_copy(update={"dead_nozzles": dead}))):
+            rec: dict = {}
+
+            def timed(mod, name, key):
+                f = getattr(mod, name)
+
+                def w(*a, **kw):
+                    t = clock()
+                    r = f(*a, **kw)
+                    rec.setdefault(key, []).append(clock() - t)
+                    return r
+                setattr(mod, name, w)
+                return f
+
+            saved = [(il, "transform_restored", timed(il, "transform_restored", "images")),
+                     (il, "track_fractions", timed(il, "track_fractions", "layer")),
+                     (il, "edge_zone", timed(il, "edge_zone", "layer")),
+                     (dc, "cover_dead_tracks", timed(dc, "cover_dead_tracks", "layer"))]
+            best_img, best_layer, best_whole, n_p = float("inf"), float("inf"), float("inf"), 0
+            try:
+                for _ in range(k):
+                    rec.clear()
+                    exact_maps.cache_clear()
+                    gc.collect()
+                    t = clock()
+                    _, prs, _ = pass_prints(d, hd, pl, PassOptions(RotarySetup(tilt_deg=tilt)))
+                    best_whole = min(best_whole, clock() - t)
+                    n_p = len(prs)
+                    best_img = min(best_img, float(np.mean(rec["images"])))
+                    best_layer = min(best_layer, sum(rec.get("layer", [])))
+            finally:
+                for mod, name, f in saved:
+                    setattr(mod, name, f)
+            print(f"| {tilt:g} | {label} | {n_p} | {t0:.4f} | {best_img:.4f} | {best_img / t0:.2f} | {best_layer / n_p:.4f} | "
+                  f"{(best_img + best_layer / n_p) / t0:.2f} | {best_whole / n_p:.4f} | {best_whole / n_p / t0:.2f} |", flush=True)
+
+
 def main() -> None:
     args = [a for a in sys.argv[1:] if not a.startswith("--")]
     n = int(args[0]) if args else 1200
@@ -233,9 +299,15 @@ def main() -> None:
     if strip:  # a band of full design ROWS px high through the middle, over the same radial range
         d = np.full((strip[0], n), 255, np.uint8)
         pl = Placement(n, strip[0], px, px, inner_radius_mm=60.0)
-    cpu = {"clock": time.process_time} if "--cpu" in sys.argv else {}
+    # the calling thread's CPU time: the kernels are single-threaded, and after the shares' matrix products
+    # an OpenBLAS worker spins for a while (measured: process_time 46-94 ms where the pass took 23-46 ms wall)
+    cpu = {"clock": time.thread_time} if "--cpu" in sys.argv else {}
+    if "--passes-cost-only" in sys.argv:
+        pass_prints_table(d, pl, head0, tilts, **cpu)
+        return
     if "--cost-only" in sys.argv:
         cost_table(d, pl, head0, tilts, **cpu)
+        pass_prints_table(d, pl, head0, tilts, **cpu)
         return
     quick, level_on = "--quick" in sys.argv, "--no-level" not in sys.argv
     raise_opt = {"off": False, "on": True, "auto": "auto"}
@@ -323,6 +395,7 @@ def main() -> None:
         sensitivity_table(sens_prs, d, head0, sens_tilt)
     if not quick:
         cost_table(d, pl, head0, tilts, **cpu)
+        pass_prints_table(d, pl, head0, tilts, **cpu)
 
 
 if __name__ == "__main__":

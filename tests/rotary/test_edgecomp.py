@@ -215,3 +215,24 @@ def test_transform_restored_takes_the_layers_edge_zone(head):
         transform_restored(small, head, Placement(100, 100, PX, PX, inner_radius_mm=60.0), st, shares, zone=z)
     grey = np.where(d > 0, np.where(np.arange(200) % 2 == 0, 255, 128), 0).astype(np.uint8)  # two ink values
     assert edge_zone(grey, head, pl) is None
+
+
+def test_radial_near_kernel_matches_radial_edge_near():
+    """The jit loop of the radial edge test gives radial_edge_near's answer site for site: sites
+    inside, beside and outside the image, several zones and placement angles."""
+    import math
+
+    from rotoprint.rotary import _edgecomp_kernels as ek
+    from rotoprint.rotary.edgecomp import design_rim
+    from rotoprint.rotary.testimage import test_design
+
+    m = test_design(200) > 0
+    rng = np.random.default_rng(3)
+    col, row = rng.uniform(-3.0, 203.0, 100_000), rng.uniform(-3.0, 203.0, 100_000)
+    for angle, zone in ((0.0, 50.0), (23.0, 20.0), (-61.0, 70.0)):
+        pl = Placement(200, 200, PX, PX, inner_radius_mm=60.0, angle_deg=angle)
+        want = radial_edge_near(m, pl, col, row, zone)
+        got = np.empty(col.size, bool)
+        a = math.radians(angle)
+        ek.radial_near_jit(m, design_rim(m), col, row, 60.0, PX, PX, 100.0, math.cos(a), math.sin(a), zone, got)
+        assert np.array_equal(want, got) and 1000 < int(want.sum()) < 50_000

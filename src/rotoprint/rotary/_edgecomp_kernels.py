@@ -29,7 +29,7 @@ from numba import njit
 from ._exact_kernels import _ink_state, _landing_index, _pointwise_index_numpy, _window_drops
 from ._thin_kernels import thin_floors_jit
 
-__all__ = ["restore_candidates_jit", "restore_candidates_numpy", "RESTORE_PIECE"]
+__all__ = ["restore_candidates_jit", "restore_candidates_numpy", "radial_near_jit", "RESTORE_PIECE"]
 
 #: Firing rows per piece whose zone blocks are looked at before its drops are.
 RESTORE_PIECE = 64
@@ -105,3 +105,35 @@ def restore_candidates_numpy(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r,
     m = int(sel.sum())
     out_row[:m], out_k[:m] = r[sel], k[sel]
     return m
+
+
+@njit(cache=True, nogil=True)
+def radial_near_jit(mask, rim, col, row, inner_mm, pitch_x_mm, pitch_y_mm, half_h, c, s, zone_um, out):  # pragma: no cover - jit
+    """:func:`rotoprint.rotary.edgecomp.radial_edge_near` of the sites ``col``, ``row`` ``(M,)
+    float64`` into ``out`` ``(M,) bool``, the same float operations in the same order (the
+    placement's frame: inner radius, pitches, ``half_h`` = half its height in pixels, ``c``, ``s``
+    the cos / sin of its angle); ``mask``, ``rim`` ``(H, W) bool``."""
+    h, w = mask.shape
+    for q in range(col.shape[0]):
+        out[q] = False
+        i = np.floor(row[q])
+        j = np.floor(col[q])
+        if not (i >= 0 and i < h and j >= 0 and j < w) or not rim[int(i), int(j)]:
+            continue
+        xl = inner_mm + col[q] * pitch_x_mm
+        yl = (half_h - row[q]) * pitch_y_mm
+        x = c * xl - s * yl
+        y = s * xl + c * yl
+        rad = max(np.hypot(x, y), 1e-12)
+        for t in (-1.0, 1.0):
+            x2 = x + t * 1e-3 * zone_um * x / rad
+            y2 = y + t * 1e-3 * zone_um * y / rad
+            xl2 = c * x2 + s * y2
+            yl2 = -s * x2 + c * y2
+            c2 = (xl2 - inner_mm) / pitch_x_mm
+            r2 = half_h - yl2 / pitch_y_mm
+            i2 = np.floor(r2)
+            j2 = np.floor(c2)
+            if not (i2 >= 0 and i2 < h and j2 >= 0 and j2 < w) or not mask[int(i2), int(j2)]:
+                out[q] = True
+                break

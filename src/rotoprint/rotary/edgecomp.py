@@ -448,7 +448,12 @@ def transform_restored(design: np.ndarray, head, placement, setup, shares, *, op
             continue
         rows, ks = rows[:m], ks[:m]
         col, row = placement.to_design(*landing_xy(thinned, sw, ks, rows + sw.first_firing))
-        if opts.radial_only:
+        if opts.radial_only and maps.backend == "jit":  # radial_edge_near's arithmetic, in one loop
+            near = np.empty(m, bool)
+            a = math.radians(placement.angle_deg)
+            _ek.radial_near_jit(z.mask, z.rim, col, row, placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm,
+                                placement.height_px / 2.0, math.cos(a), math.sin(a), float(opts.zone_um), near)
+        elif opts.radial_only:
             near = radial_edge_near(z.mask, placement, col, row, opts.zone_um, rim=z.rim)
         else:
             near = edge_distance_um(z.mask, col, row, placement.pitch_x_mm, placement.pitch_y_mm, opts.zone_um)
