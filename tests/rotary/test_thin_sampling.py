@@ -97,8 +97,8 @@ def test_shares_of_the_wrong_shape_are_one_line_errors():
 
 def test_pass_prints_thins_while_sampling(monkeypatch):
     """The equalised passes (with dead nozzles and their cover) are what sampling unthinned, then
-    thin_print, made before: the same images, and every pass was thinned while sampled (with the
-    edge restore, the default, the edge zone's transform too)."""
+    thin_print, made before: the same images, and every pass was thinned while sampled, in one
+    transform (the edge restore, the default, makes no second one)."""
     import rotoprint.rotary.exact as ex
     from rotoprint.rotary.interlace import PassOptions, pass_prints
     from rotoprint.rotary.options import RotarySetup
@@ -117,9 +117,9 @@ def test_pass_prints_thins_while_sampling(monkeypatch):
     _, want, _ = pass_prints(d, head, pl, opts)
     monkeypatch.setattr(ex, "transform_exact", orig)
     _, got, man = pass_prints(d, head, pl, opts)
-    # two thinned transforms a pass: the whole design's, and the edge zone's of the edge restore (the default)
+    # one thinned transform a pass: the edge restore (the default) sweeps that pass's windows for its drops
     assert man["equalise"] == "thinning" and "dead_cover" in man and "edge_restore" in man and len(got) > 1
-    assert thinned == [True] * (2 * len(got))
+    assert thinned == [True] * len(got)
     assert all(np.array_equal(a.levels, b.levels) for p, q in zip(got, want) for a, b in zip(p.swathes, q.swathes))
 
 
