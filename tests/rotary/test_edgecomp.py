@@ -183,8 +183,8 @@ def test_restore_candidates_kernel_matches_its_numpy_reference(head, tilt, angle
         args = (*w.coefficients, w.nozzle, w.row, w.count, w.cos_row, w.sin_row, w.width, w.height, z.zone_flat, z.zone_blocks,
                 f, thin_phases(head.nozzles, q), gain, o, int(sm.first_firing), claim_rows(w.cos_row, w.sin_row))
         cap = int(w.count.sum())
-        got = [np.empty(cap, np.int64), np.empty(cap, np.int64)]
-        want = [np.empty(cap, np.int64), np.empty(cap, np.int64)]
+        got = [np.empty(cap, np.int32), np.empty(cap, np.int32)]
+        want = [np.empty(cap, np.int32), np.empty(cap, np.int32)]
         m = ek.restore_candidates_jit(*args, *got)
         assert m == ek.restore_candidates_numpy(*args, *want)
         assert np.array_equal(got[0][:m], want[0][:m]) and np.array_equal(got[1][:m], want[1][:m])

@@ -440,14 +440,14 @@ def transform_restored(design: np.ndarray, head, placement, setup, shares, *, op
         gain, o = restore_pattern(nozzles, f, opts.coefficient, pass_index)  # gain 0 unless 0 < f < 1 (c > 0)
         gain[dead] = 0.0  # a dead nozzle has no drop to restore
         w = sm.windows
-        cap = int(w.count.sum())
-        rows, ks = np.empty(cap, np.int64), np.empty(cap, np.int64)
+        cap = int(w.count.sum())  # at most one candidate a window drop (8 bytes each, as the maps' own index; pages touched as written)
+        rows, ks = np.empty(cap, np.int32), np.empty(cap, np.int32)
         m = kern(*w.coefficients, w.nozzle, w.row, w.count, w.cos_row, w.sin_row, w.width, w.height, z.zone_flat, z.zone_blocks,
                  f, p, gain, o, int(sm.first_firing), claim_rows(w.cos_row, w.sin_row), rows, ks)
         if m == 0:
             continue
         rows, ks = rows[:m], ks[:m]
-        col, row = placement.to_design(*landing_xy(thinned, sw, ks, rows + sw.first_firing))
+        col, row = placement.to_design(*landing_xy(thinned, sw, ks, rows.astype(np.int64) + sw.first_firing))
         if opts.radial_only and maps.backend == "jit":  # radial_edge_near's arithmetic, in one loop
             near = np.empty(m, bool)
             a = math.radians(placement.angle_deg)
