@@ -263,10 +263,9 @@ def pass_prints_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -
                 setattr(mod, name, w)
                 return f
 
-            saved = [(il, "transform_restored", timed(il, "transform_restored", "images")),
-                     (il, "track_fractions", timed(il, "track_fractions", "layer")),
-                     (il, "edge_zone", timed(il, "edge_zone", "layer")),
-                     (dc, "cover_dead_tracks", timed(dc, "cover_dead_tracks", "layer"))]
+            saved = [(mod, name, timed(mod, name, key)) for mod, name, key in
+                     ((il, "transform_restored", "images"), (il, "track_fractions", "layer"), (il, "edge_zone", "layer"),
+                      (dc, "cover_dead_tracks", "layer")) if hasattr(mod, name)]  # (an older checkout has no edge_zone)
             best_img, best_layer, best_whole, n_p = float("inf"), float("inf"), float("inf"), 0
             try:
                 for _ in range(k):
