@@ -298,8 +298,8 @@ def main() -> None:
     if strip:  # a band of full design ROWS px high through the middle, over the same radial range
         d = np.full((strip[0], n), 255, np.uint8)
         pl = Placement(n, strip[0], px, px, inner_radius_mm=60.0)
-    # the calling thread's CPU time: the kernels are single-threaded, and after the shares' matrix products
-    # an OpenBLAS worker spins for a while (measured: process_time 46-94 ms where the pass took 23-46 ms wall)
+    # the calling thread's CPU time: the kernels are single-threaded, and after a large enough matrix-vector
+    # product (the shares') an OpenBLAS worker spins for a while (process_time 46-94 ms where a pass took 23-46 ms wall)
     cpu = {"clock": time.thread_time} if "--cpu" in sys.argv else {}
     if "--passes-cost-only" in sys.argv:
         pass_prints_table(d, pl, head0, tilts, **cpu)
