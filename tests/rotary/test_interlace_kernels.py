@@ -33,6 +33,33 @@ def test_candidate_gaps_match_radii_then_max_gaps():
     assert np.array_equal(out, ik.max_gaps_numpy(rest, r, 55.0, 75.0))
 
 
+def test_kept_candidate_radii_give_the_same_gaps():
+    """A kept candidate set (its sorted radii made once, then merged with each fixed set) gives
+    candidate_gaps_jit's gaps bit for bit, against several fixed sets; beyond the kept sets' limit
+    or without a key the gaps are computed afresh; another set under a kept key is refused."""
+    import pytest
+
+    rng = np.random.default_rng(11)
+    x, y = rng.uniform(40.0, 70.0, 500), rng.uniform(-20.0, 20.0, 500)
+    band_lo = np.where(np.arange(500) < 250, -np.inf, 65.0 - 1e-9)
+    band_hi = np.where(np.arange(500) < 250, 66.0, np.inf)
+    tracks = (x, y, band_lo, band_hi, 0.8, 0.6)
+    cand = np.linspace(0.0, 0.14, 64, endpoint=False)
+    kept: dict = {}
+    for trial in range(4):
+        rest = np.sort(rng.uniform(55.0, 75.0, 200 + 100 * trial))
+        want = np.empty(cand.size)
+        ik.candidate_gaps_jit(rest, x, y, band_lo, band_hi, 0.8, 0.6, cand, 55.0, 75.0, want)
+        assert np.array_equal(ik.candidate_gaps(rest, tracks, cand, 55.0, 75.0, kept=kept, key=0.0), want)
+        assert np.array_equal(ik.candidate_gaps(rest, tracks, cand, 55.0, 75.0), want)
+    assert list(kept) == [0.0]
+    for key in range(1, ik.KEPT_CANDIDATE_SETS + 2):
+        ik.candidate_gaps(rest, tracks, cand + 0.01 * key, 55.0, 75.0, kept=kept, key=key)
+    assert len(kept) == ik.KEPT_CANDIDATE_SETS
+    with pytest.raises(ValueError, match="another candidate set"):
+        ik.candidate_gaps(rest, tracks, cand + 0.5, 55.0, 75.0, kept=kept, key=0.0)
+
+
 def test_profile_add_matches_bincount_order():
     rng = np.random.default_rng(7)
     idx = rng.integers(-5, 60, (9, 200))  # many hits per bin, some outside
@@ -44,14 +71,24 @@ def test_profile_add_matches_bincount_order():
 
 
 def test_shortfall_terms_match_numpy():
+    """Random profiles with a hole, and rows at the edge of the kernel's shortcut (terms known to be
+    0 without the divisions): constant rows at target 1 (t equal to its local mean), rows a hair
+    above and below the target, zeros, denormals."""
     rng = np.random.default_rng(9)
-    fixed, prof = rng.uniform(0.0, 2.0, 500), rng.uniform(0.0, 2.0, (4, 500))
-    prof[:, 100:130] = 0.0
-    out = np.empty(prof.shape)
-    ik.shortfall_terms_jit(fixed, prof, 25, 0.8, out)
-    t = fixed[None, :] + prof
-    c = np.cumsum(np.pad(t, ((0, 0), (1, 0))), axis=1)
-    i = np.arange(500)
-    lo, hi = np.maximum(0, i - 25), np.minimum(500, i + 26)
-    local = (c[:, hi] - c[:, lo]) / (hi - lo)
-    assert np.array_equal(out, np.maximum(0.0, 1.0 - t / np.maximum(0.8 * local, 1e-300)) ** 2)
+    fixed, prof = rng.uniform(0.0, 2.0, 500), rng.uniform(0.0, 2.0, (10, 500))
+    prof[:4, 100:130] = 0.0
+    prof[4] = 0.3
+    prof[5] = 0.3 * (1.0 + 1e-13 * rng.standard_normal(500))
+    prof[6] = 0.3 * (1.0 + 1e-16 * rng.standard_normal(500))
+    prof[7] = 0.0
+    prof[8] = 1e-310 * rng.uniform(0.0, 1.0, 500)
+    prof[9] = np.where(np.arange(500) % 7 == 0, 0.0, 0.3)
+    for fx, target in ((fixed, 0.8), (np.zeros(500), 1.0), (np.zeros(500), 0.8), (np.full(500, 1e-305), 1.0)):
+        out = np.empty(prof.shape)
+        ik.shortfall_terms_jit(fx, prof, 25, target, out)
+        t = fx[None, :] + prof
+        c = np.cumsum(np.pad(t, ((0, 0), (1, 0))), axis=1)
+        i = np.arange(500)
+        lo, hi = np.maximum(0, i - 25), np.minimum(500, i + 26)
+        local = (c[:, hi] - c[:, lo]) / (hi - lo)
+        assert np.array_equal(out, np.maximum(0.0, 1.0 - t / np.maximum(target * local, 1e-300)) ** 2)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["max_gap", "inside_sorted", "max_gaps_jit", "max_gaps_numpy", "profile_add_jit", "profile_add_numpy"]
+__all__ = ["max_gap", "inside_sorted", "candidate_gaps", "candidate_radii_jit", "sorted_gaps_jit", "max_gaps_jit", "max_gaps_numpy", "profile_add_jit", "profile_add_numpy"]
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -131,6 +131,32 @@ def shortfall_terms_jit(fixed, profiles, win, target, out):  # pragma: no cover 
             out[p, i] = v * v
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _candidate_sorted(d, x, y, band_lo, band_hi, ex, ey, lo, hi, order, key, srt):  # pragma: no cover - jit
+    # srt[:n] = the sorted radii hypot(x + d ex, y + d ey) inside their band and [lo, hi]; returns n. `order`
+    # is kept from the call before and re-sorted by insertion (the offsets move the radii little and alike)
+    m = x.shape[0]
+    inf = np.inf
+    dx = d * ex
+    dy = d * ey
+    for k in range(m):
+        r = np.hypot(x[k] + dx, y[k] + dy)
+        key[k] = r if (r >= band_lo[k] and r < band_hi[k] and r >= lo and r <= hi) else inf
+    for i in range(1, m):  # insertion sort of order by key
+        o = order[i]
+        v = key[o]
+        j = i - 1
+        while j >= 0 and key[order[j]] > v:
+            order[j + 1] = order[j]
+            j -= 1
+        order[j + 1] = o
+    n = 0
+    while n < m and key[order[n]] < inf:
+        srt[n] = key[order[n]]
+        n += 1
+    return n
+
+
 @njit(cache=True, nogil=True)
 def candidate_gaps_jit(rest, x, y, band_lo, band_hi, ex, ey, cand, lo, hi, out):  # pragma: no cover - jit
     """:func:`max_gaps_jit` of the tracks of one pass at each candidate offset: ``out[c]`` the
@@ -146,27 +172,54 @@ def candidate_gaps_jit(rest, x, y, band_lo, band_hi, ex, ey, cand, lo, hi, out):
     order = np.arange(m)
     key = np.empty(m, np.float64)
     srt = np.empty(m, np.float64)
-    inf = np.inf
     for c in range(cand.shape[0]):
-        d = cand[c]
-        dx = d * ex
-        dy = d * ey
-        for k in range(m):
-            r = np.hypot(x[k] + dx, y[k] + dy)
-            key[k] = r if (r >= band_lo[k] and r < band_hi[k] and r >= lo and r <= hi) else inf
-        for i in range(1, m):  # insertion sort of order by key
-            o = order[i]
-            v = key[o]
-            j = i - 1
-            while j >= 0 and key[order[j]] > v:
-                order[j + 1] = order[j]
-                j -= 1
-            order[j + 1] = o
-        n = 0
-        while n < m and key[order[n]] < inf:
-            srt[n] = key[order[n]]
-            n += 1
+        n = _candidate_sorted(cand[c], x, y, band_lo, band_hi, ex, ey, lo, hi, order, key, srt)
         out[c] = _merged_max_gap(rest, srt, n)
+
+
+@njit(cache=True, nogil=True)
+def candidate_radii_jit(x, y, band_lo, band_hi, ex, ey, cand, lo, hi, rows, counts):  # pragma: no cover - jit
+    """The sorted radii :func:`candidate_gaps_jit` merges, kept: ``rows[c, :counts[c]]`` those of
+    candidate ``cand[c]``. rows : (C, M) float64; counts : (C,) int64."""
+    m = x.shape[0]
+    order = np.arange(m)
+    key = np.empty(m, np.float64)
+    for c in range(cand.shape[0]):
+        counts[c] = _candidate_sorted(cand[c], x, y, band_lo, band_hi, ex, ey, lo, hi, order, key, rows[c])
+
+
+@njit(cache=True, nogil=True)
+def sorted_gaps_jit(rest, rows, counts, out):  # pragma: no cover - jit
+    """``out[c]``: the largest gap of ``rest`` merged with ``rows[c, :counts[c]]`` (both sorted)."""
+    for c in range(rows.shape[0]):
+        out[c] = _merged_max_gap(rest, rows[c], counts[c])
+
+
+#: Candidate sets whose sorted radii :func:`candidate_gaps` keeps (each ``(C, M)`` float64).
+KEPT_CANDIDATE_SETS = 8
+
+
+def candidate_gaps(rest, tracks, cand, lo, hi, *, kept=None, key=None):
+    """:func:`candidate_gaps_jit` of ``cand`` ``(C,) float64`` for the tracks ``(x, y, band_lo,
+    band_hi, ex, ey)``: ``(C,) float64``. With a dict ``kept`` and a ``key`` naming the candidate
+    set (the coordinate descent tries one set again and again against other fixed passes), the
+    set's sorted radii are made once (:func:`candidate_radii_jit`) and only merged with ``rest``
+    afterwards (:func:`sorted_gaps_jit`): the same values."""
+    x, y, band_lo, band_hi, ex, ey = tracks
+    cand = np.ascontiguousarray(cand, np.float64)
+    out = np.empty(cand.shape[0])
+    if kept is None or key is None or (key not in kept and len(kept) >= KEPT_CANDIDATE_SETS):
+        candidate_gaps_jit(rest, x, y, band_lo, band_hi, ex, ey, cand, float(lo), float(hi), out)
+        return out
+    if key not in kept:
+        rows, counts = np.empty((cand.shape[0], x.shape[0])), np.empty(cand.shape[0], np.int64)
+        candidate_radii_jit(x, y, band_lo, band_hi, ex, ey, cand, float(lo), float(hi), rows, counts)
+        kept[key] = (cand.copy(), rows, counts)
+    c0, rows, counts = kept[key]
+    if not np.array_equal(c0, cand):
+        raise ValueError("candidate_gaps: another candidate set under a kept key")
+    sorted_gaps_jit(rest, rows, counts, out)
+    return out
 
 
 def max_gap(rest, rows, lo, hi):

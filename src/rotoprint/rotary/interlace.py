@@ -389,12 +389,11 @@ def plan_passes(
     band_lo = np.concatenate([np.full(len(xy), bands[j][0]) for j, xy in enumerate(xys)]) if xys else np.zeros(0)
     band_hi = np.concatenate([np.full(len(xy), bands[j][1]) for j, xy in enumerate(xys)]) if xys else np.zeros(0)
 
-    def candidate_gaps(rest: np.ndarray, cand: np.ndarray) -> np.ndarray:
-        """``_ik.max_gap(rest, radii(cand), lo, hi)`` in one kernel."""
-        out = np.empty(cand.shape[0])
-        _ik.candidate_gaps_jit(rest, all_x, all_y, band_lo, band_hi,
-                               float(e[0]), float(e[1]), np.ascontiguousarray(cand, np.float64), float(lo), float(hi), out)
-        return out
+    tracks, kept = (all_x, all_y, band_lo, band_hi, float(e[0]), float(e[1])), {}
+
+    def candidate_gaps(rest: np.ndarray, cand: np.ndarray, key=None) -> np.ndarray:
+        """``_ik.max_gap(rest, radii(cand), lo, hi)`` in one kernel (a set named by ``key``: its radii kept)."""
+        return _ik.candidate_gaps(rest, tracks, cand, lo, hi, kept=kept, key=key)
     d_mm = footprint_um * 1e-3
     a_mm = 0.5 * d_mm
     period = head.rows * head.pitch_mm  # the tracks of one row repeat after about this
@@ -468,7 +467,7 @@ def plan_passes(
                 # rounds over the whole row period, then one finer round about each offset
                 cand = b0[q] + (coarse if rnd < _ROUNDS else np.mod(offs[q] - b0[q] + np.linspace(-step, step, 33), period))
                 rest = _ik.inside_sorted(np.concatenate([radii(offs[p])[0] for p in range(n) if p != q]), lo, hi)
-                gmax = candidate_gaps(rest, cand)
+                gmax = candidate_gaps(rest, cand, key=b0[q] if rnd < _ROUNDS else None)  # the coarse set: b0[q] + coarse
                 # the largest gap first (to _GAP_QUANTUM_UM); among equal ones the profile (measured
                 # on the test design: the profile first gives larger gaps and no thinner film)
                 g_q = np.round(gmax * 1e3 / _GAP_QUANTUM_UM)
