@@ -213,6 +213,10 @@ def test_transform_restored_takes_the_layers_edge_zone(head):
     small = test_design(100)
     with pytest.raises(ConfigError, match="another design"):
         transform_restored(small, head, Placement(100, 100, PX, PX, inner_radius_mm=60.0), st, shares, zone=z)
+    other = d.copy()
+    other[50:60, 50:60] = 0  # the same size, another design
+    with pytest.raises(ConfigError, match="another design"):
+        transform_restored(other, head, pl, st, shares, zone=z)
     grey = np.where(d > 0, np.where(np.arange(200) % 2 == 0, 255, 128), 0).astype(np.uint8)  # two ink values
     assert edge_zone(grey, head, pl) is None
 

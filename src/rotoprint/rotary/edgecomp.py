@@ -336,8 +336,8 @@ class EdgeZone:
 
     Attributes
     ----------
-    shape : (int, int)
-        The design's ``(H, W)``.
+    design : (H, W) uint8
+        A read-only copy of the design it was made of (a pass of another design is refused).
     mask, rim : (H, W) bool
         The printing pixels (:func:`~rotoprint.rotary.simulate.design_mask`) and those of them
         beside an empty one (:func:`design_rim`).
@@ -351,7 +351,7 @@ class EdgeZone:
         Resolved for the placement.
     """
 
-    shape: tuple
+    design: np.ndarray
     mask: np.ndarray
     rim: np.ndarray
     level: int
@@ -375,7 +375,9 @@ def edge_zone(design: np.ndarray, head, placement, options: EdgeRestore | None =
     level = int(design_levels(np.array([255], np.uint8), head.grey_levels, kind="binary")[0])
     zone_flat, _ = BINARY_LEVELS["jit"](np.where(edge_zone_mask(mask, placement, opts), design, 0).astype(np.uint8), level)
     h, w = design.shape
-    return EdgeZone(shape=(h, w), mask=mask, rim=design_rim(mask) if opts.radial_only else mask, level=level, zone_flat=zone_flat,
+    own = design.copy()
+    own.flags.writeable = False
+    return EdgeZone(design=own, mask=mask, rim=design_rim(mask) if opts.radial_only else mask, level=level, zone_flat=zone_flat,
                     zone_blocks=ink_blocks(zone_flat, w, h), options=opts)
 
 
@@ -423,7 +425,7 @@ def transform_restored(design: np.ndarray, head, placement, setup, shares, *, op
     opts = (options or EdgeRestore()).resolved(placement)
     design = np.asarray(design)
     z = edge_zone(design, head, placement, opts) if zone is None else zone
-    if z is not None and (z.shape != design.shape or z.options != opts):
+    if z is not None and (z.options != opts or not np.array_equal(z.design, design)):
         raise ConfigError("edge restore: the edge zone was made for another design or other options")
     if z is None:
         return opts.thin(transform_exact(design, head, placement, setup), shares, design, pass_index=pass_index)
