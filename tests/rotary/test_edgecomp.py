@@ -208,7 +208,7 @@ def test_transform_restored_takes_the_layers_edge_zone(head):
     assert all(np.array_equal(x.levels, y.levels) for x, y in zip(a.swathes, b.swathes))
     c = transform_restored(d, head, pl, dataclasses.replace(st, backend="numpy"), shares, pass_index=1, zone=z)  # the reference kernels
     assert all(np.array_equal(x.levels, y.levels) for x, y in zip(a.swathes, c.swathes))
-    with pytest.raises(ConfigError, match="another design or other options"):
+    with pytest.raises(ConfigError, match="other options"):
         transform_restored(d, head, pl, st, shares, options=EdgeRestore(zone_um=30.0), zone=z)
     small = test_design(100)
     with pytest.raises(ConfigError, match="another design"):
@@ -240,3 +240,26 @@ def test_radial_near_kernel_matches_radial_edge_near():
         a = math.radians(angle)
         ek.radial_near_jit(m, design_rim(m), col, row, 60.0, PX, PX, 100.0, math.cos(a), math.sin(a), zone, got)
         assert np.array_equal(want, got) and 1000 < int(want.sum()) < 50_000
+
+
+def test_edge_zone_refuses_a_wider_radial_zone_and_another_head_or_placement(head):
+    """The radial zone is at most a pixel on every route (the jit one checks it as radial_edge_near
+    does); a zone made for another placement or another head's drop levels is refused."""
+    from rotoprint.rotary.edgecomp import edge_zone, transform_restored
+    from rotoprint.rotary.testimage import test_design
+
+    d = test_design(120)
+    pl = Placement(120, 120, PX, PX, inner_radius_mm=60.0)
+    st = RotarySetup(tilt_deg=20.0, dpi_y=1440.0)
+    shares = [np.full(head.nozzles, 0.45) for _ in transform_exact(d, head, pl, st).swathes]
+    with pytest.raises(ConfigError, match="at most a pixel"):
+        edge_zone(d, head, pl, EdgeRestore(zone_um=120.0))
+    with pytest.raises(ConfigError, match="at most a pixel"):
+        transform_restored(d, head, pl, st, shares, options=EdgeRestore(zone_um=120.0))
+    z = edge_zone(d, head, pl, EdgeRestore(zone_um=50.0, radial_only=False))
+    fine = Placement(120, 120, 0.02, 0.02, inner_radius_mm=60.0)
+    with pytest.raises(ConfigError, match="another design, placement, head"):
+        transform_restored(d, head, fine, st, shares, options=EdgeRestore(zone_um=50.0, radial_only=False), zone=z)
+    grey = head.model_copy(update={"grey_levels": 3})
+    with pytest.raises(ConfigError, match="another design, placement, head"):
+        transform_restored(d, grey, pl, st, shares, options=EdgeRestore(zone_um=50.0, radial_only=False), zone=z)

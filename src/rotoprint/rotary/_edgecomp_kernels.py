@@ -38,8 +38,9 @@ RESTORE_PIECE = 64
 @njit(cache=True, nogil=True)
 def restore_candidates_jit(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, width, height, zone_flat, zone_sat,
                            f, p, gain, o, first, claim_rows, out_row, out_k):  # pragma: no cover - jit
-    """Write the candidates' print rows and nozzles to ``out_row``, ``out_k`` ``(>= M,) int32``
-    (window order, rows ascending within a window); returns ``M``.
+    """Write the candidates' print rows and nozzles to ``out_row``, ``out_k`` (window order, rows
+    ascending within a window); returns their number ``M``. The buffers, ``(count.sum(),) int32``,
+    one slot a window drop: the branch-free loops write a slot before they know whether it counts.
 
     Parameters as :func:`rotoprint.rotary._exact_kernels.windows_sample_thin_numba`'s (``A .. F``
     the coefficients, the windows, the firing rows' cos / sin, the design's size), with

@@ -204,7 +204,9 @@ def candidate_gaps(rest, tracks, cand, lo, hi, *, kept=None, key=None):
     band_hi, ex, ey)``: ``(C,) float64``. With a dict ``kept`` and a ``key`` naming the candidate
     set (the coordinate descent tries one set again and again against other fixed passes), the
     set's sorted radii are made once (:func:`candidate_radii_jit`) and only merged with ``rest``
-    afterwards (:func:`sorted_gaps_jit`): the same values."""
+    afterwards (:func:`sorted_gaps_jit`): the same values. The key names the candidates only (they
+    are checked); ``tracks``, ``lo`` and ``hi`` must be those the set was kept with (one
+    ``plan_passes`` call keeps its own ``kept``)."""
     x, y, band_lo, band_hi, ex, ey = tracks
     cand = np.ascontiguousarray(cand, np.float64)
     out = np.empty(cand.shape[0])

@@ -338,6 +338,9 @@ class EdgeZone:
     ----------
     design : (H, W) uint8
         A read-only copy of the design it was made of (a pass of another design is refused).
+    placement : Placement
+    grey_levels : int
+        The head's drop levels (``level`` follows from them).
     mask, rim : (H, W) bool
         The printing pixels (:func:`~rotoprint.rotary.simulate.design_mask`) and those of them
         beside an empty one (:func:`design_rim`).
@@ -352,6 +355,8 @@ class EdgeZone:
     """
 
     design: np.ndarray
+    placement: object
+    grey_levels: int
     mask: np.ndarray
     rim: np.ndarray
     level: int
@@ -371,13 +376,16 @@ def edge_zone(design: np.ndarray, head, placement, options: EdgeRestore | None =
     design = np.ascontiguousarray(design)
     if design_kind(design) != "binary":
         return None
+    if opts.radial_only and opts.zone_um * 1e-3 > min(placement.pitch_x_mm, placement.pitch_y_mm) + 1e-12:  # radial_edge_near's rule
+        raise ConfigError(f"a radial edge zone must be at most a pixel ({1e3 * min(placement.pitch_x_mm, placement.pitch_y_mm):.1f} um), "
+                          f"got {opts.zone_um!r}")
     mask = design_mask(design, head.grey_levels)
     level = int(design_levels(np.array([255], np.uint8), head.grey_levels, kind="binary")[0])
     zone_flat, _ = BINARY_LEVELS["jit"](np.where(edge_zone_mask(mask, placement, opts), design, 0).astype(np.uint8), level)
     h, w = design.shape
     own = design.copy()
     own.flags.writeable = False
-    return EdgeZone(design=own, mask=mask, rim=design_rim(mask) if opts.radial_only else mask, level=level, zone_flat=zone_flat,
+    return EdgeZone(design=own, placement=placement, grey_levels=int(head.grey_levels), mask=mask, rim=design_rim(mask) if opts.radial_only else mask, level=level, zone_flat=zone_flat,
                     zone_blocks=ink_blocks(zone_flat, w, h), options=opts)
 
 
@@ -425,8 +433,9 @@ def transform_restored(design: np.ndarray, head, placement, setup, shares, *, op
     opts = (options or EdgeRestore()).resolved(placement)
     design = np.asarray(design)
     z = edge_zone(design, head, placement, opts) if zone is None else zone
-    if z is not None and (z.options != opts or not np.array_equal(z.design, design)):
-        raise ConfigError("edge restore: the edge zone was made for another design or other options")
+    if z is not None and (z.options != opts or z.placement != placement or z.grey_levels != head.grey_levels
+                          or not np.array_equal(z.design, design)):
+        raise ConfigError("edge restore: the edge zone was made for another design, placement, head or other options")
     if z is None:
         return opts.thin(transform_exact(design, head, placement, setup), shares, design, pass_index=pass_index)
     thinned = transform_exact(design, head, placement, setup, kind="binary", thin=ThinShares(shares, pass_index))
@@ -442,7 +451,7 @@ def transform_restored(design: np.ndarray, head, placement, setup, shares, *, op
         gain, o = restore_pattern(nozzles, f, opts.coefficient, pass_index)  # gain 0 unless 0 < f < 1 (c > 0)
         gain[dead] = 0.0  # a dead nozzle has no drop to restore
         w = sm.windows
-        cap = int(w.count.sum())  # at most one candidate a window drop (8 bytes each, as the maps' own index; pages touched as written)
+        cap = int(w.count.sum())  # the kernel's buffers: one slot a window drop (8 bytes each; pages touched as written)
         rows, ks = np.empty(cap, np.int32), np.empty(cap, np.int32)
         m = kern(*w.coefficients, w.nozzle, w.row, w.count, w.cos_row, w.sin_row, w.width, w.height, z.zone_flat, z.zone_blocks,
                  f, p, gain, o, int(sm.first_firing), claim_rows(w.cos_row, w.sin_row), rows, ks)

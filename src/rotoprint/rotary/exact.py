@@ -356,9 +356,15 @@ def exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup | None
 @functools.lru_cache(maxsize=8)
 def _swathe_plan(head: InkjetHead, tilt_deg: float, r_in: float, r_out: float, mount_angle_deg: float, direction: int,
                  max_swathes, overlap_mm: float, seam_mm: float) -> SwathePlan:
-    # the passes of a layer differ in pivot offset (and clock) only: their maps share one plan (not mutated)
-    return plan_swathes(head, tilt_deg=tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out, mount_angle_deg=mount_angle_deg,
+    # the passes of a layer differ in pivot offset (and clock) only: their maps share one plan, its
+    # arrays read-only (the prints' SwatheImage.enabled may be a plan's own array: shared, so not writable)
+    plan = plan_swathes(head, tilt_deg=tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out, mount_angle_deg=mount_angle_deg,
                         direction=direction, max_swathes=max_swathes, overlap_mm=overlap_mm).with_seam(seam_mm)
+    for sw in plan.swathes:
+        for a in (sw.enabled, sw.usable):
+            if isinstance(a, np.ndarray):
+                a.flags.writeable = False
+    return plan
 
 
 @functools.lru_cache(maxsize=8)
