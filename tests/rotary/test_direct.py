@@ -356,3 +356,19 @@ def test_part_placement_round_trip_and_validation():
         slice_rotary(box_mesh(), load_device("perfactory-sxga"), layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0)
     with pytest.raises(ConfigError):
         slice_rotary(box_mesh(), DEV, layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0, backend="cuda")
+
+
+def test_one_floor_kept_test_is_kept_jit():
+    """The row sweep's thinned test ``floor((i + 1) f + o) > i f + o`` (one floor) is kept_jit's
+    ``floor((i + 1) f + o) > floor(i f + o)`` bit for bit: k > floor(a) exactly when k > a for an
+    integer k; here on exact integer hits (f = 1/2, 1/4, o = 0) and on random shares, phases and
+    firings (negative ones too)."""
+    from rotoprint.rotary._thin_kernels import kept_numpy
+
+    rng = np.random.default_rng(5)
+    i = np.concatenate([np.arange(-300, 300), rng.integers(-10**6, 10**6, 20000)]).astype(np.float64)
+    f = np.concatenate([np.full(600, 0.5), rng.uniform(0.0, 1.0, 20000)])
+    o = np.concatenate([np.zeros(300), np.full(300, 0.25), rng.uniform(0.0, 1.0, 20000)])
+    for ff in (f, np.full_like(f, 0.25), np.full_like(f, 1.0 / 3.0)):
+        one = np.floor((i + 1.0) * ff + o) > i * ff + o
+        np.testing.assert_array_equal(one, kept_numpy(i, ff, o))

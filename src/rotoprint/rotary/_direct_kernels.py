@@ -99,7 +99,8 @@ def _thin_rows(out, r0, r1, i0, c0, c1, fc, oc, state, level):  # pragma: no cov
         i = float(r + i0)
         row = out[r, c0:c1]
         for c in range(c1 - c0):
-            keep = np.floor((i + 1.0) * f[c] + o[c]) > np.floor(i * f[c] + o[c])
+            # kept_jit's test with one floor: for a real a and an integer k, k > floor(a) exactly when k > a
+            keep = np.floor((i + 1.0) * f[c] + o[c]) > i * f[c] + o[c]
             row[c] = level if keep else s[c]
 
 
