@@ -356,3 +356,46 @@ def test_part_placement_round_trip_and_validation():
         slice_rotary(box_mesh(), load_device("perfactory-sxga"), layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0)
     with pytest.raises(ConfigError):
         slice_rotary(box_mesh(), DEV, layer_height_mm=0.5, tilt_deg=0.0, inner_radius_mm=40.0, backend="cuda")
+
+
+def test_one_floor_kept_test_is_kept_jit():
+    """The row sweep's thinned test ``floor((i + 1) f + o) > i f + o`` (one floor) is kept_jit's
+    ``floor((i + 1) f + o) > floor(i f + o)`` bit for bit: k > floor(a) exactly when k > a for an
+    integer k; here on exact integer hits (f = 1/2, 1/4, o = 0) and on random shares, phases and
+    firings (negative ones too)."""
+    from rotoprint.rotary._thin_kernels import kept_numpy
+
+    rng = np.random.default_rng(5)
+    i = np.concatenate([np.arange(-300, 300), rng.integers(-10**6, 10**6, 20000)]).astype(np.float64)
+    f = np.concatenate([np.full(600, 0.5), rng.uniform(0.0, 1.0, 20000)])
+    o = np.concatenate([np.zeros(300), np.full(300, 0.25), rng.uniform(0.0, 1.0, 20000)])
+    for ff in (f, np.full_like(f, 0.25), np.full_like(f, 1.0 / 3.0)):
+        one = np.floor((i + 1.0) * ff + o) > i * ff + o
+        np.testing.assert_array_equal(one, kept_numpy(i, ff, o))
+
+
+def test_fill_writes_every_byte_of_its_image():
+    """The jit fill allocates its image uninitialised: on an image of garbage it gives the numpy
+    reference's image (rows without ink, columns beside it, tracks of share 0, no span at all, and
+    two thinned tracks in one column, which the tiled writes fill after the sweep)."""
+    rng = np.random.default_rng(31)
+    n_tr = 120
+    r = np.sort(rng.uniform(30, 40, n_tr))
+    psi0 = rng.uniform(-0.05, 0.05, n_tr)
+    for trial in range(12):
+        frac = rng.choice([1.0, 0.0, 0.3, 0.7, 1.0 / 3.0], n_tr)
+        if trial == 0:
+            frac[:] = 0.0  # no track writes: no span events
+        cols = rng.permutation(200)[:n_tr]
+        if trial % 3 == 2:  # two thinned tracks in one column
+            thin = np.flatnonzero((frac > 0) & (frac < 1))
+            cols[thin[1]] = cols[thin[0]]
+        n = rng.integers(3, 30)
+        x, y = rng.uniform(31, 39, n), rng.uniform(-3, 3, n)
+        args = (x, y, np.roll(x, -1), np.roll(y, -1), r * r, psi0, cols, frac, rng.uniform(0, 1, n_tr))
+        kw = dict(dphi=0.002, direction=int(rng.choice([1, -1])), i0=int(rng.integers(-200, 50)), n_f=350, n_cols=200,
+                  fill=["nonzero", "evenodd"][trial % 2], level=2)
+        out = np.full((kw["n_f"], kw["n_cols"]), 171, np.uint8)
+        got = K._direct_fill(*K._prep(*args), kw["dphi"], kw["direction"], kw["i0"], kw["n_f"], kw["fill"] == "evenodd",
+                             np.uint8(kw["level"]), out, *K._NO_EDGE)
+        np.testing.assert_array_equal(got, K.direct_fill_numpy(*args, **kw))

@@ -368,7 +368,7 @@ class BuildPlan:
             blocks = [sections[q] for q in self._higher(part) if len(sections[q])]
             # the edge restore's region is the part minus the higher-priority parts (their drops go below)
             pr = lat.print_from_segments(seg, layer_index=index, cut=blocks)
-            lv = [s.levels.copy() for s in pr.swathes]
+            lv = [s.levels for s in pr.swathes]  # pr is this call's own print: its images are edited in place, not copied
             for q in blocks:
                 ins = inside.print_from_segments(q, layer_index=index)
                 for j, s in enumerate(ins.swathes):
