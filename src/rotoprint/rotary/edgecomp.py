@@ -133,8 +133,15 @@ def edge_distance_um(mask: np.ndarray, col: np.ndarray, row: np.ndarray, pitch_x
     return out
 
 
+def _check_radial_zone(placement, zone_um: float) -> None:
+    """One-line :class:`ConfigError` unless the radial zone is at most the smaller pixel pitch."""
+    px_um = 1e3 * min(placement.pitch_x_mm, placement.pitch_y_mm)
+    if zone_um * 1e-3 > min(placement.pitch_x_mm, placement.pitch_y_mm) + 1e-12:
+        raise ConfigError(f"a radial edge zone must be at most a pixel ({px_um:.1f} um), got {zone_um!r}")
+
+
 def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarray, zone_um: float, *,
-                     rim: np.ndarray | None = None) -> np.ndarray:
+                     rim: np.ndarray | None = None, backend: str = "numpy") -> np.ndarray:
     """Sites inside the design with an edge within ``zone_um`` along the platform radius.
 
     Parameters
@@ -149,16 +156,27 @@ def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarr
         tells it: an empty stretch is at least a pixel wide).
     rim : (H, W) bool, optional
         :func:`design_rim` of ``mask`` (made here when not given).
+    backend : {"numpy", "jit"}
+        ``"jit"``: the same float operations in one loop (``_edgecomp_kernels.radial_near_jit``).
 
     Returns
     -------
     (M,) bool
     """
     pl = placement
-    if zone_um * 1e-3 > min(pl.pitch_x_mm, pl.pitch_y_mm) + 1e-12:
-        raise ConfigError(f"a radial edge zone must be at most a pixel ({1e3 * min(pl.pitch_x_mm, pl.pitch_y_mm):.1f} um), got {zone_um!r}")
+    _check_radial_zone(pl, zone_um)
     m = np.asarray(mask, bool)
     h, w = m.shape
+    col, row = np.asarray(col, np.float64), np.asarray(row, np.float64)
+    rim = design_rim(m) if rim is None else rim
+    if backend == "jit":
+        from ._edgecomp_kernels import radial_near_jit
+
+        near = np.empty(col.size, bool)
+        a = math.radians(pl.angle_deg)
+        radial_near_jit(m, rim, col, row, pl.inner_radius_mm, pl.pitch_x_mm, pl.pitch_y_mm, pl.height_px / 2.0,
+                        math.cos(a), math.sin(a), float(zone_um), near)
+        return near
 
     def inside(c: np.ndarray, r: np.ndarray) -> np.ndarray:
         i, j = np.floor(r).astype(np.int64), np.floor(c).astype(np.int64)
@@ -167,10 +185,8 @@ def radial_edge_near(mask: np.ndarray, placement, col: np.ndarray, row: np.ndarr
         out[ok] = m[i[ok], j[ok]]
         return out
 
-    col, row = np.asarray(col, np.float64), np.asarray(row, np.float64)
     # only a printing pixel with an empty one among its 8 neighbours can hold a site within a
-    # pixel of an edge: the rest is not looked at again
-    rim = design_rim(m) if rim is None else rim
+    # pixel of an edge (the rim): the rest is not looked at again
     i, j = np.floor(row).astype(np.int64), np.floor(col).astype(np.int64)
     ok = (i >= 0) & (i < h) & (j >= 0) & (j < w)
     cand = np.zeros(col.size, bool)
@@ -343,7 +359,7 @@ class EdgeZone:
         The head's drop levels (``level`` follows from them).
     mask, rim : (H, W) bool
         The printing pixels (:func:`~rotoprint.rotary.simulate.design_mask`) and those of them
-        beside an empty one (:func:`design_rim`).
+        beside an empty one (:func:`design_rim`; None for the all-edges zone, which does not use it).
     level : int
         The drop level of the design's ink.
     zone_flat : (H W + 1,) uint8
@@ -358,7 +374,7 @@ class EdgeZone:
     placement: object
     grey_levels: int
     mask: np.ndarray
-    rim: np.ndarray
+    rim: np.ndarray | None
     level: int
     zone_flat: np.ndarray
     zone_blocks: np.ndarray
@@ -376,16 +392,15 @@ def edge_zone(design: np.ndarray, head, placement, options: EdgeRestore | None =
     design = np.ascontiguousarray(design)
     if design_kind(design) != "binary":
         return None
-    if opts.radial_only and opts.zone_um * 1e-3 > min(placement.pitch_x_mm, placement.pitch_y_mm) + 1e-12:  # radial_edge_near's rule
-        raise ConfigError(f"a radial edge zone must be at most a pixel ({1e3 * min(placement.pitch_x_mm, placement.pitch_y_mm):.1f} um), "
-                          f"got {opts.zone_um!r}")
+    if opts.radial_only:
+        _check_radial_zone(placement, opts.zone_um)  # radial_edge_near's rule, before any pass is made
     mask = design_mask(design, head.grey_levels)
     level = int(design_levels(np.array([255], np.uint8), head.grey_levels, kind="binary")[0])
     zone_flat, _ = BINARY_LEVELS["jit"](np.where(edge_zone_mask(mask, placement, opts), design, 0).astype(np.uint8), level)
     h, w = design.shape
     own = design.copy()
     own.flags.writeable = False
-    return EdgeZone(design=own, placement=placement, grey_levels=int(head.grey_levels), mask=mask, rim=design_rim(mask) if opts.radial_only else mask, level=level, zone_flat=zone_flat,
+    return EdgeZone(design=own, placement=placement, grey_levels=int(head.grey_levels), mask=mask, rim=design_rim(mask) if opts.radial_only else None, level=level, zone_flat=zone_flat,
                     zone_blocks=ink_blocks(zone_flat, w, h), options=opts)
 
 
@@ -459,13 +474,8 @@ def transform_restored(design: np.ndarray, head, placement, setup, shares, *, op
             continue
         rows, ks = rows[:m], ks[:m]
         col, row = placement.to_design(*landing_xy(thinned, sw, ks, rows.astype(np.int64) + sw.first_firing))
-        if opts.radial_only and maps.backend == "jit":  # radial_edge_near's arithmetic, in one loop
-            near = np.empty(m, bool)
-            a = math.radians(placement.angle_deg)
-            _ek.radial_near_jit(z.mask, z.rim, col, row, placement.inner_radius_mm, placement.pitch_x_mm, placement.pitch_y_mm,
-                                placement.height_px / 2.0, math.cos(a), math.sin(a), float(opts.zone_um), near)
-        elif opts.radial_only:
-            near = radial_edge_near(z.mask, placement, col, row, opts.zone_um, rim=z.rim)
+        if opts.radial_only:
+            near = radial_edge_near(z.mask, placement, col, row, opts.zone_um, rim=z.rim, backend=maps.backend)
         else:
             near = edge_distance_um(z.mask, col, row, placement.pitch_x_mm, placement.pitch_y_mm, opts.zone_um)
             near = (near > 0.0) & (near <= opts.zone_um)
