@@ -27,7 +27,7 @@ import numpy as np
 from numba import njit
 
 from ._exact_kernels import _ink_state, _landing_index, _pointwise_index_numpy, _window_drops
-from ._thin_kernels import thin_floors_jit
+from ._thin_kernels import kept_jit, kept_numpy, thin_floors_jit
 
 __all__ = ["restore_candidates_jit", "restore_candidates_numpy", "radial_near_jit", "RESTORE_PIECE"]
 
@@ -87,7 +87,7 @@ def restore_candidates_jit(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, w
                 i = i0 + t
                 out_row[m] = lo + t
                 out_k[m] = k
-                m += (np.floor((i + 1.0) + pk) > np.floor(i + pk)) & \
+                m += kept_jit(i, 1.0, pk) & \
                     (zone_flat[_landing_index(a, b, d, e, C, F, cos_r[lo + t], sin_r[lo + t], width, height)] != 0)
     return m
 
@@ -99,8 +99,7 @@ def restore_candidates_numpy(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r,
     k, r = _window_drops(nozzle, row, count)  # window order, rows ascending
     i = r + float(first)
     f, p, gain, o = (np.asarray(x, np.float64)[k] for x in (f, p, gain, o))
-    sel = (gain > 0.0) & ~(np.floor((i + 1.0) * f + p) > np.floor(i * f + p)) & (np.floor((i + 1.0) + p) > np.floor(i + p)) \
-        & (np.floor((i + 1.0) * gain + o) > np.floor(i * gain + o))
+    sel = (gain > 0.0) & ~kept_numpy(i, f, p) & kept_numpy(i, 1.0, p) & kept_numpy(i, gain, o)
     k, r = k[sel], r[sel]
     sel = zone_flat[_pointwise_index_numpy(A, B, C, D, E, F, k, cos_r[r], sin_r[r], width, height)] != 0
     m = int(sel.sum())
