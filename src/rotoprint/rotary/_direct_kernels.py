@@ -110,13 +110,14 @@ def _thin_rows(out, r0, r1, i0, c0, c1, fc, oc, state, level):  # pragma: no cov
     f = fc[c0:c1]
     o = oc[c0:c1]
     s = state[c0:c1]
+    # the state is 0 or ``level``, so ``level if keep else s`` is ``s | keep * level``: in that form the
+    # loop vectorises on AVX2 too (the select did only with AVX-512's masks: 14 x slower on an AVX2 EPYC)
     for r in range(r0, r1):
         i = float(r + i0)
         row = out[r, c0:c1]
         for c in range(c1 - c0):
             # kept_jit's test with one floor: for a real a and an integer k, k > floor(a) exactly when k > a
-            keep = np.floor((i + 1.0) * f[c] + o[c]) > i * f[c] + o[c]
-            row[c] = level if keep else s[c]
+            row[c] = s[c] | (np.uint8(np.floor((i + 1.0) * f[c] + o[c]) > i * f[c] + o[c]) * level)
 
 
 @njit(cache=True, nogil=True)
