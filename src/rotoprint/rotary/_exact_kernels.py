@@ -259,7 +259,9 @@ def _landing_index(a, b, d, e, C, F, c, s, width, height):  # pragma: no cover -
     u = a * c + b * s + C
     v = d * c + e * s + F
     ok = (u >= 0.0) & (v >= 0.0) & (u < width) & (v < height)
-    return (np.int64(v) * width + np.int64(u)) if ok else width * height
+    # where ok, 0 <= u < width < 2**31: truncated to int32 exactly as to int64, and a packed float64 -> int32
+    # conversion exists on AVX2 (-> int64 needs AVX-512), so the callers' loops vectorise there too
+    return (np.int64(np.int32(v)) * width + np.int64(np.int32(u))) if ok else width * height
 
 
 @njit(cache=True, nogil=True)
@@ -477,7 +479,6 @@ def _windows_sample_thin_nb(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, 
     sentinel = width * height
     g = np.empty(tile + 1, np.float64)
     tmp = np.empty(tile, np.int64)
-    zero = np.uint8(0)
     for r0 in range(0, n_rows, tile):
         r1 = min(r0 + tile, n_rows)
         for q in range(nozzle.shape[0]):
@@ -498,8 +499,8 @@ def _windows_sample_thin_nb(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, 
             thin_floors_jit(g, float(lo + first), n, f[k], o[k])
             col = out[lo:hi, k]
             if state == 2:  # every drop on ink: the level where kept, no landing point needed
-                for t in range(n):
-                    col[t] = level if g[t + 1] > g[t] else zero
+                for t in range(n):  # (arithmetic, not a select: the same bytes, and vectorised on AVX2 too)
+                    col[t] = np.uint8(g[t + 1] > g[t]) * level
                 continue
             cs = cos_r[lo:hi]
             ss = sin_r[lo:hi]
