@@ -31,16 +31,22 @@ from ._thin_kernels import kept_jit, kept_numpy, thin_floors_jit
 
 __all__ = ["restore_candidates_jit", "restore_candidates_numpy", "radial_near_jit", "RESTORE_PIECE"]
 
-#: Firing rows per piece whose zone blocks are looked at before its drops are.
+#: Firing rows per piece whose zone blocks are looked at before its drops are (at most 64: one bit a row).
 RESTORE_PIECE = 64
+
+#: De Bruijn's 64-bit constant: ``(w * _DE_BRUIJN) >> 58`` differs for every one-bit word ``w``, and
+#: ``_LOW_BIT`` maps it back to the bit's position.
+_DE_BRUIJN = np.uint64(0x03F79D71B4CA8B09)
+_LOW_BIT = np.zeros(64, np.int64)
+_LOW_BIT[((np.uint64(1) << np.arange(64, dtype=np.uint64)) * _DE_BRUIJN) >> np.uint64(58)] = np.arange(64)
 
 
 @njit(cache=True, nogil=True)
 def restore_candidates_jit(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, width, height, zone_flat, zone_sat,
                            f, p, gain, o, first, claim_rows, out_row, out_k):  # pragma: no cover - jit
     """Write the candidates' print rows and nozzles to ``out_row``, ``out_k`` (window order, rows
-    ascending within a window); returns their number ``M``. The buffers, ``(count.sum(),) int32``,
-    one slot a window drop: the branch-free loops write a slot before they know whether it counts.
+    ascending within a window); returns their number ``M``. The buffers: ``(count.sum(),) int32``
+    (at most one candidate a window drop).
 
     Parameters as :func:`rotoprint.rotary._exact_kernels.windows_sample_thin_numba`'s (``A .. F``
     the coefficients, the windows, the firing rows' cos / sin, the design's size), with
@@ -50,13 +56,15 @@ def restore_candidates_jit(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, w
     ``claim_rows`` the longest piece whose blocks can be claimed (longer ones are looked at drop by drop).
     """
     # Per piece of RESTORE_PIECE rows that can land on the zone: both rules' floors, one per firing
-    # (thin_floors_jit's form: firing t is kept where g[t + 1] > g[t]), then the few drops that
-    # pass both get the share-1 rule and their landing index.
+    # (thin_floors_jit's form: firing t is kept where g[t + 1] > g[t]); the drops that pass both as the bits
+    # of one word (an or-reduction, vectorised; RESTORE_PIECE <= 64), walked lowest first (de Bruijn), each
+    # then tested against the zone at its landing index and the share-1 rule.
     m = 0
     piece = max(1, min(RESTORE_PIECE, claim_rows))
     gt = np.empty(RESTORE_PIECE + 1, np.float64)
     gr = np.empty(RESTORE_PIECE + 1, np.float64)
-    sel = np.empty(RESTORE_PIECE, np.int64)
+    low_bit = _LOW_BIT
+    one = np.uint64(1)
     for q in range(nozzle.shape[0]):
         k = nozzle[q]
         g = gain[k]
@@ -78,17 +86,20 @@ def restore_candidates_jit(A, B, C, D, E, F, nozzle, row, count, cos_r, sin_r, w
             i0 = float(lo + first)
             thin_floors_jit(gt, i0, n, fk, pk)
             thin_floors_jit(gr, i0, n, g, ok)
-            c = 0
-            for t in range(n):  # branch-free: thinned out and restored by the pattern
-                sel[c] = t
-                c += (gt[t + 1] <= gt[t]) & (gr[t + 1] > gr[t])
-            for u in range(c):  # branch-free: kept at share 1 (the earlier route's unthinned pass), sampled from the zone
-                t = sel[u]
-                i = i0 + t
-                out_row[m] = lo + t
-                out_k[m] = k
-                m += kept_jit(i, 1.0, pk) & \
-                    (zone_flat[_landing_index(a, b, d, e, C, F, cos_r[lo + t], sin_r[lo + t], width, height)] != 0)
+            bits = np.uint64(0)
+            for t in range(n):  # thinned out and restored by the pattern
+                bits |= np.uint64((gt[t + 1] <= gt[t]) & (gr[t + 1] > gr[t])) << np.uint64(t)
+            while bits:
+                low = bits & (~bits + one)
+                t = low_bit[(low * _DE_BRUIJN) >> np.uint64(58)]
+                bits ^= low
+                r = lo + t
+                # sampled from the zone, kept at share 1 (the earlier route's unthinned pass)
+                if zone_flat[_landing_index(a, b, d, e, C, F, cos_r[r], sin_r[r], width, height)] != 0 and \
+                        kept_jit(i0 + t, 1.0, pk):
+                    out_row[m] = r
+                    out_k[m] = k
+                    m += 1
     return m
 
 

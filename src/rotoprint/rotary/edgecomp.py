@@ -466,7 +466,7 @@ def transform_restored(design: np.ndarray, head, placement, setup, shares, *, op
         gain, o = restore_pattern(nozzles, f, opts.coefficient, pass_index)  # gain 0 unless 0 < f < 1 (c > 0)
         gain[dead] = 0.0  # a dead nozzle has no drop to restore
         w = sm.windows
-        cap = int(w.count.sum())  # the kernel's buffers: one slot a window drop (8 bytes each; pages touched as written)
+        cap = int(w.count.sum())  # at most one candidate a window drop (8 bytes each; pages touched only as written)
         rows, ks = np.empty(cap, np.int32), np.empty(cap, np.int32)
         m = kern(*w.coefficients, w.nozzle, w.row, w.count, w.cos_row, w.sin_row, w.width, w.height, z.zone_flat, z.zone_blocks,
                  f, p, gain, o, int(sm.first_firing), claim_rows(w.cos_row, w.sin_row), rows, ks)
