@@ -62,9 +62,10 @@ def thin_levels_jit(levels, first_firing, f, o, out):  # pragma: no cover - jit
     n_f, n = levels.shape
     for b in range(n_f):
         i = float(b + first_firing)
-        for k in range(n):
-            v = levels[b, k]
-            out[b, k] = v if v != 0 and kept_jit(i, f[k], o[k]) else 0
+        src = levels[b]
+        dst = out[b]
+        for k in range(n):  # (a product, not a select: the same bytes, and the loop vectorises on AVX2 too)
+            dst[k] = src[k] * np.uint8(kept_jit(i, f[k], o[k]))
 
 
 #: The golden-ratio step of the phases between nozzles (:func:`thin_phases`).
