@@ -2,8 +2,11 @@
 (and its pivot offset) over today's print of a layer at the native clock, for the exact
 transform of the bundled test design (360 dpi, first column at 60 mm) and for direct slicing
 of one layer of a real mesh; and the default (equalised) pass at twice the planned clock,
-thinned while sampled (``transform_exact(..., thin=ThinShares)``, as ``pass_prints`` prints it;
-its shares, once for all passes and from the geometry only, timed apart as ``shares_s``). The
+thinned while sampled (``transform_exact(..., thin=ThinShares)``; its shares, once for all passes
+and from the geometry only, timed apart as ``shares_s``; the edge restore that ``pass_prints`` adds
+is timed by ``film_acceptance.py --passes-cost-only``); for the direct slicer also a real P-pass
+layer's pass with the union's shares (``slice_default_pass_s``: what ``slice --rotary --passes``
+prints; the shares, once per build and tilt, apart as ``slice_union_shares_s``). The
 floor: ratio <= 2. The film figures themselves (uncovered, thinnest / mean, bins) are in
 ``bench/film_acceptance.py`` (minutes per tilt)."""
 
@@ -17,7 +20,7 @@ TITLE = "Film: a pass's firing images against today's layer (issue 14 cost floor
 
 
 def run(quick: bool = False) -> list[dict]:
-    from film_acceptance import _best, default_shares
+    from film_acceptance import _best, default_shares, direct_pass_layer
 
     from rotoprint import load_device
     from rotoprint.io.mesh import load_mesh
@@ -63,7 +66,10 @@ def run(quick: bool = False) -> list[dict]:
             s0 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw).layer(1), 7)
             s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1), 7)
             s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=off).layer(1), 7)
+            tu, tp, n_p = direct_pass_layer(mesh, head, kw, 5)
             row.update({"slice_layer_native_s": s0, "slice_layer_pass_s": s1, "slice_ratio": s1 / s0,
-                        "slice_layer_equalised_clock_s": s2, "slice_equalised_ratio": s2 / s0})
+                        "slice_layer_equalised_clock_s": s2, "slice_equalised_ratio": s2 / s0,
+                        "slice_passes": n_p, "slice_default_pass_s": tp / n_p, "slice_default_pass_ratio": tp / n_p / s0,
+                        "slice_union_shares_s": tu})
         rows.append(row)
     return rows

@@ -143,6 +143,30 @@ def default_shares(head, sp, pp, tilt: float) -> list:
                            reach=ReachFloor(COVER_SHARE * 49.6, EQUALISE_CLOCK_FACTOR))
 
 
+def direct_pass_layer(mesh, head, kw: dict, k: int = 5, clock=time.perf_counter) -> tuple[float, float, int]:
+    """A real P-pass layer of the direct slicer, as ``slice_rotary_passes`` prints it (``layer(1)`` of
+    ``mesh`` with ``slice_rotary`` keywords ``kw``): the union's shares (``union_pass_shares``, once
+    per build and tilt), then every pass at its offset with its shares. Returns the best of ``k``
+    times of the shares and of all the passes, and the pass count ``P``."""
+    from rotoprint.rotary.direct import slice_rotary, union_pass_shares
+
+    pp_d = plan_passes(head, slice_rotary(mesh, "omnidot760", **kw).plan, footprint_um=DepositOptions().full_footprint_um(head))
+
+    def union():
+        j0 = slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp_d.dpi_y)
+        return union_pass_shares(head, j0.plan, pp_d.offsets_mm, dpi_y=pp_d.dpi_y)[:2]
+
+    sh_d, clk_d = union()
+
+    def passes_alone():
+        for q, o in enumerate(pp_d.offsets_mm):
+            slice_rotary(mesh, "omnidot760", **kw, dpi_y=clk_d, pivot_offset_mm=o, shares=sh_d[q], pass_index=q).layer(1)
+
+    tp = _best(passes_alone, k, clock)
+    tu = _best(union, k, clock)
+    return tu, tp, pp_d.passes
+
+
 def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
     """The cost floor: a pass's firing images at the planned clock over today's at native (best of ``k``
     times of ``clock``: wall, or ``time.thread_time`` with ``--cpu``).
@@ -154,7 +178,7 @@ def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
     P-pass layer of it (``union_pass_shares`` once, then every pass's ``slice_rotary(..., shares=)``
     layer) per pass, with and without the shares (which a build computes once for all its layers).
     """
-    from rotoprint.rotary.direct import slice_rotary, union_pass_shares
+    from rotoprint.rotary.direct import slice_rotary
     from rotoprint.rotary.exact import ThinShares
     from rotoprint.io.mesh import load_mesh
 
@@ -202,23 +226,7 @@ def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
             s1 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp.dpi_y, pivot_offset_mm=off).layer(1), k, clock)
             s2 = _best(lambda: slice_rotary(mesh, "omnidot760", **kw, dpi_y=dpi_e, pivot_offset_mm=pp_e.offsets_mm[-1]).layer(1), k, clock)
             row += f" {s0:.4f} | {s1:.4f} | {s1 / s0:.2f} | {s2:.4f} | {s2 / s0:.2f} |"
-            # a real P-pass layer of the direct slicer, as slice_rotary_passes prints it: the union's shares
-            # (once per build: charged whole to this layer here), then each pass at its offset with its shares
-            pp_d = plan_passes(head, slice_rotary(mesh, "omnidot760", **kw).plan, footprint_um=DepositOptions().full_footprint_um(head))
-
-            def union():
-                j0 = slice_rotary(mesh, "omnidot760", **kw, dpi_y=pp_d.dpi_y)
-                return union_pass_shares(head, j0.plan, pp_d.offsets_mm, dpi_y=pp_d.dpi_y)[:2]
-
-            sh_d, clk_d = union()
-
-            def passes_alone():
-                for q, o in enumerate(pp_d.offsets_mm):
-                    slice_rotary(mesh, "omnidot760", **kw, dpi_y=clk_d, pivot_offset_mm=o, shares=sh_d[q], pass_index=q).layer(1)
-
-            tp = _best(passes_alone, k, clock)
-            tu = _best(union, k, clock)
-            n_p = pp_d.passes
+            tu, tp, n_p = direct_pass_layer(mesh, head, kw, k, clock)
             row += f" {(tu + tp) / n_p:.4f} | {(tu + tp) / n_p / s0:.2f} | {tp / n_p:.4f} | {tp / n_p / s0:.2f} |"
         print(row, flush=True)
 
