@@ -173,3 +173,13 @@ def test_maps_pickle_before_and_after_first_layer():
     for a, b, c in zip(ref.swathes, m2.apply(d).swathes, m3.apply(d).swathes):
         np.testing.assert_array_equal(a.levels, b.levels)
         np.testing.assert_array_equal(a.levels, c.levels)
+
+
+def test_maps_refuse_a_side_the_int32_landing_index_cannot_hold():
+    """The kernels truncate a drop's column and row through int32 (packed float64 -> int32 exists on
+    AVX2; -> int64 needs AVX-512): a design side of 2**31 px or more is refused before any map is built."""
+    from rotoprint.errors import ImageError
+
+    head = load_device("omnidot760").head
+    with pytest.raises(ImageError, match=r"2147483648 x 2 px.*at most 2147483647 px a side"):
+        exact_maps(head, Placement(2**31, 2, 1e-5, 0.07, inner_radius_mm=60.0), tilt_deg=20.0)

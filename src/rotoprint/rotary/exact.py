@@ -379,6 +379,8 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
     a_lo, a_hi = placement.angular_range_rad()
     angle = math.radians(placement.angle_deg)
     width, height = placement.width_px, placement.height_px
+    if max(width, height) >= 2**31:  # the kernels' landing indices truncate a pixel's column and row through int32
+        raise ImageError(f"a design of {width} x {height} px: the exact transform takes at most {2**31 - 1} px a side")
     # the design's rectangle in its own frame (mm): x0 <= xl <= x1, |yl| <= yh
     x0, x1, yh = placement.inner_radius_mm, placement.inner_radius_mm + placement.width_mm, placement.height_mm / 2.0
     setup = []
