@@ -1,6 +1,7 @@
 """The pass planner's kernels against their numpy references, bit for bit."""
 
 import numpy as np
+import pytest
 
 from rotoprint.rotary import _interlace_kernels as ik
 
@@ -92,3 +93,19 @@ def test_shortfall_terms_match_numpy():
         lo, hi = np.maximum(0, i - 25), np.minimum(500, i + 26)
         local = (c[:, hi] - c[:, lo]) / (hi - lo)
         assert np.array_equal(out, np.maximum(0.0, 1.0 - t / np.maximum(target * local, 1e-300)) ** 2)
+
+
+@pytest.mark.parametrize("n_g", [1, 10, 25, 26, 50, 51, 52, 53, 54, 200])
+def test_shortfall_terms_at_every_window_edge(n_g):
+    """The kernel's three row ranges (window cut at the start, whole inside, cut at the end) against
+    numpy's cumsum form for grids shorter than, as long as and longer than the window (win 25)."""
+    rng = np.random.default_rng(n_g)
+    fixed, prof = rng.uniform(0.0, 2.0, n_g), rng.uniform(0.0, 2.0, (6, n_g))
+    out = np.empty(prof.shape)
+    ik.shortfall_terms_jit(fixed, prof, 25, 0.8, out)
+    t = fixed[None, :] + prof
+    c = np.cumsum(np.pad(t, ((0, 0), (1, 0))), axis=1)
+    i = np.arange(n_g)
+    lo, hi = np.maximum(0, i - 25), np.minimum(n_g, i + 26)
+    local = (c[:, hi] - c[:, lo]) / (hi - lo)
+    assert np.array_equal(out, np.maximum(0.0, 1.0 - t / np.maximum(0.8 * local, 1e-300)) ** 2)

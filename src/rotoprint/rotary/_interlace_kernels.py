@@ -114,21 +114,41 @@ def shortfall_terms_jit(fixed, profiles, win, target, out):  # pragma: no cover 
 
     fixed : (G,) float64; profiles, out : (P, G) float64.
     """
+    # The rows whose window lies whole inside (lo = i - win, hi = i + win + 1) in one loop over shifted
+    # slices with the constant width 2 win + 1 (it vectorises: no index converted to a float), the
+    # rows near the ends with their widths made once.
     n_p, n_g = profiles.shape
     t = np.empty(n_g, np.float64)
     c = np.empty(n_g + 1, np.float64)
+    den = np.empty(n_g, np.float64)
+    for i in range(n_g):
+        den[i] = float(min(n_g, i + win + 1) - max(0, i - win))
+    a = min(n_g, win + 1)  # rows i < a: lo = 0
+    b = max(a, n_g - win - 1)  # rows a <= i < b: the whole window inside
+    w = float(2 * win + 1)
     for p in range(n_p):
         c[0] = 0.0
         for i in range(n_g):
             t[i] = fixed[i] + profiles[p, i]
             c[i + 1] = c[i] + t[i]
-        for i in range(n_g):
-            lo = max(0, i - win)
-            hi = min(n_g, i + win + 1)
-            local = (c[hi] - c[lo]) / float(hi - lo)
-            v = 1.0 - t[i] / max(target * local, 1e-300)
-            v = max(0.0, v)
-            out[p, i] = v * v
+        o = out[p]
+        for i in range(a):
+            _shortfall_term(c, t, o, i, min(n_g, i + win + 1), 0, den[i], target)
+        c_hi = c[a + win + 1:]
+        c_lo = c[a - win:]
+        t_in = t[a:b]
+        o_in = o[a:b]
+        for j in range(b - a):
+            v = max(0.0, 1.0 - t_in[j] / max(target * ((c_hi[j] - c_lo[j]) / w), 1e-300))
+            o_in[j] = v * v
+        for i in range(b, n_g):
+            _shortfall_term(c, t, o, i, min(n_g, i + win + 1), max(0, i - win), den[i], target)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _shortfall_term(c, t, o, i, hi, lo, den, target):  # pragma: no cover - jit
+    v = max(0.0, 1.0 - t[i] / max(target * ((c[hi] - c[lo]) / den), 1e-300))
+    o[i] = v * v
 
 
 @njit(cache=True, nogil=True, inline="always")
