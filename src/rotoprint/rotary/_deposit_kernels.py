@@ -166,13 +166,26 @@ def _add_comp(acc, i, t):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def radial_bin(x, y):
+    """``floor(hypot(x, y))`` as an int, without libm's ``hypot`` (slow) where it cannot decide:
+    ``sqrt(x * x + y * y)`` is within a few ulp of ``hypot`` (finite, not tiny, arguments: radii
+    in mm), so where its floor is the same 1e-12 (relative) either side, that is the floor of
+    ``hypot``; near an integer ``hypot`` itself decides."""
+    r = math.sqrt(x * x + y * y)
+    lo = math.floor(r * (1.0 - 1e-12))
+    if lo == math.floor(r * (1.0 + 1e-12)):
+        return int(lo)
+    return int(math.floor(math.hypot(x, y)))
+
+
+@njit(cache=True, nogil=True, inline="always")
 def radial_bin_add(bins_sum, bins_n, col, r_in, px, ca, sa, yl, t):
     """Thickness ``t`` of the film cell at design column ``col`` (continuous, pixels) of a row at
     ``yl`` mm into its 1 mm radial bin ``floor(r)`` of ``bins_sum`` ``(B,) float64`` and
     ``bins_n`` ``(B,) int64`` (bins outside ``0..B-1`` skipped); ``r_in``, ``px``, ``ca``, ``sa``
     as in :func:`strip_stats_jit`'s ``geo``."""
     xl = r_in + col * px
-    b = int(math.floor(math.hypot(ca * xl - sa * yl, sa * xl + ca * yl)))
+    b = radial_bin(ca * xl - sa * yl, sa * xl + ca * yl)
     if 0 <= b < bins_sum.size:
         bins_sum[b] += t
         bins_n[b] += 1
@@ -196,37 +209,87 @@ def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bin
     rows, cols = film.shape
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
+    # the accumulators in locals (registers), written back at the end: the same operations in
+    # the same order as _add_comp on acc
+    a0, a1, a2, a3, a4, a5, a6 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]
+    n0, n1, n2, n3, n4, n5 = cnt[0], cnt[1], cnt[2], cnt[3], cnt[4], cnt[5]
+    # radial_bin_add's arithmetic with its per-column products computed once, and the bin
+    # being added to kept in registers until the bin changes (the same additions in the same
+    # order on every bin)
+    cax = np.empty(cols, np.float64)
+    sax = np.empty(cols, np.float64)
+    for j in range(cols):
+        xl = r_in + ((j + 0.5 - ox) / nx) * px
+        cax[j] = ca * xl
+        sax[j] = sa * xl
+    nb = bins_sum.size
+    cb = -1
+    cs = 0.0
+    cn = 0
     k = 0
     ns = 0
     for i in range(rows):
         row = (i + row0 + 0.5 - oy) / ny
         yl = (hpx / 2.0 - row) * py
+        say = sa * yl
+        cay = ca * yl
         for j in range(cols):
             t = film[i, j]
-            _add_comp(acc, 0, t)
+            s = a0 + t
+            if abs(a0) >= abs(t):
+                a1 += (a0 - s) + t
+            else:
+                a1 += (t - s) + a0
+            a0 = s
             if not des[i, j]:
                 continue
-            _add_comp(acc, 2, t)
-            cnt[0] += 1
+            s = a2 + t
+            if abs(a2) >= abs(t):
+                a3 += (a2 - s) + t
+            else:
+                a3 += (t - s) + a2
+            a2 = s
+            n0 += 1
             if t > 0.0:
-                cnt[1] += 1
+                n1 += 1
             if not inter[i, j]:
-                cnt[4] += 1
+                n4 += 1
                 if t <= 0.0:
-                    cnt[5] += 1
+                    n5 += 1
                 continue
-            cnt[2] += 1
+            n2 += 1
             if t <= 0.0:
-                cnt[3] += 1
+                n3 += 1
             elif stride > 0:
                 if k % stride == 0:
                     samples[ns] = t
                     ns += 1
                 k += 1
-            _add_comp(acc, 4, t)
-            if t < acc[6]:
-                acc[6] = t
-            radial_bin_add(bins_sum, bins_n, (j + 0.5 - ox) / nx, r_in, px, ca, sa, yl, t)
+            s = a4 + t
+            if abs(a4) >= abs(t):
+                a5 += (a4 - s) + t
+            else:
+                a5 += (t - s) + a4
+            a4 = s
+            if t < a6:
+                a6 = t
+            b = radial_bin(cax[j] - say, sax[j] + cay)
+            if b != cb:
+                if cb >= 0:
+                    bins_sum[cb] = cs
+                    bins_n[cb] = cn
+                cb = b if 0 <= b < nb else -1
+                if cb >= 0:
+                    cs = bins_sum[cb]
+                    cn = bins_n[cb]
+            if cb >= 0:
+                cs += t
+                cn += 1
+    if cb >= 0:
+        bins_sum[cb] = cs
+        bins_n[cb] = cn
+    acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6] = a0, a1, a2, a3, a4, a5, a6
+    cnt[0], cnt[1], cnt[2], cnt[3], cnt[4], cnt[5] = n0, n1, n2, n3, n4, n5
     return ns
 
 
