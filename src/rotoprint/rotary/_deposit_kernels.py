@@ -112,46 +112,64 @@ def interior_rows_jit(dmask, core0, core1, thr_um, gx_um, gy_um, out):
 
     Each column's nearest False row (above or below) is found by two scans over the rows; a
     cell is then interior unless a column within ``thr_um`` holds a False cell nearer than
-    ``thr_um``. Memory: one ``int32`` per cell of ``dmask`` and two per column.
+    ``thr_um``. Memory: one ``int32`` per cell of ``dmask`` and three per column.
     """
     rows, cols = dmask.shape
     big = rows + 1  # no False cell in this column of the window
     dv = np.empty((rows, cols), np.int32)
     last = np.full(cols, -big, np.int64)
+    # both scans branch-free (selects), so that they vectorise (AVX2 too)
     for r in range(rows):
         for c in range(cols):
-            if not dmask[r, c]:
-                last[c] = r
-            dv[r, c] = r - last[c] if last[c] > -big else big
+            lc = last[c] if dmask[r, c] else r
+            last[c] = lc
+            dv[r, c] = r - lc if lc > -big else big
     for c in range(cols):
         last[c] = -1
     for r in range(rows - 1, -1, -1):
         for c in range(cols):
-            if not dmask[r, c]:
-                last[c] = r
-            if last[c] >= 0 and last[c] - r < dv[r, c]:
-                dv[r, c] = last[c] - r
+            lc = last[c] if dmask[r, c] else r
+            last[c] = lc
+            cur = dv[r, c]
+            e = lc - r
+            dv[r, c] = e if (lc >= 0 and e < cur) else cur
     kx = int(math.ceil(thr_um / gx_um)) + 1
     t2 = thr_um * thr_um
     lo2, hi2 = t2 * (1.0 - 1e-9), t2 * (1.0 + 1e-9)
+    # The test of a column c2 = c + o, d = dv[r, c2], is a function of (d, o) alone, and q grows
+    # with d: so it is "d < dmin[o]", dmin[o] the first d the test passes (found with the test's
+    # own arithmetic; at most big, which always passes). The cells' loop is then integers only.
+    dmin = np.empty(2 * kx + 1, np.int32)
+    for o in range(-kx, kx + 1):
+        d = 0
+        while d < big:
+            dy = d * gy_um
+            dx = o * gx_um
+            q = dy * dy + dx * dx
+            if not (q < lo2 or (q <= hi2 and math.sqrt(q) < thr_um)):
+                break
+            d += 1
+        dmin[o + kx] = d
+    # a row at a time, one offset at a time: "some column of the window fails" for every cell
+    # of the row, over whole rows (vectorises), not cell by cell with an early exit
+    slack = np.empty(cols, np.int32)  # min over the window of dv - dmin: < 0 where a column fails
     for r in range(core0, core1):
-        o = r - core0
+        drow = dv[r]
         for c in range(cols):
-            if not dmask[r, c]:
-                out[o, c] = False
+            slack[c] = drow[c] - dmin[kx]
+        for o in range(-kx, kx + 1):
+            th = dmin[o + kx]
+            lo, hi = max(0, -o), min(cols, cols - o)
+            if hi <= lo:
                 continue
-            ok = True
-            for c2 in range(max(0, c - kx), min(cols - 1, c + kx) + 1):
-                d = dv[r, c2]
-                if d >= big:
-                    continue
-                dy = d * gy_um
-                dx = (c2 - c) * gx_um
-                q = dy * dy + dx * dx
-                if q < lo2 or (q <= hi2 and math.sqrt(q) < thr_um):
-                    ok = False
-                    break
-            out[o, c] = ok
+            src = drow[lo + o: hi + o]  # views, indexed from 0: no negative-index wrap, the loop vectorises
+            dst = slack[lo:hi]
+            for c in range(hi - lo):
+                dst[c] = min(dst[c], src[c] - th)
+        orow = out[r - core0]
+        mrow = dmask[r]
+        for c in range(cols):
+            orow[c] = mrow[c] & (slack[c] >= 0)
 
 
 @njit(cache=True, nogil=True)
