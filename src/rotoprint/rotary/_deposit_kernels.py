@@ -29,47 +29,138 @@ def _weight(du: float, dv: float, a: float, rs: float, h: float) -> float:
     return math.sqrt(rs * rs - rho2) - (rs - h)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _box(ud, vd, a, gx_um, gy_um):
+    """The footprint's box of cells: ``c0, c1, r0, r1`` (inclusive)."""
+    c0 = int(math.floor(ud - a / gx_um - 0.5))
+    c1 = int(math.ceil(ud + a / gx_um - 0.5))
+    r0 = int(math.floor(vd - a / gy_um - 0.5))
+    r1 = int(math.ceil(vd + a / gy_um - 0.5))
+    return c0, c1, r0, r1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _box_weights(ud, vd, a, rs, h, gx_um, gy_um, c0, c1, r0, r1, du2, rho, buf):
+    """:func:`_weight` of every cell centre of the box into ``buf`` (row-major), branch-free and
+    in one flat loop (``rho^2`` first), so that it vectorises (AVX2 too)."""
+    nc = c1 - c0 + 1
+    n = (r1 - r0 + 1) * nc
+    for j in range(nc):
+        du = (c0 + j + 0.5 - ud) * gx_um
+        du2[j] = du * du
+    for i in range(r1 - r0 + 1):
+        dv = (r0 + i + 0.5 - vd) * gy_um
+        dv2 = dv * dv
+        rrow = rho[i * nc: (i + 1) * nc]
+        for j in range(nc):
+            rrow[j] = du2[j] + dv2
+    a2 = a * a
+    rs2 = rs * rs
+    cap = rs - h
+    for k in range(n):
+        rho2 = rho[k]
+        w = math.sqrt(rs2 - rho2) - cap
+        buf[k] = w if rho2 < a2 else 0.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _box_add(ud, vd, vol, s, c0, c1, r0, r1, buf, area, row0, out):
+    """Add a drop's weights ``buf`` (norm ``s``) to ``out``, as :func:`deposit_strip_jit` says."""
+    rows, cols = out.shape
+    if s <= 0.0:  # footprint smaller than a cell: all on the landing cell
+        r = int(math.floor(vd)) - row0
+        c = int(math.floor(ud))
+        if 0 <= r < rows and 0 <= c < cols:
+            out[r, c] += vol / area
+        return
+    nc = c1 - c0 + 1
+    scale = vol / (area * s)
+    cs, ce = max(c0, 0), min(c1, cols - 1) + 1
+    if ce <= cs:
+        return
+    for r in range(max(r0, row0), min(r1, row0 + rows - 1) + 1):
+        # views indexed from 0 (no negative-index wrap); the cell is rewritten with itself
+        # where the weight is not > 0 (a select, not a branch: the loop vectorises)
+        wrow = buf[(r - r0) * nc + cs - c0: (r - r0) * nc + ce - c0]
+        orow = out[r - row0, cs:ce]
+        for j in range(ce - cs):
+            w = wrow[j]
+            o = orow[j]
+            orow[j] = o + w * scale if w > 0.0 else o
+
+
 @njit(cache=True, nogil=True)
 def deposit_strip_jit(u, v, vol_um3, a_um, rs_um, h_um, gx_um, gy_um, row0, out):
     """Add the drops' thickness (um) to ``out`` ``(rows, cols) float64``, whose row 0 is grid
     row ``row0``; cells outside ``out`` are skipped (their share is another strip's). Each
     drop's weights are summed over every cell centre of its footprint (its norm, row by row)
-    and kept in a buffer, then the cells inside ``out`` get their share."""
-    rows, cols = out.shape
+    and kept in a buffer, then the cells inside ``out`` get their share.
+
+    Drops go four at a time: their weights first, then their four norms summed in one loop
+    (four independent chains of additions, each in the order of its cells), then their shares
+    added to ``out`` drop by drop, in order."""
     area = gx_um * gy_um
-    buf = np.empty(0, np.float64)
+    nmax = 0
+    ncmax = 0
     for d in range(u.size):
-        a = a_um[d]
-        c0 = int(math.floor(u[d] - a / gx_um - 0.5))
-        c1 = int(math.ceil(u[d] + a / gx_um - 0.5))
-        r0 = int(math.floor(v[d] - a / gy_um - 0.5))
-        r1 = int(math.ceil(v[d] + a / gy_um - 0.5))
-        nc = c1 - c0 + 1
-        n = (r1 - r0 + 1) * nc
-        if buf.size < n:
-            buf = np.empty(2 * n, np.float64)
-        s = 0.0
-        k = 0
-        for r in range(r0, r1 + 1):
-            dv = (r + 0.5 - v[d]) * gy_um
-            for c in range(c0, c1 + 1):
-                w = _weight((c + 0.5 - u[d]) * gx_um, dv, a, rs_um[d], h_um[d])
-                buf[k] = w
-                s += w
-                k += 1
-        if s <= 0.0:  # footprint smaller than a cell: all on the landing cell
-            r = int(math.floor(v[d])) - row0
-            c = int(math.floor(u[d]))
-            if 0 <= r < rows and 0 <= c < cols:
-                out[r, c] += vol_um3[d] / area
-            continue
-        scale = vol_um3[d] / (area * s)
-        for r in range(max(r0, row0), min(r1, row0 + rows - 1) + 1):
-            base = (r - r0) * nc - c0
-            for c in range(max(c0, 0), min(c1, cols - 1) + 1):
-                w = buf[base + c]
-                if w > 0.0:
-                    out[r - row0, c] += w * scale
+        c0, c1, r0, r1 = _box(u[d], v[d], a_um[d], gx_um, gy_um)
+        nmax = max(nmax, (r1 - r0 + 1) * (c1 - c0 + 1))
+        ncmax = max(ncmax, c1 - c0 + 1)
+    du2 = np.empty(ncmax, np.float64)
+    rho = np.empty(nmax, np.float64)
+    b0 = np.empty(nmax, np.float64)
+    b1 = np.empty(nmax, np.float64)
+    b2 = np.empty(nmax, np.float64)
+    b3 = np.empty(nmax, np.float64)
+    nd = u.size
+    d = 0
+    while d + 4 <= nd:
+        x0, x1, y0, y1 = _box(u[d], v[d], a_um[d], gx_um, gy_um)
+        _box_weights(u[d], v[d], a_um[d], rs_um[d], h_um[d], gx_um, gy_um, x0, x1, y0, y1, du2, rho, b0)
+        p0, p1, q0, q1 = _box(u[d + 1], v[d + 1], a_um[d + 1], gx_um, gy_um)
+        _box_weights(u[d + 1], v[d + 1], a_um[d + 1], rs_um[d + 1], h_um[d + 1], gx_um, gy_um, p0, p1, q0, q1,
+                     du2, rho, b1)
+        e0, e1, f0, f1 = _box(u[d + 2], v[d + 2], a_um[d + 2], gx_um, gy_um)
+        _box_weights(u[d + 2], v[d + 2], a_um[d + 2], rs_um[d + 2], h_um[d + 2], gx_um, gy_um, e0, e1, f0, f1,
+                     du2, rho, b2)
+        g0, g1, k0, k1 = _box(u[d + 3], v[d + 3], a_um[d + 3], gx_um, gy_um)
+        _box_weights(u[d + 3], v[d + 3], a_um[d + 3], rs_um[d + 3], h_um[d + 3], gx_um, gy_um, g0, g1, k0, k1,
+                     du2, rho, b3)
+        n0 = (y1 - y0 + 1) * (x1 - x0 + 1)
+        n1 = (q1 - q0 + 1) * (p1 - p0 + 1)
+        n2 = (f1 - f0 + 1) * (e1 - e0 + 1)
+        n3 = (k1 - k0 + 1) * (g1 - g0 + 1)
+        m = min(min(n0, n1), min(n2, n3))
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        s3 = 0.0
+        for k in range(m):
+            s0 += b0[k]
+            s1 += b1[k]
+            s2 += b2[k]
+            s3 += b3[k]
+        for k in range(m, n0):
+            s0 += b0[k]
+        for k in range(m, n1):
+            s1 += b1[k]
+        for k in range(m, n2):
+            s2 += b2[k]
+        for k in range(m, n3):
+            s3 += b3[k]
+        _box_add(u[d], v[d], vol_um3[d], s0, x0, x1, y0, y1, b0, area, row0, out)
+        _box_add(u[d + 1], v[d + 1], vol_um3[d + 1], s1, p0, p1, q0, q1, b1, area, row0, out)
+        _box_add(u[d + 2], v[d + 2], vol_um3[d + 2], s2, e0, e1, f0, f1, b2, area, row0, out)
+        _box_add(u[d + 3], v[d + 3], vol_um3[d + 3], s3, g0, g1, k0, k1, b3, area, row0, out)
+        d += 4
+    while d < nd:
+        x0, x1, y0, y1 = _box(u[d], v[d], a_um[d], gx_um, gy_um)
+        _box_weights(u[d], v[d], a_um[d], rs_um[d], h_um[d], gx_um, gy_um, x0, x1, y0, y1, du2, rho, b0)
+        s0 = 0.0
+        for k in range((y1 - y0 + 1) * (x1 - x0 + 1)):
+            s0 += b0[k]
+        _box_add(u[d], v[d], vol_um3[d], s0, x0, x1, y0, y1, b0, area, row0, out)
+        d += 1
 
 
 def _weights_numpy(ud, vd, a, rs, h, gx_um, gy_um):
