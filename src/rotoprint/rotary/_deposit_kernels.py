@@ -427,11 +427,37 @@ def radial_cell_counts_jit(mask, geo, lo_mm, bin_mm, out):
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
     nb = out.size
+    # the per-column products once; the bin by a guarded sqrt as in radial_bin ((h - lo) / bin
+    # is monotone in h, so where the bounds either side agree, hypot's bin is theirs); the
+    # current bin's count in a register
+    cax = np.empty(cols, np.float64)
+    sax = np.empty(cols, np.float64)
+    for j in range(cols):
+        xl = r_in + (j + 0.5 - ox) / nx * px
+        cax[j] = ca * xl
+        sax[j] = sa * xl
+    cb = -1
+    cn = 0
     for i in range(rows):
         yl = (hpx / 2.0 - (i + 0.5 - oy) / ny) * py
+        say = sa * yl
+        cay = ca * yl
         for j in range(cols):
             if mask[i, j]:
-                xl = r_in + (j + 0.5 - ox) / nx * px
-                b = int(math.floor((math.hypot(ca * xl - sa * yl, sa * xl + ca * yl) - lo_mm) / bin_mm))
-                if 0 <= b < nb:
-                    out[b] += 1
+                x = cax[j] - say
+                y = sax[j] + cay
+                r = math.sqrt(x * x + y * y)
+                fb = math.floor((r * (1.0 - 1e-12) - lo_mm) / bin_mm)
+                if fb != math.floor((r * (1.0 + 1e-12) - lo_mm) / bin_mm):
+                    fb = math.floor((math.hypot(x, y) - lo_mm) / bin_mm)
+                b = int(fb)
+                if b != cb:
+                    if cb >= 0:
+                        out[cb] = cn
+                    cb = b if 0 <= b < nb else -1
+                    if cb >= 0:
+                        cn = out[cb]
+                if cb >= 0:
+                    cn += 1
+    if cb >= 0:
+        out[cb] = cn
