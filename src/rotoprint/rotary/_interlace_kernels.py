@@ -122,13 +122,35 @@ def shortfall_terms_jit(fixed, profiles, win, target, out):  # pragma: no cover 
         for i in range(n_g):
             t[i] = fixed[i] + profiles[p, i]
             c[i + 1] = c[i] + t[i]
-        for i in range(n_g):
-            lo = max(0, i - win)
-            hi = min(n_g, i + win + 1)
-            local = (c[hi] - c[lo]) / float(hi - lo)
-            v = 1.0 - t[i] / max(target * local, 1e-300)
-            v = max(0.0, v)
-            out[p, i] = v * v
+        # the cells whose window is whole (lo = i - win, hi = i + win + 1) apart, over views
+        # indexed from 0: that loop vectorises (no clamped or possibly negative index)
+        m0 = min(win, n_g)
+        m1 = max(m0, n_g - win - 1)
+        for i in range(m0):
+            _shortfall_cell(t, c, i, n_g, win, target, out[p])
+        if m1 > m0:
+            ca = c[m0 - win: m1 - win]
+            cb = c[m0 + win + 1: m1 + win + 1]
+            tm = t[m0:m1]
+            om = out[p, m0:m1]
+            width = float(2 * win + 1)
+            for k in range(m1 - m0):
+                local = (cb[k] - ca[k]) / width
+                v = 1.0 - tm[k] / max(target * local, 1e-300)
+                v = max(0.0, v)
+                om[k] = v * v
+        for i in range(m1, n_g):
+            _shortfall_cell(t, c, i, n_g, win, target, out[p])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _shortfall_cell(t, c, i, n_g, win, target, row):  # pragma: no cover - jit
+    lo = max(0, i - win)
+    hi = min(n_g, i + win + 1)
+    local = (c[hi] - c[lo]) / float(hi - lo)
+    v = 1.0 - t[i] / max(target * local, 1e-300)
+    v = max(0.0, v)
+    row[i] = v * v
 
 
 @njit(cache=True, nogil=True, inline="always")
