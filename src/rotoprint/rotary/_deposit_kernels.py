@@ -29,47 +29,138 @@ def _weight(du: float, dv: float, a: float, rs: float, h: float) -> float:
     return math.sqrt(rs * rs - rho2) - (rs - h)
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _box(ud, vd, a, gx_um, gy_um):
+    """The footprint's box of cells: ``c0, c1, r0, r1`` (inclusive)."""
+    c0 = int(math.floor(ud - a / gx_um - 0.5))
+    c1 = int(math.ceil(ud + a / gx_um - 0.5))
+    r0 = int(math.floor(vd - a / gy_um - 0.5))
+    r1 = int(math.ceil(vd + a / gy_um - 0.5))
+    return c0, c1, r0, r1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _box_weights(ud, vd, a, rs, h, gx_um, gy_um, c0, c1, r0, r1, du2, rho, buf):
+    """:func:`_weight` of every cell centre of the box into ``buf`` (row-major), branch-free and
+    in one flat loop (``rho^2`` first), so that it vectorises (AVX2 too)."""
+    nc = c1 - c0 + 1
+    n = (r1 - r0 + 1) * nc
+    for j in range(nc):
+        du = (c0 + j + 0.5 - ud) * gx_um
+        du2[j] = du * du
+    for i in range(r1 - r0 + 1):
+        dv = (r0 + i + 0.5 - vd) * gy_um
+        dv2 = dv * dv
+        rrow = rho[i * nc: (i + 1) * nc]
+        for j in range(nc):
+            rrow[j] = du2[j] + dv2
+    a2 = a * a
+    rs2 = rs * rs
+    cap = rs - h
+    for k in range(n):
+        rho2 = rho[k]
+        w = math.sqrt(rs2 - rho2) - cap
+        buf[k] = w if rho2 < a2 else 0.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _box_add(ud, vd, vol, s, c0, c1, r0, r1, buf, area, row0, out):
+    """Add a drop's weights ``buf`` (norm ``s``) to ``out``, as :func:`deposit_strip_jit` says."""
+    rows, cols = out.shape
+    if s <= 0.0:  # footprint smaller than a cell: all on the landing cell
+        r = int(math.floor(vd)) - row0
+        c = int(math.floor(ud))
+        if 0 <= r < rows and 0 <= c < cols:
+            out[r, c] += vol / area
+        return
+    nc = c1 - c0 + 1
+    scale = vol / (area * s)
+    cs, ce = max(c0, 0), min(c1, cols - 1) + 1
+    if ce <= cs:
+        return
+    for r in range(max(r0, row0), min(r1, row0 + rows - 1) + 1):
+        # views indexed from 0 (no negative-index wrap); the cell is rewritten with itself
+        # where the weight is not > 0 (a select, not a branch: the loop vectorises)
+        wrow = buf[(r - r0) * nc + cs - c0: (r - r0) * nc + ce - c0]
+        orow = out[r - row0, cs:ce]
+        for j in range(ce - cs):
+            w = wrow[j]
+            o = orow[j]
+            orow[j] = o + w * scale if w > 0.0 else o
+
+
 @njit(cache=True, nogil=True)
 def deposit_strip_jit(u, v, vol_um3, a_um, rs_um, h_um, gx_um, gy_um, row0, out):
     """Add the drops' thickness (um) to ``out`` ``(rows, cols) float64``, whose row 0 is grid
     row ``row0``; cells outside ``out`` are skipped (their share is another strip's). Each
     drop's weights are summed over every cell centre of its footprint (its norm, row by row)
-    and kept in a buffer, then the cells inside ``out`` get their share."""
-    rows, cols = out.shape
+    and kept in a buffer, then the cells inside ``out`` get their share.
+
+    Drops go four at a time: their weights first, then their four norms summed in one loop
+    (four independent chains of additions, each in the order of its cells), then their shares
+    added to ``out`` drop by drop, in order."""
     area = gx_um * gy_um
-    buf = np.empty(0, np.float64)
+    nmax = 0
+    ncmax = 0
     for d in range(u.size):
-        a = a_um[d]
-        c0 = int(math.floor(u[d] - a / gx_um - 0.5))
-        c1 = int(math.ceil(u[d] + a / gx_um - 0.5))
-        r0 = int(math.floor(v[d] - a / gy_um - 0.5))
-        r1 = int(math.ceil(v[d] + a / gy_um - 0.5))
-        nc = c1 - c0 + 1
-        n = (r1 - r0 + 1) * nc
-        if buf.size < n:
-            buf = np.empty(2 * n, np.float64)
-        s = 0.0
-        k = 0
-        for r in range(r0, r1 + 1):
-            dv = (r + 0.5 - v[d]) * gy_um
-            for c in range(c0, c1 + 1):
-                w = _weight((c + 0.5 - u[d]) * gx_um, dv, a, rs_um[d], h_um[d])
-                buf[k] = w
-                s += w
-                k += 1
-        if s <= 0.0:  # footprint smaller than a cell: all on the landing cell
-            r = int(math.floor(v[d])) - row0
-            c = int(math.floor(u[d]))
-            if 0 <= r < rows and 0 <= c < cols:
-                out[r, c] += vol_um3[d] / area
-            continue
-        scale = vol_um3[d] / (area * s)
-        for r in range(max(r0, row0), min(r1, row0 + rows - 1) + 1):
-            base = (r - r0) * nc - c0
-            for c in range(max(c0, 0), min(c1, cols - 1) + 1):
-                w = buf[base + c]
-                if w > 0.0:
-                    out[r - row0, c] += w * scale
+        c0, c1, r0, r1 = _box(u[d], v[d], a_um[d], gx_um, gy_um)
+        nmax = max(nmax, (r1 - r0 + 1) * (c1 - c0 + 1))
+        ncmax = max(ncmax, c1 - c0 + 1)
+    du2 = np.empty(ncmax, np.float64)
+    rho = np.empty(nmax, np.float64)
+    b0 = np.empty(nmax, np.float64)
+    b1 = np.empty(nmax, np.float64)
+    b2 = np.empty(nmax, np.float64)
+    b3 = np.empty(nmax, np.float64)
+    nd = u.size
+    d = 0
+    while d + 4 <= nd:
+        x0, x1, y0, y1 = _box(u[d], v[d], a_um[d], gx_um, gy_um)
+        _box_weights(u[d], v[d], a_um[d], rs_um[d], h_um[d], gx_um, gy_um, x0, x1, y0, y1, du2, rho, b0)
+        p0, p1, q0, q1 = _box(u[d + 1], v[d + 1], a_um[d + 1], gx_um, gy_um)
+        _box_weights(u[d + 1], v[d + 1], a_um[d + 1], rs_um[d + 1], h_um[d + 1], gx_um, gy_um, p0, p1, q0, q1,
+                     du2, rho, b1)
+        e0, e1, f0, f1 = _box(u[d + 2], v[d + 2], a_um[d + 2], gx_um, gy_um)
+        _box_weights(u[d + 2], v[d + 2], a_um[d + 2], rs_um[d + 2], h_um[d + 2], gx_um, gy_um, e0, e1, f0, f1,
+                     du2, rho, b2)
+        g0, g1, k0, k1 = _box(u[d + 3], v[d + 3], a_um[d + 3], gx_um, gy_um)
+        _box_weights(u[d + 3], v[d + 3], a_um[d + 3], rs_um[d + 3], h_um[d + 3], gx_um, gy_um, g0, g1, k0, k1,
+                     du2, rho, b3)
+        n0 = (y1 - y0 + 1) * (x1 - x0 + 1)
+        n1 = (q1 - q0 + 1) * (p1 - p0 + 1)
+        n2 = (f1 - f0 + 1) * (e1 - e0 + 1)
+        n3 = (k1 - k0 + 1) * (g1 - g0 + 1)
+        m = min(min(n0, n1), min(n2, n3))
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        s3 = 0.0
+        for k in range(m):
+            s0 += b0[k]
+            s1 += b1[k]
+            s2 += b2[k]
+            s3 += b3[k]
+        for k in range(m, n0):
+            s0 += b0[k]
+        for k in range(m, n1):
+            s1 += b1[k]
+        for k in range(m, n2):
+            s2 += b2[k]
+        for k in range(m, n3):
+            s3 += b3[k]
+        _box_add(u[d], v[d], vol_um3[d], s0, x0, x1, y0, y1, b0, area, row0, out)
+        _box_add(u[d + 1], v[d + 1], vol_um3[d + 1], s1, p0, p1, q0, q1, b1, area, row0, out)
+        _box_add(u[d + 2], v[d + 2], vol_um3[d + 2], s2, e0, e1, f0, f1, b2, area, row0, out)
+        _box_add(u[d + 3], v[d + 3], vol_um3[d + 3], s3, g0, g1, k0, k1, b3, area, row0, out)
+        d += 4
+    while d < nd:
+        x0, x1, y0, y1 = _box(u[d], v[d], a_um[d], gx_um, gy_um)
+        _box_weights(u[d], v[d], a_um[d], rs_um[d], h_um[d], gx_um, gy_um, x0, x1, y0, y1, du2, rho, b0)
+        s0 = 0.0
+        for k in range((y1 - y0 + 1) * (x1 - x0 + 1)):
+            s0 += b0[k]
+        _box_add(u[d], v[d], vol_um3[d], s0, x0, x1, y0, y1, b0, area, row0, out)
+        d += 1
 
 
 def _weights_numpy(ud, vd, a, rs, h, gx_um, gy_um):
@@ -112,46 +203,64 @@ def interior_rows_jit(dmask, core0, core1, thr_um, gx_um, gy_um, out):
 
     Each column's nearest False row (above or below) is found by two scans over the rows; a
     cell is then interior unless a column within ``thr_um`` holds a False cell nearer than
-    ``thr_um``. Memory: one ``int32`` per cell of ``dmask`` and two per column.
+    ``thr_um``. Memory: one ``int32`` per cell of ``dmask`` and three per column.
     """
     rows, cols = dmask.shape
     big = rows + 1  # no False cell in this column of the window
     dv = np.empty((rows, cols), np.int32)
     last = np.full(cols, -big, np.int64)
+    # both scans branch-free (selects), so that they vectorise (AVX2 too)
     for r in range(rows):
         for c in range(cols):
-            if not dmask[r, c]:
-                last[c] = r
-            dv[r, c] = r - last[c] if last[c] > -big else big
+            lc = last[c] if dmask[r, c] else r
+            last[c] = lc
+            dv[r, c] = r - lc if lc > -big else big
     for c in range(cols):
         last[c] = -1
     for r in range(rows - 1, -1, -1):
         for c in range(cols):
-            if not dmask[r, c]:
-                last[c] = r
-            if last[c] >= 0 and last[c] - r < dv[r, c]:
-                dv[r, c] = last[c] - r
+            lc = last[c] if dmask[r, c] else r
+            last[c] = lc
+            cur = dv[r, c]
+            e = lc - r
+            dv[r, c] = e if (lc >= 0 and e < cur) else cur
     kx = int(math.ceil(thr_um / gx_um)) + 1
     t2 = thr_um * thr_um
     lo2, hi2 = t2 * (1.0 - 1e-9), t2 * (1.0 + 1e-9)
+    # The test of a column c2 = c + o, d = dv[r, c2], is a function of (d, o) alone, and q grows
+    # with d: so it is "d < dmin[o]", dmin[o] the first d the test passes (found with the test's
+    # own arithmetic; at most big, which always passes). The cells' loop is then integers only.
+    dmin = np.empty(2 * kx + 1, np.int32)
+    for o in range(-kx, kx + 1):
+        d = 0
+        while d < big:
+            dy = d * gy_um
+            dx = o * gx_um
+            q = dy * dy + dx * dx
+            if not (q < lo2 or (q <= hi2 and math.sqrt(q) < thr_um)):
+                break
+            d += 1
+        dmin[o + kx] = d
+    # a row at a time, one offset at a time: "some column of the window fails" for every cell
+    # of the row, over whole rows (vectorises), not cell by cell with an early exit
+    slack = np.empty(cols, np.int32)  # min over the window of dv - dmin: < 0 where a column fails
     for r in range(core0, core1):
-        o = r - core0
+        drow = dv[r]
         for c in range(cols):
-            if not dmask[r, c]:
-                out[o, c] = False
+            slack[c] = drow[c] - dmin[kx]
+        for o in range(-kx, kx + 1):
+            th = dmin[o + kx]
+            lo, hi = max(0, -o), min(cols, cols - o)
+            if hi <= lo:
                 continue
-            ok = True
-            for c2 in range(max(0, c - kx), min(cols - 1, c + kx) + 1):
-                d = dv[r, c2]
-                if d >= big:
-                    continue
-                dy = d * gy_um
-                dx = (c2 - c) * gx_um
-                q = dy * dy + dx * dx
-                if q < lo2 or (q <= hi2 and math.sqrt(q) < thr_um):
-                    ok = False
-                    break
-            out[o, c] = ok
+            src = drow[lo + o: hi + o]  # views, indexed from 0: no negative-index wrap, the loop vectorises
+            dst = slack[lo:hi]
+            for c in range(hi - lo):
+                dst[c] = min(dst[c], src[c] - th)
+        orow = out[r - core0]
+        mrow = dmask[r]
+        for c in range(cols):
+            orow[c] = mrow[c] & (slack[c] >= 0)
 
 
 @njit(cache=True, nogil=True)
@@ -166,13 +275,26 @@ def _add_comp(acc, i, t):
 
 
 @njit(cache=True, nogil=True, inline="always")
+def radial_bin(x, y):
+    """``floor(hypot(x, y))`` as an int, without libm's ``hypot`` (slow) where it cannot decide:
+    ``sqrt(x * x + y * y)`` is within a few ulp of ``hypot`` (finite, not tiny, arguments: radii
+    in mm), so where its floor is the same 1e-12 (relative) either side, that is the floor of
+    ``hypot``; near an integer ``hypot`` itself decides."""
+    r = math.sqrt(x * x + y * y)
+    lo = math.floor(r * (1.0 - 1e-12))
+    if lo == math.floor(r * (1.0 + 1e-12)):
+        return int(lo)
+    return int(math.floor(math.hypot(x, y)))
+
+
+@njit(cache=True, nogil=True, inline="always")
 def radial_bin_add(bins_sum, bins_n, col, r_in, px, ca, sa, yl, t):
     """Thickness ``t`` of the film cell at design column ``col`` (continuous, pixels) of a row at
     ``yl`` mm into its 1 mm radial bin ``floor(r)`` of ``bins_sum`` ``(B,) float64`` and
     ``bins_n`` ``(B,) int64`` (bins outside ``0..B-1`` skipped); ``r_in``, ``px``, ``ca``, ``sa``
     as in :func:`strip_stats_jit`'s ``geo``."""
     xl = r_in + col * px
-    b = int(math.floor(math.hypot(ca * xl - sa * yl, sa * xl + ca * yl)))
+    b = radial_bin(ca * xl - sa * yl, sa * xl + ca * yl)
     if 0 <= b < bins_sum.size:
         bins_sum[b] += t
         bins_n[b] += 1
@@ -196,37 +318,87 @@ def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bin
     rows, cols = film.shape
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
+    # the accumulators in locals (registers), written back at the end: the same operations in
+    # the same order as _add_comp on acc
+    a0, a1, a2, a3, a4, a5, a6 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]
+    n0, n1, n2, n3, n4, n5 = cnt[0], cnt[1], cnt[2], cnt[3], cnt[4], cnt[5]
+    # radial_bin_add's arithmetic with its per-column products computed once, and the bin
+    # being added to kept in registers until the bin changes (the same additions in the same
+    # order on every bin)
+    cax = np.empty(cols, np.float64)
+    sax = np.empty(cols, np.float64)
+    for j in range(cols):
+        xl = r_in + ((j + 0.5 - ox) / nx) * px
+        cax[j] = ca * xl
+        sax[j] = sa * xl
+    nb = bins_sum.size
+    cb = -1
+    cs = 0.0
+    cn = 0
     k = 0
     ns = 0
     for i in range(rows):
         row = (i + row0 + 0.5 - oy) / ny
         yl = (hpx / 2.0 - row) * py
+        say = sa * yl
+        cay = ca * yl
         for j in range(cols):
             t = film[i, j]
-            _add_comp(acc, 0, t)
+            s = a0 + t
+            if abs(a0) >= abs(t):
+                a1 += (a0 - s) + t
+            else:
+                a1 += (t - s) + a0
+            a0 = s
             if not des[i, j]:
                 continue
-            _add_comp(acc, 2, t)
-            cnt[0] += 1
+            s = a2 + t
+            if abs(a2) >= abs(t):
+                a3 += (a2 - s) + t
+            else:
+                a3 += (t - s) + a2
+            a2 = s
+            n0 += 1
             if t > 0.0:
-                cnt[1] += 1
+                n1 += 1
             if not inter[i, j]:
-                cnt[4] += 1
+                n4 += 1
                 if t <= 0.0:
-                    cnt[5] += 1
+                    n5 += 1
                 continue
-            cnt[2] += 1
+            n2 += 1
             if t <= 0.0:
-                cnt[3] += 1
+                n3 += 1
             elif stride > 0:
                 if k % stride == 0:
                     samples[ns] = t
                     ns += 1
                 k += 1
-            _add_comp(acc, 4, t)
-            if t < acc[6]:
-                acc[6] = t
-            radial_bin_add(bins_sum, bins_n, (j + 0.5 - ox) / nx, r_in, px, ca, sa, yl, t)
+            s = a4 + t
+            if abs(a4) >= abs(t):
+                a5 += (a4 - s) + t
+            else:
+                a5 += (t - s) + a4
+            a4 = s
+            if t < a6:
+                a6 = t
+            b = radial_bin(cax[j] - say, sax[j] + cay)
+            if b != cb:
+                if cb >= 0:
+                    bins_sum[cb] = cs
+                    bins_n[cb] = cn
+                cb = b if 0 <= b < nb else -1
+                if cb >= 0:
+                    cs = bins_sum[cb]
+                    cn = bins_n[cb]
+            if cb >= 0:
+                cs += t
+                cn += 1
+    if cb >= 0:
+        bins_sum[cb] = cs
+        bins_n[cb] = cn
+    acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6] = a0, a1, a2, a3, a4, a5, a6
+    cnt[0], cnt[1], cnt[2], cnt[3], cnt[4], cnt[5] = n0, n1, n2, n3, n4, n5
     return ns
 
 
@@ -255,11 +427,37 @@ def radial_cell_counts_jit(mask, geo, lo_mm, bin_mm, out):
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
     nb = out.size
+    # the per-column products once; the bin by a guarded sqrt as in radial_bin ((h - lo) / bin
+    # is monotone in h, so where the bounds either side agree, hypot's bin is theirs); the
+    # current bin's count in a register
+    cax = np.empty(cols, np.float64)
+    sax = np.empty(cols, np.float64)
+    for j in range(cols):
+        xl = r_in + (j + 0.5 - ox) / nx * px
+        cax[j] = ca * xl
+        sax[j] = sa * xl
+    cb = -1
+    cn = 0
     for i in range(rows):
         yl = (hpx / 2.0 - (i + 0.5 - oy) / ny) * py
+        say = sa * yl
+        cay = ca * yl
         for j in range(cols):
             if mask[i, j]:
-                xl = r_in + (j + 0.5 - ox) / nx * px
-                b = int(math.floor((math.hypot(ca * xl - sa * yl, sa * xl + ca * yl) - lo_mm) / bin_mm))
-                if 0 <= b < nb:
-                    out[b] += 1
+                x = cax[j] - say
+                y = sax[j] + cay
+                r = math.sqrt(x * x + y * y)
+                fb = math.floor((r * (1.0 - 1e-12) - lo_mm) / bin_mm)
+                if fb != math.floor((r * (1.0 + 1e-12) - lo_mm) / bin_mm):
+                    fb = math.floor((math.hypot(x, y) - lo_mm) / bin_mm)
+                b = int(fb)
+                if b != cb:
+                    if cb >= 0:
+                        out[cb] = cn
+                    cb = b if 0 <= b < nb else -1
+                    if cb >= 0:
+                        cn = out[cb]
+                if cb >= 0:
+                    cn += 1
+    if cb >= 0:
+        out[cb] = cn

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._deposit_kernels import radial_bin_add
+from ._deposit_kernels import radial_bin
 
 __all__ = ["axis_weights", "restrict_wet_jit", "prolong_combine_jit", "film_stats_jit"]
 
@@ -105,27 +105,58 @@ def film_stats_jit(lv, inter_bits, row0, geo, half_mean, acc, bins_sum, bins_n):
     rows, cols = lv.shape
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
+    # the accumulators in locals (registers), written back at the end; radial_bin_add's
+    # arithmetic with its per-column products computed once, and the bin being added to kept
+    # in registers until the bin changes: the same operations in the same order
+    a0, a1, a2, a3, a4, a5, a6 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]
+    cax = np.empty(cols, np.float64)
+    sax = np.empty(cols, np.float64)
+    for j in range(cols):
+        xl = r_in + ((j + 0.5 - ox) / nx) * px
+        cax[j] = ca * xl
+        sax[j] = sa * xl
+    nb = bins_sum.size
+    cb = -1
+    cs = 0.0
+    cn = 0
     for i in range(rows):
         row = (i + row0 + 0.5 - oy) / ny
         yl = (hpx / 2.0 - row) * py
+        say = sa * yl
+        cay = ca * yl
         for j in range(cols):
             t = lv[i, j]
-            s = acc[0] + t  # Neumaier: acc[1] keeps what the sum lost
-            if abs(acc[0]) >= abs(t):
-                acc[1] += (acc[0] - s) + t
+            s = a0 + t  # Neumaier: a1 keeps what the sum lost
+            if abs(a0) >= abs(t):
+                a1 += (a0 - s) + t
             else:
-                acc[1] += (t - s) + acc[0]
-            acc[0] = s
+                a1 += (t - s) + a0
+            a0 = s
             if (inter_bits[i, j >> 3] >> (7 - (j & 7))) & 1:
-                s = acc[2] + t
-                if abs(acc[2]) >= abs(t):
-                    acc[3] += (acc[2] - s) + t
+                s = a2 + t
+                if abs(a2) >= abs(t):
+                    a3 += (a2 - s) + t
                 else:
-                    acc[3] += (t - s) + acc[2]
-                acc[2] = s
-                if t < acc[4]:
-                    acc[4] = t
-                acc[5] += 1.0
+                    a3 += (t - s) + a2
+                a2 = s
+                if t < a4:
+                    a4 = t
+                a5 += 1.0
                 if t < half_mean:
-                    acc[6] += 1.0
-                radial_bin_add(bins_sum, bins_n, (j + 0.5 - ox) / nx, r_in, px, ca, sa, yl, t)
+                    a6 += 1.0
+                b = radial_bin(cax[j] - say, sax[j] + cay)
+                if b != cb:
+                    if cb >= 0:
+                        bins_sum[cb] = cs
+                        bins_n[cb] = cn
+                    cb = b if 0 <= b < nb else -1
+                    if cb >= 0:
+                        cs = bins_sum[cb]
+                        cn = bins_n[cb]
+                if cb >= 0:
+                    cs += t
+                    cn += 1
+    if cb >= 0:
+        bins_sum[cb] = cs
+        bins_n[cb] = cn
+    acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6] = a0, a1, a2, a3, a4, a5, a6
