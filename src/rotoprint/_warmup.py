@@ -40,7 +40,7 @@ WARMED: dict[str, tuple[str, ...]] = {
     "rotoprint.check._kernels.simplify": ("_greedy_emit", "simplify_section"),
     "rotoprint.check._kernels.unionfind": ("_find", "_union", "_relabel"),
     "rotoprint.check._kernels.widths": ("_run_clear", "sample_widths", "_seg_cells", "sample_widths_chained", "measure_widths"),
-    "rotoprint.rotary._deposit_kernels": ("_weight", "deposit_strip_jit", "interior_rows_jit", "_add_comp", "strip_stats_jit", "pair_counts_jit", "radial_cell_counts_jit"),
+    "rotoprint.rotary._deposit_kernels": ("deposit_strip_jit", "interior_rows_jit", "strip_stats_jit", "pair_counts_jit", "radial_cell_counts_jit"),
     "rotoprint.rotary._direct_kernels": ("_scanline_fill", "_direct_fill"),
     "rotoprint.rotary._edgecomp_kernels": ("restore_candidates_jit", "radial_near_jit"),
     "rotoprint.rotary._exact_kernels": ("_coords_nb", "_bilinear_nb", "_track_windows_nb", "_window_bounds_nb", "_windows_fill_nb", "_windows_fill_gather_nb", "_ink_blocks_nb", "_windows_sample_thin_nb", "_binary_levels_nb"),

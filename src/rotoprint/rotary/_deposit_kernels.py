@@ -21,14 +21,6 @@ __all__ = ["deposit_strip_jit", "deposit_strip_numpy", "interior_rows_jit", "str
            "radial_cell_counts_jit"]
 
 
-@njit(cache=True, nogil=True)
-def _weight(du: float, dv: float, a: float, rs: float, h: float) -> float:
-    rho2 = du * du + dv * dv
-    if rho2 >= a * a:
-        return 0.0
-    return math.sqrt(rs * rs - rho2) - (rs - h)
-
-
 @njit(cache=True, nogil=True, inline="always")
 def _box(ud, vd, a, gx_um, gy_um):
     """The footprint's box of cells: ``c0, c1, r0, r1`` (inclusive)."""
@@ -41,8 +33,9 @@ def _box(ud, vd, a, gx_um, gy_um):
 
 @njit(cache=True, nogil=True, inline="always")
 def _box_weights(ud, vd, a, rs, h, gx_um, gy_um, c0, c1, r0, r1, du2, rho, buf):
-    """:func:`_weight` of every cell centre of the box into ``buf`` (row-major), branch-free and
-    in one flat loop (``rho^2`` first), so that it vectorises (AVX2 too)."""
+    """The cap's weight ``sqrt(rs^2 - rho^2) - (rs - h)`` (0 where ``rho^2 >= a^2``) of every cell
+    centre of the box into ``buf`` (row-major), branch-free and in one flat loop (``rho^2``
+    first), so that it vectorises (AVX2 too)."""
     nc = c1 - c0 + 1
     n = (r1 - r0 + 1) * nc
     for j in range(nc):
@@ -263,17 +256,6 @@ def interior_rows_jit(dmask, core0, core1, thr_um, gx_um, gy_um, out):
             orow[c] = mrow[c] & (slack[c] >= 0)
 
 
-@njit(cache=True, nogil=True)
-def _add_comp(acc, i, t):
-    """``acc[i] += t`` compensated (Neumaier): ``acc[i + 1]`` keeps what the sum lost."""
-    s = acc[i] + t
-    if abs(acc[i]) >= abs(t):
-        acc[i + 1] += (acc[i] - s) + t
-    else:
-        acc[i + 1] += (t - s) + acc[i]
-    acc[i] = s
-
-
 @njit(cache=True, nogil=True, inline="always")
 def radial_bin(x, y):
     """``floor(hypot(x, y))`` as an int, without libm's ``hypot`` (slow) where it cannot decide:
@@ -285,19 +267,6 @@ def radial_bin(x, y):
     if lo == math.floor(r * (1.0 + 1e-12)):
         return int(lo)
     return int(math.floor(math.hypot(x, y)))
-
-
-@njit(cache=True, nogil=True, inline="always")
-def radial_bin_add(bins_sum, bins_n, col, r_in, px, ca, sa, yl, t):
-    """Thickness ``t`` of the film cell at design column ``col`` (continuous, pixels) of a row at
-    ``yl`` mm into its 1 mm radial bin ``floor(r)`` of ``bins_sum`` ``(B,) float64`` and
-    ``bins_n`` ``(B,) int64`` (bins outside ``0..B-1`` skipped); ``r_in``, ``px``, ``ca``, ``sa``
-    as in :func:`strip_stats_jit`'s ``geo``."""
-    xl = r_in + col * px
-    b = radial_bin(ca * xl - sa * yl, sa * xl + ca * yl)
-    if 0 <= b < bins_sum.size:
-        bins_sum[b] += t
-        bins_n[b] += 1
 
 
 @njit(cache=True, nogil=True)
@@ -318,11 +287,11 @@ def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bin
     rows, cols = film.shape
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
-    # the accumulators in locals (registers), written back at the end: the same operations in
-    # the same order as _add_comp on acc
+    # the accumulators in locals (registers), written back at the end: each sum compensated
+    # (Neumaier: acc[i + 1] keeps what acc[i] lost), the same operations in the same order as before
     a0, a1, a2, a3, a4, a5, a6 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]
     n0, n1, n2, n3, n4, n5 = cnt[0], cnt[1], cnt[2], cnt[3], cnt[4], cnt[5]
-    # radial_bin_add's arithmetic with its per-column products computed once, and the bin
+    # the 1 mm radial bin floor(hypot(x, y)) of a cell (radial_bin) with its per-column products computed once, and the bin
     # being added to kept in registers until the bin changes (the same additions in the same
     # order on every bin)
     cax = np.empty(cols, np.float64)

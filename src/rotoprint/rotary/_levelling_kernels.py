@@ -105,8 +105,8 @@ def film_stats_jit(lv, inter_bits, row0, geo, half_mean, acc, bins_sum, bins_n):
     rows, cols = lv.shape
     ox, oy, nx, ny = geo[0], geo[1], geo[2], geo[3]
     r_in, px, py, hpx, ca, sa = geo[4], geo[5], geo[6], geo[7], geo[8], geo[9]
-    # the accumulators in locals (registers), written back at the end; radial_bin_add's
-    # arithmetic with its per-column products computed once, and the bin being added to kept
+    # the accumulators in locals (registers), written back at the end; the radial bin's
+    # arithmetic (radial_bin) with its per-column products computed once, and the bin being added to kept
     # in registers until the bin changes: the same operations in the same order
     a0, a1, a2, a3, a4, a5, a6 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]
     cax = np.empty(cols, np.float64)
