@@ -71,6 +71,34 @@ GOLDEN_NATIVE = {
     "build-gas": ("4ea43b8ce132581edaaee466d43014e9ff3ce63a7488d37734f56e03c4c9f883", 407),
 }
 
+#: The builds on a machine whose numpy runs without its AVX-512 (SKX) kernels: the same code writes
+#: other bytes there. Measured in session 14 on an AVX2 EPYC (no AVX-512): main 3e29ff1, whose
+#: digests above were pinned on AVX-512 machines, and main after that session's kernel changes give
+#: these same digests; the layer folder, the SL1 and the rotary slices are the same on both
+#: machines. (numba here has no SVML: its kernels call libm everywhere; numpy's float64
+#: transcendental functions have AVX-512 kernels of their own, which is where a build's film and
+#: plan figures are the likely source: not traced to a file.)
+GOLDEN_BUILDS_NO_AVX512 = {
+    "native": {
+        "build-coil-no-check": ("436de81e9aa6b2fca74efc4f5b072d4743db3113a497d5e667b3131a8e1c411b", 737),
+        "build-gas": ("96d41d621137eab37454a5beaae7ce473d13786d0b09c874364bcaeac2caddee", 407),
+    },
+    "numba": {
+        "build-coil-no-check": ("26fbbe22189e23e5cf40fbe4694810454eedffd56f15d3f2c0d88f8660b90740", 737),
+        "build-gas": ("5547a4ff998e93ed2ebb19c4941f9e03327813d92a35c2959307790d1229b956", 407),
+    },
+}
+
+
+def _numpy_avx512() -> bool:
+    """Whether numpy dispatches to its AVX-512 (SKX) kernels on this machine (True when unknown)."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__
+    except ImportError:  # pragma: no cover - another numpy layout
+        return True
+    return bool(__cpu_features__.get("AVX512_SKX", True))
+
+
 _TEXT = (".json", ".html", ".ini", ".txt", ".jsonl")
 MARKER = "rotoprint-output.json"  # issue 12's ownership marker (absent before it)
 
@@ -117,8 +145,11 @@ def _check(name: str, out: Path) -> None:
     from rotoprint._accel import native
 
     pinned = (GOLDEN_NATIVE if native is not None else GOLDEN)[name]
+    if name.startswith("build-") and not _numpy_avx512():
+        pinned = GOLDEN_BUILDS_NO_AVX512["native" if native is not None else "numba"][name]
     got = output_digest(out)
-    assert got == pinned, f"{name}: output changed: {got} (pinned {pinned}, native={native is not None})"
+    assert got == pinned, (f"{name}: output changed: {got} (pinned {pinned}, native={native is not None}, "
+                           f"numpy AVX-512 {_numpy_avx512()})")
 
 
 @pytest.mark.parametrize(
