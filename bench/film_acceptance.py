@@ -231,6 +231,53 @@ def cost_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
         print(row, flush=True)
 
 
+def default_pass_cost(d, pl, hd, tilt: float, k: int = 5, clock=time.perf_counter) -> tuple[float, float, int, float]:
+    """One default pass of :func:`~rotoprint.rotary.interlace.pass_prints` (``PassOptions()`` at
+    ``tilt``, head ``hd``) on design ``d``: ``(images, per-layer work, P, whole call)`` in seconds,
+    the images the mean of ``transform_restored`` over the passes of one call, the per-layer work
+    (shares, dead cover, edge zone) the sum over the call, both from the one of ``k`` calls whose
+    pass with them costs least; the whole call its own best (the exact maps' cache emptied before each)."""
+    import gc
+
+    import rotoprint.rotary.deadcover as dc
+    import rotoprint.rotary.interlace as il
+    from rotoprint.rotary.exact import exact_maps
+    from rotoprint.rotary.interlace import pass_prints
+
+    rec: dict = {}
+
+    def timed(mod, name, key):
+        f = getattr(mod, name)
+
+        def w(*a, **kw):
+            t = clock()
+            r = f(*a, **kw)
+            rec.setdefault(key, []).append(clock() - t)
+            return r
+        setattr(mod, name, w)
+        return f
+
+    saved = [(mod, name, timed(mod, name, key)) for mod, name, key in
+             ((il, "transform_restored", "images"), (il, "track_fractions", "layer"), (il, "edge_zone", "layer"),
+              (dc, "cover_dead_tracks", "layer")) if hasattr(mod, name)]  # (an older checkout has no edge_zone)
+    runs, best_whole = [], float("inf")
+    try:
+        for _ in range(k):
+            rec.clear()
+            exact_maps.cache_clear()
+            gc.collect()
+            t = clock()
+            _, prs, _ = pass_prints(d, hd, pl, PassOptions(RotarySetup(tilt_deg=tilt)))
+            best_whole = min(best_whole, clock() - t)
+            runs.append((float(np.mean(rec["images"])), sum(rec.get("layer", [])), len(prs)))
+    finally:
+        for mod, name, f in saved:
+            setattr(mod, name, f)
+    # the images and the per-layer work of one run: the run whose pass with them costs least
+    best_img, best_layer, n_p = min(runs, key=lambda x: x[0] + x[1] / x[2])
+    return best_img, best_layer, n_p, best_whole
+
+
 def pass_prints_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -> None:
     """The default print's passes as :func:`~rotoprint.rotary.interlace.pass_prints` makes them
     (equalised, the dead-track cover, the edge restore: ``PassOptions()``), without and with the 5
@@ -244,13 +291,6 @@ def pass_prints_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -
     run of ``k`` whose pass with them costs least (the whole call: its own best). With ``--cpu``
     (the calling thread's time) the work an OpenBLAS worker does in the shares' products is not
     counted: the per-layer column may read a little low."""
-    import gc
-
-    import rotoprint.rotary.deadcover as dc
-    import rotoprint.rotary.interlace as il
-    from rotoprint.rotary.exact import exact_maps
-    from rotoprint.rotary.interlace import pass_prints
-
     print()
     print("| tilt deg | nozzles | passes | native transform s | one pass's images (maps + thinned + edge restore) s | ratio | "
           "per-layer shares + dead cover + edge zone / P s | ratio with them | whole pass_prints / P s | ratio |")
@@ -261,37 +301,7 @@ def pass_prints_table(d, pl, head, tilts, k: int = 5, clock=time.perf_counter) -
         dead = tuple(sorted(int(x) for x in np.random.default_rng(14).choice(np.flatnonzero(sp.swathes[0].enabled), 5, replace=False)))
         t0 = _best(lambda: transform_exact(d, head, pl, tilt_deg=tilt), k, clock)
         for label, hd in (("all live", head), ("5 dead", head.model_copy(update={"dead_nozzles": dead}))):
-            rec: dict = {}
-
-            def timed(mod, name, key):
-                f = getattr(mod, name)
-
-                def w(*a, **kw):
-                    t = clock()
-                    r = f(*a, **kw)
-                    rec.setdefault(key, []).append(clock() - t)
-                    return r
-                setattr(mod, name, w)
-                return f
-
-            saved = [(mod, name, timed(mod, name, key)) for mod, name, key in
-                     ((il, "transform_restored", "images"), (il, "track_fractions", "layer"), (il, "edge_zone", "layer"),
-                      (dc, "cover_dead_tracks", "layer")) if hasattr(mod, name)]  # (an older checkout has no edge_zone)
-            runs, best_whole = [], float("inf")
-            try:
-                for _ in range(k):
-                    rec.clear()
-                    exact_maps.cache_clear()
-                    gc.collect()
-                    t = clock()
-                    _, prs, _ = pass_prints(d, hd, pl, PassOptions(RotarySetup(tilt_deg=tilt)))
-                    best_whole = min(best_whole, clock() - t)
-                    runs.append((float(np.mean(rec["images"])), sum(rec.get("layer", [])), len(prs)))
-            finally:
-                for mod, name, f in saved:
-                    setattr(mod, name, f)
-            # the images and the per-layer work of one run: the run whose pass with them costs least
-            best_img, best_layer, n_p = min(runs, key=lambda x: x[0] + x[1] / x[2])
+            best_img, best_layer, n_p, best_whole = default_pass_cost(d, pl, hd, tilt, k, clock)
             print(f"| {tilt:g} | {label} | {n_p} | {t0:.4f} | {best_img:.4f} | {best_img / t0:.2f} | {best_layer / n_p:.4f} | "
                   f"{(best_img + best_layer / n_p) / t0:.2f} | {best_whole / n_p:.4f} | {best_whole / n_p / t0:.2f} |", flush=True)
 
