@@ -269,6 +269,55 @@ def radial_bin(x, y):
     return int(math.floor(math.hypot(x, y)))
 
 
+@njit(cache=True, nogil=True, inline="always")
+def neumaier_add(a, c, t):  # pragma: no cover - jit
+    """``a + t`` compensated (Neumaier): returns the sum and ``c`` plus what the sum lost."""
+    s = a + t
+    if abs(a) >= abs(t):
+        c += (a - s) + t
+    else:
+        c += (t - s) + a
+    return s, c
+
+
+@njit(cache=True, nogil=True, inline="always")
+def column_products(cols, ox, nx, r_in, px, ca, sa):  # pragma: no cover - jit
+    """``ca * xl`` and ``sa * xl`` ``(cols,) float64`` of each film column's model x (the radius of
+    :func:`radial_bin`'s argument as ``Placement.to_platform`` computes it)."""
+    cax = np.empty(cols, np.float64)
+    sax = np.empty(cols, np.float64)
+    for j in range(cols):
+        xl = r_in + ((j + 0.5 - ox) / nx) * px
+        cax[j] = ca * xl
+        sax[j] = sa * xl
+    return cax, sax
+
+
+@njit(cache=True, nogil=True, inline="always")
+def bin_add(b, cb, cs, cn, bins_sum, bins_n, t):  # pragma: no cover - jit
+    """Add ``t`` to radial bin ``b`` through the bin held in registers (``cb``, its sum ``cs`` and
+    count ``cn``; ``cb`` -1: none), written back to ``bins_sum``, ``bins_n`` when the bin changes
+    (bins outside ``0..B-1`` skipped): the same additions in the same order on every bin. Returns
+    the new ``cb, cs, cn``; the caller writes the last one back (:func:`bin_flush`)."""
+    if b != cb:
+        bin_flush(cb, cs, cn, bins_sum, bins_n)
+        cb = b if 0 <= b < bins_sum.size else -1
+        if cb >= 0:
+            cs = bins_sum[cb]
+            cn = bins_n[cb]
+    if cb >= 0:
+        cs += t
+        cn += 1
+    return cb, cs, cn
+
+
+@njit(cache=True, nogil=True, inline="always")
+def bin_flush(cb, cs, cn, bins_sum, bins_n):  # pragma: no cover - jit
+    if cb >= 0:
+        bins_sum[cb] = cs
+        bins_n[cb] = cn
+
+
 @njit(cache=True, nogil=True)
 def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bins_n, samples):
     """Accumulate the figures of film rows ``film`` ``(rows, cols) float64`` (grid rows
@@ -294,13 +343,7 @@ def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bin
     # the 1 mm radial bin floor(hypot(x, y)) of a cell (radial_bin) with its per-column products computed once, and the bin
     # being added to kept in registers until the bin changes (the same additions in the same
     # order on every bin)
-    cax = np.empty(cols, np.float64)
-    sax = np.empty(cols, np.float64)
-    for j in range(cols):
-        xl = r_in + ((j + 0.5 - ox) / nx) * px
-        cax[j] = ca * xl
-        sax[j] = sa * xl
-    nb = bins_sum.size
+    cax, sax = column_products(cols, ox, nx, r_in, px, ca, sa)
     cb = -1
     cs = 0.0
     cn = 0
@@ -313,20 +356,10 @@ def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bin
         cay = ca * yl
         for j in range(cols):
             t = film[i, j]
-            s = a0 + t
-            if abs(a0) >= abs(t):
-                a1 += (a0 - s) + t
-            else:
-                a1 += (t - s) + a0
-            a0 = s
+            a0, a1 = neumaier_add(a0, a1, t)
             if not des[i, j]:
                 continue
-            s = a2 + t
-            if abs(a2) >= abs(t):
-                a3 += (a2 - s) + t
-            else:
-                a3 += (t - s) + a2
-            a2 = s
+            a2, a3 = neumaier_add(a2, a3, t)
             n0 += 1
             if t > 0.0:
                 n1 += 1
@@ -343,29 +376,11 @@ def strip_stats_jit(film, des, inter, row0, geo, stride, acc, cnt, bins_sum, bin
                     samples[ns] = t
                     ns += 1
                 k += 1
-            s = a4 + t
-            if abs(a4) >= abs(t):
-                a5 += (a4 - s) + t
-            else:
-                a5 += (t - s) + a4
-            a4 = s
+            a4, a5 = neumaier_add(a4, a5, t)
             if t < a6:
                 a6 = t
-            b = radial_bin(cax[j] - say, sax[j] + cay)
-            if b != cb:
-                if cb >= 0:
-                    bins_sum[cb] = cs
-                    bins_n[cb] = cn
-                cb = b if 0 <= b < nb else -1
-                if cb >= 0:
-                    cs = bins_sum[cb]
-                    cn = bins_n[cb]
-            if cb >= 0:
-                cs += t
-                cn += 1
-    if cb >= 0:
-        bins_sum[cb] = cs
-        bins_n[cb] = cn
+            cb, cs, cn = bin_add(radial_bin(cax[j] - say, sax[j] + cay), cb, cs, cn, bins_sum, bins_n, t)
+    bin_flush(cb, cs, cn, bins_sum, bins_n)
     acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6] = a0, a1, a2, a3, a4, a5, a6
     cnt[0], cnt[1], cnt[2], cnt[3], cnt[4], cnt[5] = n0, n1, n2, n3, n4, n5
     return ns
@@ -399,12 +414,7 @@ def radial_cell_counts_jit(mask, geo, lo_mm, bin_mm, out):
     # the per-column products once; the bin by a guarded sqrt as in radial_bin ((h - lo) / bin
     # is monotone in h, so where the bounds either side agree, hypot's bin is theirs); the
     # current bin's count in a register
-    cax = np.empty(cols, np.float64)
-    sax = np.empty(cols, np.float64)
-    for j in range(cols):
-        xl = r_in + (j + 0.5 - ox) / nx * px
-        cax[j] = ca * xl
-        sax[j] = sa * xl
+    cax, sax = column_products(cols, ox, nx, r_in, px, ca, sa)
     cb = -1
     cn = 0
     for i in range(rows):

@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._deposit_kernels import radial_bin
+from ._deposit_kernels import bin_add, bin_flush, column_products, neumaier_add, radial_bin
 
 __all__ = ["axis_weights", "restrict_wet_jit", "prolong_combine_jit", "film_stats_jit"]
 
@@ -109,13 +109,7 @@ def film_stats_jit(lv, inter_bits, row0, geo, half_mean, acc, bins_sum, bins_n):
     # arithmetic (radial_bin) with its per-column products computed once, and the bin being added to kept
     # in registers until the bin changes: the same operations in the same order
     a0, a1, a2, a3, a4, a5, a6 = acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6]
-    cax = np.empty(cols, np.float64)
-    sax = np.empty(cols, np.float64)
-    for j in range(cols):
-        xl = r_in + ((j + 0.5 - ox) / nx) * px
-        cax[j] = ca * xl
-        sax[j] = sa * xl
-    nb = bins_sum.size
+    cax, sax = column_products(cols, ox, nx, r_in, px, ca, sa)
     cb = -1
     cs = 0.0
     cn = 0
@@ -126,37 +120,14 @@ def film_stats_jit(lv, inter_bits, row0, geo, half_mean, acc, bins_sum, bins_n):
         cay = ca * yl
         for j in range(cols):
             t = lv[i, j]
-            s = a0 + t  # Neumaier: a1 keeps what the sum lost
-            if abs(a0) >= abs(t):
-                a1 += (a0 - s) + t
-            else:
-                a1 += (t - s) + a0
-            a0 = s
+            a0, a1 = neumaier_add(a0, a1, t)  # a1 keeps what the sum lost
             if (inter_bits[i, j >> 3] >> (7 - (j & 7))) & 1:
-                s = a2 + t
-                if abs(a2) >= abs(t):
-                    a3 += (a2 - s) + t
-                else:
-                    a3 += (t - s) + a2
-                a2 = s
+                a2, a3 = neumaier_add(a2, a3, t)
                 if t < a4:
                     a4 = t
                 a5 += 1.0
                 if t < half_mean:
                     a6 += 1.0
-                b = radial_bin(cax[j] - say, sax[j] + cay)
-                if b != cb:
-                    if cb >= 0:
-                        bins_sum[cb] = cs
-                        bins_n[cb] = cn
-                    cb = b if 0 <= b < nb else -1
-                    if cb >= 0:
-                        cs = bins_sum[cb]
-                        cn = bins_n[cb]
-                if cb >= 0:
-                    cs += t
-                    cn += 1
-    if cb >= 0:
-        bins_sum[cb] = cs
-        bins_n[cb] = cn
+                cb, cs, cn = bin_add(radial_bin(cax[j] - say, sax[j] + cay), cb, cs, cn, bins_sum, bins_n, t)
+    bin_flush(cb, cs, cn, bins_sum, bins_n)
     acc[0], acc[1], acc[2], acc[3], acc[4], acc[5], acc[6] = a0, a1, a2, a3, a4, a5, a6
