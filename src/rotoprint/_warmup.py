@@ -46,7 +46,7 @@ WARMED: dict[str, tuple[str, ...]] = {
     "rotoprint.rotary._exact_kernels": ("_coords_nb", "_bilinear_nb", "_track_windows_nb", "_window_bounds_nb", "_windows_fill_nb", "_windows_fill_gather_nb", "_ink_blocks_nb", "_windows_sample_thin_nb", "_binary_levels_nb"),
     "rotoprint.rotary._equalise_kernels": ("profile_jit", "level_at_jit", "settle_jit", "drop_round_jit"),
     "rotoprint.rotary._halftone_kernels": ("diffuse_jit",),
-    "rotoprint.rotary._interlace_kernels": ("max_gaps_jit", "profile_add_jit", "shortfall_terms_jit", "candidate_gaps_jit", "candidate_radii_jit", "sorted_gaps_jit"),
+    "rotoprint.rotary._interlace_kernels": ("max_gaps_jit", "profile_add_jit", "profile_base_jit", "shortfall_terms_jit", "candidate_gaps_jit", "candidate_radii_jit", "sorted_gaps_jit"),
     "rotoprint.rotary._levelling_kernels": ("restrict_wet_jit", "prolong_combine_jit", "film_stats_jit"),
     "rotoprint.slicing._kernels": ("bucket_crossings", "union_labels"),
 }

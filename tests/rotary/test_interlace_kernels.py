@@ -109,3 +109,19 @@ def test_shortfall_terms_at_every_window_edge(n_g):
     lo, hi = np.maximum(0, i - 25), np.minimum(n_g, i + 26)
     local = (c[:, hi] - c[:, lo]) / (hi - lo)
     assert np.array_equal(out, np.maximum(0.0, 1.0 - t / np.maximum(0.8 * local, 1e-300)) ** 2)
+
+
+def test_profile_base_matches_numpy():
+    """The grid points near each track and their cap base, against numpy's form (radii on grid
+    points, between them, a hair either side; the cap's edge at x = +-1)."""
+    rng = np.random.default_rng(4)
+    step, grid0, a_mm = 0.002, 59.9, 0.0248
+    r = np.concatenate([grid0 + step * rng.integers(0, 5000, 40), rng.uniform(60.0, 70.0, 400),
+                        np.nextafter(grid0 + step * 17, np.inf) + np.zeros(3), grid0 + step * 9 + a_mm * np.array([1.0, -1.0])])
+    n_s = 2 * (int(np.ceil(a_mm / step)) + 1) + 1
+    got = np.empty((n_s, r.size), np.int64), np.empty((n_s, r.size))
+    want = np.empty((n_s, r.size), np.int64), np.empty((n_s, r.size))
+    ik.profile_base_jit(r, grid0, step, a_mm, *got)
+    ik.profile_base_numpy(r, grid0, step, a_mm, *want)
+    assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
+    assert (got[1] == 0.0).any() and (got[1] > 0.99).any()

@@ -96,6 +96,34 @@ def profile_add_jit(t, idx, k):  # pragma: no cover - jit
                 acc[b] = 0.0
 
 
+@njit(cache=True, nogil=True)
+def profile_base_jit(r, grid0, step, a_mm, idx, base):  # pragma: no cover - jit
+    """The grid points near each track and their cap base, elementwise as numpy computes them:
+    ``idx[s, m] = floor((r_m - grid0) / step) + s - reach`` (``reach = (S - 1) / 2``) and
+    ``base[s, m] = max(1 - x^2, 0)``, ``x = (grid0 + idx[s, m] step - r_m) / a_mm``.
+
+    r : (M,) float64; idx : (S, M) int64 and base : (S, M) float64, written. The power of the
+    base stays numpy's (its SIMD pow is not libm's on every machine)."""
+    n_s, m = idx.shape
+    reach = (n_s - 1) // 2
+    for k in range(m):
+        i0 = np.int64(np.floor((r[k] - grid0) / step))
+        for s in range(n_s):
+            i = i0 + (s - reach)
+            idx[s, k] = i
+            x = (grid0 + i * step - r[k]) / a_mm
+            base[s, k] = max(1.0 - x * x, 0.0)
+
+
+def profile_base_numpy(r, grid0, step, a_mm, idx, base):
+    """:func:`profile_base_jit` in numpy (the reference)."""
+    n_s = idx.shape[0]
+    idx[:] = np.floor((r - grid0) / step).astype(np.int64) + np.arange(-(n_s // 2), n_s // 2 + 1)[:, None]
+    x = (grid0 + idx * step - r) / a_mm
+    base[:] = np.clip(1.0 - x * x, 0.0, None)
+    return idx, base
+
+
 def profile_add_numpy(t, idx, k):
     """:func:`profile_add_jit` in numpy (the reference)."""
     for s in range(idx.shape[0]):

@@ -670,18 +670,16 @@ def _pass_profile(xys: list[np.ndarray], refs: list[float], e: np.ndarray, offse
     relative, times a cap's footprint averaged along the track), ``x`` the radial distance."""
     step = _PROFILE_STEP_MM
     t = np.zeros(n_grid)
-    reach = int(math.ceil(a_mm / step)) + 1
-    shifts = np.arange(-reach, reach + 1)[:, None]
+    n_s = 2 * (int(math.ceil(a_mm / step)) + 1) + 1  # the grid points near each track
     for j, (xy, r_ref) in enumerate(zip(xys, refs)):
         if not xy.size:
             continue
         r = np.hypot(xy[:, 0] + offset_mm * e[0], xy[:, 1] + offset_mm * e[1])
         if plan is not None:
-            r = r[_in_band(plan, j, r)]
-        w = r_ref / r
-        idx = np.floor((r - grid0) / step).astype(np.int64) + shifts  # (S, M): the grid points near each track
-        x = (grid0 + idx * step - r) / a_mm
-        _ik.profile_add_jit(t, idx, w * np.clip(1.0 - x * x, 0.0, None) ** 1.5)  # t += bincount of each row in turn
+            r = np.ascontiguousarray(r[_in_band(plan, j, r)])
+        idx, base = np.empty((n_s, r.size), np.int64), np.empty((n_s, r.size))
+        _ik.profile_base_jit(r, grid0, step, a_mm, idx, base)
+        _ik.profile_add_jit(t, idx, (r_ref / r) * base ** 1.5)  # t += bincount of each row in turn
     return t
 
 
