@@ -399,3 +399,32 @@ def test_fill_writes_every_byte_of_its_image():
         got = K._direct_fill(*K._prep(*args), kw["dphi"], kw["direction"], kw["i0"], kw["n_f"], kw["fill"] == "evenodd",
                              np.uint8(kw["level"]), out, *K._NO_EDGE)
         np.testing.assert_array_equal(got, K.direct_fill_numpy(*args, **kw))
+
+
+# ---------------------------------------------------------------------------------- reused images
+
+
+def test_layers_write_into_the_blocks_of_dropped_layers_and_never_into_held_ones(shared_meshes):
+    # one job over every layer (the blocks of the layer before are reused once dropped) against a new
+    # job per layer; a print the caller still holds keeps its bytes while later layers are made
+    mesh = _real(shared_meshes, "sphere_openscad.stl")
+    h = float(mesh.bounds[1][2] - mesh.bounds[0][2])
+    kw = dict(layer_height_mm=h / 6, inner_radius_mm=60.0, equalise=True)
+    job = _job(mesh, 20.0, **kw)
+    assert len(job) >= 5
+    held = job.layer(2)
+    held_copy = [s.levels.copy() for s in held.swathes]
+    reused = 0
+    addrs = set()
+    for L in range(len(job)):
+        pr = job.layer(L)
+        now = {s.levels.ctypes.data for s in pr.swathes}
+        reused += len(now & addrs)
+        addrs |= now
+        fresh = _job(mesh, 20.0, **kw).layer(L)
+        for a, b in zip(pr.swathes, fresh.swathes):
+            assert np.array_equal(a.levels, b.levels), L
+        del pr
+    assert reused > 0  # the dropped layers' blocks were written again
+    for s, c in zip(held.swathes, held_copy):
+        assert np.array_equal(s.levels, c)  # untouched by the layers made after it

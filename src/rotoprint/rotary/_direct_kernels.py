@@ -561,7 +561,8 @@ _NO_EDGE = (np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(0), np.zeros(1, np.i
             np.zeros((0, 1), np.int64), np.zeros(0), np.zeros(0))
 
 
-def direct_fill_jit(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, direction, i0, n_f, n_cols, fill, level, edge=None):
+def direct_fill_jit(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, direction, i0, n_f, n_cols, fill, level, edge=None,
+                    out=None):
     """``(n_f, n_cols) uint8`` print image of one swathe (see the module doc for the rules).
 
     ``sx0..sy1``: ``(S,) float64`` segment ends in the local frame; ``r2``: ``(M,) float64``
@@ -571,9 +572,13 @@ def direct_fill_jit(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, dir
     ``edge``: the edge restore (:mod:`._direct_edge`), ``(cuts, thin, d_mm, gain, phase)``: cut
     sections ``[(4, S_g) float64]`` (local ``x0, y0, x1, y1``), the ``(T,) int64`` indices of the
     tracks restored (thinned), the ``(S,)`` radial offsets (mm) looked at, the ``(T,)`` restore
-    rates and phases; None: no restore.
+    rates and phases; None: no restore. ``out``: the ``(n_f, n_cols) uint8`` C-contiguous array to
+    write (every byte, whatever it held: :class:`rotoprint._buffers.ReusedBuffers`), else a new one.
     """
-    out = np.empty((n_f, n_cols), np.uint8)  # _direct_fill writes every byte
+    if out is None:
+        out = np.empty((n_f, n_cols), np.uint8)  # _direct_fill writes every byte
+    elif out.shape != (n_f, n_cols) or out.dtype != np.uint8 or not out.flags.c_contiguous or not out.flags.writeable:
+        raise ValueError(f"out must be a writeable C-contiguous ({n_f}, {n_cols}) uint8 array, got {out.shape} {out.dtype}")
     args = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
     rest = _NO_EDGE
     if edge is not None and np.size(edge[1]):
