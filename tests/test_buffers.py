@@ -93,3 +93,58 @@ def test_pickles_empty_and_threads_never_share_a_block():
     for t in ts:
         t.join()
     assert len(seen) == 800 and not bad
+
+
+def test_a_weakly_held_block_stays_the_callers():
+    import weakref
+
+    pool = ReusedBuffers(4)
+    a = pool.take((8,))
+    a[:] = 5
+    w = weakref.ref(a)
+    addr = a.ctypes.data
+    del a  # only the pool and the weak reference hold it
+    b = pool.take((8,))
+    b[:] = 9
+    assert b.ctypes.data != addr and w() is not None and (w() == 5).all()
+
+
+def _reads_locals(frame, event, arg):
+    frame.f_locals  # (a debugger's or tracer's view: on 3.11 it copies the locals onto the frame)
+    return _reads_locals
+
+
+def test_a_tracer_reading_locals_never_makes_a_held_block_look_free():
+    # helper-56's case: the baseline measured while a tracer read the frame's locals was one too high,
+    # and a print held once by the caller was written over; now the counts are read on the list's items
+    import importlib
+    import sys
+
+    import rotoprint._buffers as mod
+
+    old = sys.gettrace()
+    sys.settrace(_reads_locals)
+    try:
+        fresh = importlib.reload(mod)  # the baseline measured under the tracer
+        traced = fresh.ReusedBuffers(4)
+        a = traced.take((16,))
+        kept = a
+        del a
+        b = traced.take((16,))  # taken under the tracer too
+    finally:
+        sys.settrace(old)
+    try:
+        assert b.ctypes.data != kept.ctypes.data
+        pool = fresh.ReusedBuffers(4)
+        x = pool.take((32,))
+        x[:] = 3
+        held = x
+        addr = x.ctypes.data
+        del x
+        y = pool.take((32,))
+        y[:] = 4
+        assert y.ctypes.data != addr and (held == 3).all()
+        del held
+        assert pool.take((32,)).ctypes.data == addr  # dropped: reused
+    finally:
+        importlib.reload(mod)
