@@ -428,3 +428,24 @@ def test_layers_write_into_the_blocks_of_dropped_layers_and_never_into_held_ones
     assert reused > 0  # the dropped layers' blocks were written again
     for s, c in zip(held.swathes, held_copy):
         assert np.array_equal(s.levels, c)  # untouched by the layers made after it
+
+
+def test_threads_sharing_one_job_get_the_serial_layers(shared_meshes):
+    # helper-56 found 7 wrong layers of 240 when four threads shared a job (the slice job's face sweep
+    # keeps one position); the cross-sections are now made one at a time
+    import pickle
+    from concurrent.futures import ThreadPoolExecutor
+
+    mesh = _real(shared_meshes, "sphere_openscad.stl")
+    h = float(mesh.bounds[1][2] - mesh.bounds[0][2])
+    kw = dict(layer_height_mm=h / 12, inner_radius_mm=60.0)
+    serial = _job(mesh, 20.0, **kw)
+    want = [[s.levels.copy() for s in serial.layer(L).swathes] for L in range(len(serial))]
+    shared = _job(mesh, 20.0, **kw)
+    order = [L for _ in range(4) for L in (list(range(len(shared))) + list(range(len(shared)))[::-1])]
+    with ThreadPoolExecutor(4) as ex:
+        got = list(ex.map(lambda L: (L, [s.levels.copy() for s in shared.layer(L).swathes]), order))
+    bad = [L for L, imgs in got if not all(np.array_equal(a, b) for a, b in zip(imgs, want[L]))]
+    assert not bad
+    clone = pickle.loads(pickle.dumps(shared))  # (the lock is made anew)
+    assert all(np.array_equal(a.levels, b) for a, b in zip(clone.layer(3).swathes, want[3]))

@@ -31,6 +31,7 @@ import dataclasses
 import hashlib
 import logging
 import math
+import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -279,7 +280,10 @@ def _local_pitch(r_sorted: np.ndarray, h: int) -> np.ndarray:
 
 class DirectSliceJob:
     """A planned direct rotary slicing run; :meth:`layer` (or iteration) gives one
-    :class:`RotaryPrint` per layer. Build one with :func:`slice_rotary`."""
+    :class:`RotaryPrint` per layer. Build one with :func:`slice_rotary`.
+
+    Threads may share a job: the cross-sections (the slice job's face sweep, which keeps one
+    position) are made one at a time, the fills side by side."""
 
     def __init__(self, job, head, part: PartPlacement, design: Placement, plan: SwathePlan, tracks: tuple[TrackSet, ...], *,
                  options: RotarySliceOptions, dpi_y: float, shares: tuple[np.ndarray, ...] | None = None,
@@ -317,6 +321,7 @@ class DirectSliceJob:
         # the swathe images of the layers the caller has dropped, written again (new pages cost a fault each
         # 4 KiB: 3.9 of a 5.3 ms layer): two layers' worth, for the builds' two threads
         self._buffers = ReusedBuffers(2 * len(tracks))
+        self._sweep_lock = threading.Lock()  # the slice job's face sweep keeps one position
 
     def with_shares(self, shares, *, pass_index: int = 0, edge_restore=None) -> DirectSliceJob:
         """This job printing interlaced pass ``pass_index`` with the union's shares.
@@ -376,7 +381,17 @@ class DirectSliceJob:
         return float(d.max() / d.min() - 1.0)
 
     def segments(self, index: int):
-        return self.slice_job.segments(index)
+        with self._sweep_lock:
+            return self.slice_job.segments(index)
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        del state["_sweep_lock"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._sweep_lock = threading.Lock()
 
     def print_from_segments(self, seg: Segments, *, layer_index: int = 0, cut=()) -> RotaryPrint:
         """The print of one cross-section (model-XY segments).
@@ -445,12 +460,12 @@ class DirectSliceJob:
         """Layer ``index``'s print (one swathe image per radial swathe)."""
         if not 0 <= index < len(self):
             raise IndexError(f"layer {index} out of range 0..{len(self) - 1}")
-        seg, _ = self.slice_job.segments(index)
+        seg, _ = self.segments(index)
         return self.print_from_segments(seg, layer_index=index)
 
     def reference_image(self, index: int, *, oversample: int = 1) -> np.ndarray:
         """``(H, W) uint8`` Cartesian image of layer ``index`` on the design grid (for checks)."""
-        seg, _ = self.slice_job.segments(index)
+        seg, _ = self.segments(index)
         pl = self.part.design_placement(self.design.pitch_x_mm, self.design.pitch_y_mm, oversample=oversample)
         return rasterize_section(seg, self.part, pl, fill=self.fill)
 
@@ -689,7 +704,7 @@ def rotary_layer_files(job: DirectSliceJob, index: int, *, device_name: str,
     from ..io.images import png_bytes
     from .files import print_files
 
-    seg, rep = job.slice_job.segments(index)
+    seg, rep = job.segments(index)
     pr = job.print_from_segments(seg, layer_index=index)
     stem = f"layer_{index:05d}"
     design = {"source": "mesh cross-section (direct rotary slicing)", "layer": index, "invert": False,
