@@ -15,7 +15,7 @@ the caller's), so overwriting it cannot change anything the caller can see. It k
 The count is read on the list's item, never through a local name: a debugger or tracer that reads
 a frame's locals (``frame.f_locals`` copies them onto the frame on Python 3.11) would otherwise hold
 one more reference at that moment, and a baseline measured then would make a block held once by the
-caller look free (helper-56's review). A probe block held only by its own list is counted the same
+caller look free. A probe block held only by its own list is counted the same
 way on every call; when its count is not the baseline, nothing is reused.
 """
 
@@ -75,11 +75,6 @@ class ReusedBuffers:
                 held.append(a)
                 del held[:-self.keep]
             return a
-
-    def clear(self) -> None:
-        """Forget every block (those the caller still holds stay its own)."""
-        with self._lock:
-            self._held.clear()
 
     def __len__(self) -> int:
         return len(self._held)

@@ -432,7 +432,7 @@ def test_layers_write_into_the_blocks_of_dropped_layers_and_never_into_held_ones
 
 def test_threads_sharing_one_job_get_the_serial_layers(shared_meshes):
     # helper-56 found 7 wrong layers of 240 when four threads shared a job (the slice job's face sweep
-    # keeps one position); the cross-sections are now made one at a time
+    # keeps one position); its steps are now taken under a lock
     import pickle
     from concurrent.futures import ThreadPoolExecutor
 

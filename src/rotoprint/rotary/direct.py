@@ -31,7 +31,6 @@ import dataclasses
 import hashlib
 import logging
 import math
-import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -282,8 +281,8 @@ class DirectSliceJob:
     """A planned direct rotary slicing run; :meth:`layer` (or iteration) gives one
     :class:`RotaryPrint` per layer. Build one with :func:`slice_rotary`.
 
-    Threads may share a job: the cross-sections (the slice job's face sweep, which keeps one
-    position) are made one at a time, the fills side by side."""
+    Threads may share a job (the slice job's face sweep takes its steps under a lock; the sections
+    and fills run side by side)."""
 
     def __init__(self, job, head, part: PartPlacement, design: Placement, plan: SwathePlan, tracks: tuple[TrackSet, ...], *,
                  options: RotarySliceOptions, dpi_y: float, shares: tuple[np.ndarray, ...] | None = None,
@@ -321,7 +320,6 @@ class DirectSliceJob:
         # the swathe images of the layers the caller has dropped, written again (new pages cost a fault each
         # 4 KiB: 3.9 of a 5.3 ms layer): two layers' worth, for the builds' two threads
         self._buffers = ReusedBuffers(2 * len(tracks))
-        self._sweep_lock = threading.Lock()  # the slice job's face sweep keeps one position
 
     def with_shares(self, shares, *, pass_index: int = 0, edge_restore=None) -> DirectSliceJob:
         """This job printing interlaced pass ``pass_index`` with the union's shares.
@@ -381,17 +379,7 @@ class DirectSliceJob:
         return float(d.max() / d.min() - 1.0)
 
     def segments(self, index: int):
-        with self._sweep_lock:
-            return self.slice_job.segments(index)
-
-    def __getstate__(self) -> dict:
-        state = dict(self.__dict__)
-        del state["_sweep_lock"]
-        return state
-
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
-        self._sweep_lock = threading.Lock()
+        return self.slice_job.segments(index)
 
     def print_from_segments(self, seg: Segments, *, layer_index: int = 0, cut=()) -> RotaryPrint:
         """The print of one cross-section (model-XY segments).

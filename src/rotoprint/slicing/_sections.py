@@ -15,6 +15,7 @@ lower and upper vertex only, so both faces of an edge get the bit-identical poin
 
 from __future__ import annotations
 
+import threading
 
 import numpy as np
 
@@ -37,7 +38,10 @@ class Segments:
 
 
 class FaceSweep:
-    """Faces crossing successive planes, found incrementally for increasing heights."""
+    """Faces crossing successive planes, found incrementally for increasing heights.
+
+    Threads may share a sweep: each step of its one position is taken under a lock (a thread of
+    its own goes faster with :meth:`fork`, which starts its own position)."""
 
     def __init__(self, mesh: Mesh) -> None:
         fz = mesh.vertices[:, 2][mesh.faces]
@@ -48,6 +52,16 @@ class FaceSweep:
         self._ptr = 0
         self._active = np.empty(0, np.int64)
         self._last_z = -np.inf
+        self._lock = threading.Lock()
+
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        del state["_lock"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._lock = threading.Lock()
 
     def fork(self) -> FaceSweep:
         """A sweep over the same faces from the start, sharing the (read-only) face bounds."""
@@ -56,18 +70,20 @@ class FaceSweep:
         other._ptr = 0
         other._active = np.empty(0, np.int64)
         other._last_z = -np.inf
+        other._lock = threading.Lock()
         return other
 
     def faces_at(self, z: float) -> np.ndarray:
         """Indices of faces with ``zmin < z <= zmax`` (the faces the plane crosses)."""
-        if z < self._last_z:
-            self._ptr, self._active = 0, np.empty(0, np.int64)
-        stop = int(np.searchsorted(self.zmin_sorted, z, side="left"))
-        new = self.order[self._ptr : stop]
-        act = np.concatenate([self._active, new])
-        act = act[self.zmax[act] >= z]
-        self._ptr, self._active, self._last_z = stop, act, z
-        return act
+        with self._lock:
+            if z < self._last_z:
+                self._ptr, self._active = 0, np.empty(0, np.int64)
+            stop = int(np.searchsorted(self.zmin_sorted, z, side="left"))
+            new = self.order[self._ptr : stop]
+            act = np.concatenate([self._active, new])
+            act = act[self.zmax[act] >= z]
+            self._ptr, self._active, self._last_z = stop, act, z
+            return act
 
 
 def section(mesh: Mesh, faces_idx: np.ndarray, z: float) -> Segments:
