@@ -374,6 +374,66 @@ def test_one_floor_kept_test_is_kept_jit():
         np.testing.assert_array_equal(one, kept_numpy(i, ff, o))
 
 
+def _fixed_columns(f, o):
+    n = f.size
+    F, P, H = np.zeros(n, np.uint32), np.full(n, 0x80000000, np.uint32), np.zeros(n, np.uint32)
+    for c in range(n):
+        if 0.0 < f[c] < 1.0:
+            F[c], P[c], H[c] = K._fixed_track(f[c], o[c])
+    return F, P, H
+
+
+@pytest.mark.parametrize("first", [-5000, 0, 123457, K.FIXED_MAX_FIRING - 3000, -K.FIXED_MAX_FIRING + 1])
+def test_fixed_point_rows_are_the_float_rule(first):
+    """The thinned rows decided in 32-bit fixed point give the float64 rule's bytes, on exact hits
+    (dyadic and thirds shares, phases 0 and 1/2: the rule's floors land on integers), shares next to
+    0 and 1, phases next to 1, random ones, columns of no thinned track and a whole track's state,
+    for firings up to the fixed rows' limit (either sign); the float fallback is used there."""
+    rng = np.random.default_rng(first & 0xFFFF)
+    special_f = [0.5, 0.25, 0.75, 1.0 / 3.0, 2.0 / 3.0, 0.1, 2.0 ** -40, 1.0 - 2.0 ** -40, 1.0 - 2.0 ** -20, 0.6180339887498949]
+    special_o = [0.0, 0.5, 0.25, 1.0 / 3.0, 1.0 - 2.0 ** -53, 2.0 ** -40]
+    n_c = 700
+    f = np.concatenate([rng.choice(special_f, 300), rng.uniform(0.0, 1.0, 400)])
+    o = np.concatenate([rng.choice(special_o, 300), rng.uniform(0.0, 1.0, 400)])
+    off = rng.random(n_c) < 0.1  # columns without a thinned track
+    f[off], o[off] = 0.0, 0.0
+    state = np.where(rng.random(n_c) < 0.2, 3, 0).astype(np.uint8)
+    F, P, H = _fixed_columns(f, o)
+    n_r = 2000
+    a = np.full((n_r, n_c), 77, np.uint8)
+    b = np.full((n_r, n_c), 77, np.uint8)
+    K._thin_rows(a, 0, n_r, first, 0, n_c, f, o, state, np.uint8(3))
+    K._thin_rows_fixed(b, 0, n_r, first, 0, n_c, f, o, F, P, H, state, np.uint8(3))
+    np.testing.assert_array_equal(b, a)
+    # the pattern's counts: exactly f of the firings over the run, within one, on the columns without a whole track
+    free = state == 0
+    assert np.all(np.abs((a[:, free] > 0).sum(axis=0) - f[free] * n_r) <= 1.0 + 1e-9)
+    # a sub-range of columns and rows writes only there
+    c = np.full((n_r, n_c), 77, np.uint8)
+    K._thin_rows_fixed(c, 10, 400, first, 50, 650, f, o, F, P, H, state, np.uint8(3))
+    np.testing.assert_array_equal(c[10:400, 50:650], a[10:400, 50:650])
+    assert (c[:10] == 77).all() and (c[400:] == 77).all() and (c[:, :50] == 77).all() and (c[:, 650:] == 77).all()
+
+
+def test_fill_beyond_the_fixed_rows_limit_is_the_reference():
+    """Firing indices past FIXED_MAX_FIRING (a part far round the platform at a fine clock): the fill
+    falls back to the float64 rows and still gives the numpy reference's image."""
+    rng = np.random.default_rng(41)
+    n_tr = 120
+    r = np.sort(rng.uniform(30, 40, n_tr))
+    psi0 = rng.uniform(-0.05, 0.05, n_tr)
+    frac = rng.choice([1.0, 0.3, 0.7, 1.0 / 3.0], n_tr)
+    x, y = np.array([29.0, 41.0, 41.0, 29.0]), np.array([-5.0, -5.0, 5.0, 5.0])
+    cols, offs = rng.permutation(200)[:n_tr], rng.uniform(0, 1, n_tr)
+    for i0 in (K.FIXED_MAX_FIRING - 100, -K.FIXED_MAX_FIRING - 50):
+        # psi0 unwrapped so that firings i0 .. i0 + 299 land on the box (local angles -0.1 .. 0.5 rad)
+        args = (x, y, np.roll(x, -1), np.roll(y, -1), r * r, psi0 + 0.1 + i0 * 0.002, cols, frac, offs)
+        kw = dict(dphi=0.002, direction=1, i0=i0, n_f=300, n_cols=200, fill="nonzero", level=1)
+        got = K.direct_fill_jit(*args, **kw)
+        np.testing.assert_array_equal(got, K.direct_fill_numpy(*args, **kw))
+        assert got.any()
+
+
 def test_fill_writes_every_byte_of_its_image():
     """The jit fill allocates its image uninitialised: on an image of garbage it gives the numpy
     reference's image (rows without ink, columns beside it, tracks of share 0, no span at all, and

@@ -120,6 +120,58 @@ def _thin_rows(out, r0, r1, i0, c0, c1, fc, oc, state, level):  # pragma: no cov
             row[c] = s[c] | (np.uint8(np.floor((i + 1.0) * f[c] + o[c]) > i * f[c] + o[c]) * level)
 
 
+#: The fixed-point rows (:func:`_thin_rows_fixed`) are exact for firing indices below this in magnitude
+#: (the float64 rule's rounding stays within one 2^-32 unit there); beyond it the float rows are used.
+FIXED_MAX_FIRING = 1 << 20
+_TWO32 = 4294967296.0
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _fixed_track(f, o):  # pragma: no cover - jit
+    """``(F, P, H)`` uint32 of a thinned track (``0 < f < 1``, ``0 <= o < 1``): ``F = round(f 2^32)``,
+    ``H = F >> 1`` and ``P = O + F - H`` (mod 2^32, ``O = round(o 2^32)``), so that firing ``i``'s
+    ``R = i F + P`` (mod 2^32, as int32) is ``2^32 frac((i + 1) f + o) - H``: kept when ``|R| < H``."""
+    F = min(int(math.floor(f * _TWO32 + 0.5)), 4294967295)
+    O = int(math.floor(o * _TWO32 + 0.5)) & 0xFFFFFFFF
+    H = F >> 1
+    return np.uint32(F), np.uint32((O + F - H) & 0xFFFFFFFF), np.uint32(H)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _thin_rows_fixed(out, r0, r1, i0, c0, c1, fc, oc, Fc, Pc, Hc, state, level):  # pragma: no cover - jit
+    """:func:`_thin_rows`' bytes (the same float64 rule), decided in 32-bit fixed point, 8 columns a vector
+    on AVX2 (against 4 float64): firing ``i`` of a column is kept when ``frac((i + 1) f + o) < f``, which
+    is the rule's ``floor((i + 1) f + o) > floor(i f + o)``. The fixed phase ``Q = (i + 1) F + O``
+    (mod 2^32) is within ``(|i| + 3) / 2`` units (2^-32) of the exact one and the rule's float64 values
+    within one unit of theirs (``|i| < FIXED_MAX_FIRING``), so the two decide alike unless ``Q`` lies
+    within ``|i| + 8`` units of a boundary of the kept interval ``[0, F)``; each row tracks the least such
+    distance over its columns and, when one is that near, decides those columns by the float64 rule.
+    Columns without a thinned track hold ``F = H = 0``, ``P = 2^31``: never kept, never near."""
+    f = fc[c0:c1]
+    o = oc[c0:c1]
+    F = Fc[c0:c1]
+    P = Pc[c0:c1]
+    H = Hc[c0:c1]
+    s = state[c0:c1]
+    n = c1 - c0
+    for r in range(r0, r1):
+        i = r + i0
+        iu = np.uint32(i & 0xFFFFFFFF)
+        d = np.uint32(abs(i) + 8)
+        row = out[r, c0:c1]
+        near = np.uint32(0xFFFFFFFF)
+        for c in range(n):
+            a = np.uint32(abs(np.int32(np.uint32(iu * F[c]) + P[c])))
+            row[c] = s[c] | (np.uint8(a < H[c]) * level)
+            near = min(near, np.uint32(abs(np.int32(a - H[c]))))
+        if near <= d:
+            fi = float(i)
+            for c in range(n):
+                a = np.uint32(abs(np.int32(np.uint32(iu * F[c]) + P[c])))
+                if np.uint32(abs(np.int32(a - H[c]))) <= d:
+                    row[c] = s[c] | (np.uint8(np.floor((fi + 1.0) * f[c] + o[c]) > fi * f[c] + o[c]) * level)
+
+
 @njit(cache=True, nogil=True)
 def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev, i0, n_f, level, out):  # pragma: no cover - jit
     """Write the spans of the tracks kept whole (``frac >= 1``) and, when ``thinned``, of the thinned
@@ -152,6 +204,22 @@ def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev,
     state = np.zeros(n_c, np.uint8)
     fc = np.zeros(n_c, np.float64)
     oc = np.zeros(n_c, np.float64)
+    # the thinned tracks' fixed-point terms (_thin_rows_fixed), when every firing index and phase allows them
+    fixed = thinned and abs(i0) < FIXED_MAX_FIRING and abs(i0 + n_f) < FIXED_MAX_FIRING
+    tF = np.zeros(n_tr, np.uint32)
+    tP = np.zeros(n_tr, np.uint32)
+    tH = np.zeros(n_tr, np.uint32)
+    if fixed:
+        for m in range(n_tr):
+            f = frac[m]
+            if 0.0 < f < 1.0:
+                if not 0.0 <= offs[m] < 1.0:
+                    fixed = False
+                    break
+                tF[m], tP[m], tH[m] = _fixed_track(f, offs[m])
+    Fc = np.zeros(n_c, np.uint32)
+    Pc = np.full(n_c, np.uint32(0x80000000))
+    Hc = np.zeros(n_c, np.uint32)
     n_in = 0  # columns holding a whole track
     n_thin = 0  # columns holding a thinned track
     lo = n_c  # the rows are written on columns lo .. hi - 1, which hold every column inside (the rest stay 0)
@@ -175,10 +243,16 @@ def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev,
             elif ev_step[k] > 0:  # a thinned column's track is the only thinned one there: inside or not
                 fc[c] = frac[m]
                 oc[c] = offs[m]
+                Fc[c] = tF[m]
+                Pc[c] = tP[m]
+                Hc[c] = tH[m]
                 n_thin += 1
             else:
                 fc[c] = 0.0
                 oc[c] = 0.0
+                Fc[c] = 0
+                Pc[c] = 0x80000000
+                Hc[c] = 0
                 n_thin -= 1
             if ev_step[k] > 0:
                 lo = min(lo, c)
@@ -195,7 +269,10 @@ def _scanline_fill(sp_lo, sp_hi, sp_end, start, cols, frac, offs, thinned, n_ev,
             while hi > lo and cnt[hi - 1] == 0 and fc[hi - 1] == 0.0:
                 hi -= 1
             shrink = False
-        if n_thin:
+        if n_thin and fixed:
+            _thin_rows_fixed(out, row, nxt, i0, lo, hi, fc, oc, Fc, Pc, Hc, state, level)
+            _zero_rows(out, row, nxt, lo, hi)
+        elif n_thin:
             _thin_rows(out, row, nxt, i0, lo, hi, fc, oc, state, level)
             _zero_rows(out, row, nxt, lo, hi)
         elif n_in:
