@@ -50,7 +50,7 @@ from .head import check_tilt, nozzle_layout
 from .options import RotarySliceOptions, options_from
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage
-from .swathes import SwathePlan, plan_swathes
+from .swathes import SwathePlan, shared_plan
 
 __all__ = [
     "PartPlacement",
@@ -551,8 +551,9 @@ def slice_rotary(mesh: Mesh, device, options: RotarySliceOptions | None = None, 
     job = slice_mesh(mesh, device, layer_height_mm=opts.layer_height_mm, fill=opts.fill, gap_radius_mm=opts.gap_radius_mm,
                      backend=backend)
     r_in, r_out = design.radial_range_mm()
-    plan = plan_swathes(head, tilt_deg=float(tilt_deg), inner_radius_mm=r_in, outer_radius_mm=r_out,
-                        mount_angle_deg=0.0, direction=int(direction), max_swathes=max_swathes)
+    plan = shared_plan(  # the passes' jobs share one plan
+        head, tilt_deg=float(tilt_deg), inner_radius_mm=r_in, outer_radius_mm=r_out,
+        mount_angle_deg=0.0, direction=int(direction), max_swathes=max_swathes)
     a_lo, a_hi = design.angular_range_rad()
     alpha = math.radians(part.angle_deg)
     live = np.ones(head.nozzles, bool)

@@ -27,7 +27,7 @@ from .head import Mount, NozzleLayout, nozzle_layout
 from .options import RotarySetup, options_from
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_levels
-from .swathes import SwathePlan, pass_enabled, plan_swathes
+from .swathes import SwathePlan, pass_enabled, plan_swathes, shared_plan
 
 __all__ = ["SwatheMap", "TrackWindows", "ExactMaps", "ThinShares", "exact_maps", "transform_exact", "firing_range", "KERNEL_NAMES"]
 
@@ -354,28 +354,15 @@ def exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup | None
 
 
 @functools.lru_cache(maxsize=8)
-def _swathe_plan(head: InkjetHead, tilt_deg: float, r_in: float, r_out: float, mount_angle_deg: float, direction: int,
-                 max_swathes, overlap_mm: float, seam_mm: float) -> SwathePlan:
-    # the passes of a layer differ in pivot offset (and clock) only: their maps share one plan, its
-    # arrays read-only (the prints' SwatheImage.enabled may be a plan's own array: shared, so not writable)
-    plan = plan_swathes(head, tilt_deg=tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out, mount_angle_deg=mount_angle_deg,
-                        direction=direction, max_swathes=max_swathes, overlap_mm=overlap_mm).with_seam(seam_mm)
-    for sw in plan.swathes:
-        for a in (sw.enabled, sw.usable):
-            if isinstance(a, np.ndarray):
-                a.flags.writeable = False
-    return plan
-
-
-@functools.lru_cache(maxsize=8)
 def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> ExactMaps:
     tilt_deg, dpi_y, ref_radius_mm = setup.tilt_deg, setup.dpi_y, setup.ref_radius_mm
     mount_angle_deg, direction, max_swathes, backend = setup.mount_angle_deg, setup.direction, setup.max_swathes, setup.backend
     pivot_offset_mm = setup.pivot_offset_mm
     dpi_y = float(head.dpi_y if dpi_y is None else dpi_y)
     r_in, r_out = placement.radial_range_mm()
-    plan = _swathe_plan(head, float(tilt_deg), r_in, r_out, float(mount_angle_deg), int(direction), max_swathes,
-                        float(setup.swathe_overlap_mm), float(setup.swathe_seam_mm))
+    # the passes of a layer differ in pivot offset (and clock) only: their maps share one plan
+    plan = shared_plan(head, tilt_deg=tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out, mount_angle_deg=mount_angle_deg,
+                       direction=direction, max_swathes=max_swathes, overlap_mm=setup.swathe_overlap_mm).with_seam(setup.swathe_seam_mm)
     a_lo, a_hi = placement.angular_range_rad()
     angle = math.radians(placement.angle_deg)
     width, height = placement.width_px, placement.height_px
@@ -461,7 +448,7 @@ def _exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup) -> E
 # the cache (8 maps, keyed by head, placement and setup) is emptied and inspected as before
 def _cache_clear() -> None:
     _exact_maps.cache_clear()
-    _swathe_plan.cache_clear()
+    shared_plan.cache_clear()
 
 
 exact_maps.cache_clear = _cache_clear  # type: ignore[attr-defined]

@@ -9,6 +9,7 @@ by exactly one swathe: no gap wider than a pitch, no double track.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -18,7 +19,7 @@ from ..devices.models import InkjetHead
 from ..errors import ConfigError, GeometryError
 from .head import Mount, check_tilt, nozzle_layout, nozzle_offsets
 
-__all__ = ["Swathe", "SwathePlan", "plan_swathes", "pass_enabled"]
+__all__ = ["Swathe", "SwathePlan", "plan_swathes", "shared_plan", "pass_enabled"]
 
 #: Radii closer than this (mm) count as equal when assigning tracks to bands.
 _EPS_MM = 1e-9
@@ -119,6 +120,33 @@ def _band(r: np.ndarray, row: np.ndarray, rows: int) -> tuple[float, float]:
     lo = max(float(r[row == q].min()) for q in range(rows))
     hi = min(float(r[row == q].max()) for q in range(rows))
     return lo, hi
+
+
+def shared_plan(head: InkjetHead, *, tilt_deg: float, inner_radius_mm: float, outer_radius_mm: float, mount_angle_deg: float = 0.0,
+                direction: int = 1, max_swathes: int | None = None, overlap_mm: float = 0.0) -> SwathePlan:
+    """:func:`plan_swathes`, one plan object for each set of arguments (the last 16 kept): the passes of
+    a layer and the jobs of a build differ in pivot offset and clock only, so their exact maps and
+    direct slicing jobs share one plan (:meth:`SwathePlan.with_seam` of it shares its arrays). Its
+    arrays are read-only (the prints' ``SwatheImage.enabled`` may be a plan's own array).
+    ``shared_plan.cache_clear()`` empties it."""
+    return _shared_plan(head, float(tilt_deg), float(inner_radius_mm), float(outer_radius_mm), float(mount_angle_deg),
+                        int(direction), max_swathes, float(overlap_mm))
+
+
+@functools.lru_cache(maxsize=16)
+def _shared_plan(head: InkjetHead, tilt_deg: float, r_in: float, r_out: float, mount_angle_deg: float, direction: int,
+                 max_swathes, overlap_mm: float) -> SwathePlan:
+    plan = plan_swathes(head, tilt_deg=tilt_deg, inner_radius_mm=r_in, outer_radius_mm=r_out, mount_angle_deg=mount_angle_deg,
+                        direction=direction, max_swathes=max_swathes, overlap_mm=overlap_mm)
+    for sw in plan.swathes:
+        for a in (sw.enabled, sw.usable):
+            if isinstance(a, np.ndarray):
+                a.flags.writeable = False
+    return plan
+
+
+shared_plan.cache_clear = _shared_plan.cache_clear  # type: ignore[attr-defined]
+shared_plan.cache_info = _shared_plan.cache_info  # type: ignore[attr-defined]
 
 
 def plan_swathes(
