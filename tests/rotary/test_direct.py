@@ -415,6 +415,31 @@ def test_fixed_point_rows_are_the_float_rule(first):
     assert (c[:10] == 77).all() and (c[400:] == 77).all() and (c[:, :50] == 77).all() and (c[:, 650:] == 77).all()
 
 
+def test_fixed_point_rows_on_near_integer_floors():
+    """Phases set so that a row's ``i f + o`` or ``(i + 1) f + o`` lies 1e-16 .. 1e-6 from an integer
+    (either side), at firings anywhere below the limit: the fixed rows still give the float rule's
+    bytes; the fixed decision alone, without the guard, differs on many of these lanes."""
+    rng = np.random.default_rng(7)
+    n_c, n_r, unguarded = 512, 64, 0
+    for _ in range(60):
+        first = int(rng.integers(-K.FIXED_MAX_FIRING + 1, K.FIXED_MAX_FIRING - n_r))
+        f = rng.uniform(0.0, 1.0, n_c)
+        i = (first + rng.integers(0, n_r, n_c)).astype(np.float64)
+        x = np.where(rng.integers(0, 2, n_c) == 0, i * f, (i + 1.0) * f)
+        o = np.mod(np.ceil(x) - x + 10.0 ** rng.uniform(-16, -6, n_c) * rng.choice([-1.0, 1.0], n_c), 1.0)
+        o[o >= 1.0] = 0.0
+        F, P, H = _fixed_columns(f, o)
+        s = np.zeros(n_c, np.uint8)
+        a, b = np.empty((n_r, n_c), np.uint8), np.empty((n_r, n_c), np.uint8)
+        K._thin_rows(a, 0, n_r, first, 0, n_c, f, o, s, np.uint8(1))
+        K._thin_rows_fixed(b, 0, n_r, first, 0, n_c, f, o, F, P, H, s, np.uint8(1))
+        np.testing.assert_array_equal(b, a)
+        iu = (first + np.arange(n_r, dtype=np.int64))[:, None] & 0xFFFFFFFF
+        R = ((iu * F.astype(np.int64) + P) & 0xFFFFFFFF).astype(np.uint32).view(np.int32)
+        unguarded += int(((np.abs(R.astype(np.int64)) < H) != (a > 0)).sum())
+    assert unguarded > 1000  # the cases are near enough to need the guard
+
+
 def test_fill_beyond_the_fixed_rows_limit_is_the_reference():
     """Firing indices past FIXED_MAX_FIRING (a part far round the platform at a fine clock): the fill
     falls back to the float64 rows and still gives the numpy reference's image."""
