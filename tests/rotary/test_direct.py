@@ -440,6 +440,14 @@ def test_fixed_point_rows_on_near_integer_floors():
     assert unguarded > 1000  # the cases are near enough to need the guard
 
 
+def test_fill_refuses_a_share_that_is_not_finite():
+    x, y = np.array([31.0, 39.0, 39.0, 31.0]), np.array([-3.0, -3.0, 3.0, 3.0])
+    r = np.array([33.0, 35.0, 37.0])
+    args = (x, y, np.roll(x, -1), np.roll(y, -1), r * r, np.zeros(3), np.arange(3), np.array([0.5, np.nan, 1.0]), np.zeros(3))
+    with pytest.raises(ValueError, match="frac must be finite"):
+        K.direct_fill_jit(*args, dphi=0.002, direction=1, i0=-100, n_f=200, n_cols=3, fill="nonzero", level=1)
+
+
 def test_fill_beyond_the_fixed_rows_limit_is_the_reference():
     """Firing indices past FIXED_MAX_FIRING (a part far round the platform at a fine clock): the fill
     falls back to the float64 rows and still gives the numpy reference's image."""

@@ -88,6 +88,11 @@ def test_the_shares_are_the_transform_paths_realised_by_thin_print():
         assert np.array_equal(again.layer(0).swathes[0].levels, job.layer(0).swathes[0].levels)
     with pytest.raises(ConfigError, match="one \\(764,\\) array per swathe"):
         plain.with_shares([np.ones(3)])
+    for bad in (np.nan, np.inf, -0.5):  # a NaN share would have the fill write events it made no room for
+        broken = [f.copy() for f in shares[0]]
+        broken[0][100] = bad
+        with pytest.raises(ConfigError, match="shares must be finite and >= 0"):
+            plain.with_shares(broken)
     eq = slice_rotary(mesh, dev, layer_height_mm=0.2, tilt_deg=20.0, inner_radius_mm=60.0, equalise=True)
     with pytest.raises(ConfigError, match="options.equalise must be False"):
         eq.with_shares(shares[0])

@@ -142,10 +142,13 @@ def _thin_rows_fixed(out, r0, r1, i0, c0, c1, fc, oc, Fc, Pc, Hc, state, level):
     """:func:`_thin_rows`' bytes (the same float64 rule), decided in 32-bit fixed point, 8 columns a vector
     on AVX2 (against 4 float64): firing ``i`` of a column is kept when ``frac((i + 1) f + o) < f``, which
     is the rule's ``floor((i + 1) f + o) > floor(i f + o)``. The fixed phase ``Q = (i + 1) F + O``
-    (mod 2^32) is within ``(|i| + 3) / 2`` units (2^-32) of the exact one and the rule's float64 values
-    within one unit of theirs (``|i| < FIXED_MAX_FIRING``), so the two decide alike unless ``Q`` lies
-    within ``|i| + 8`` units of a boundary of the kept interval ``[0, F)``; each row tracks the least such
-    distance over its columns and, when one is that near, decides those columns by the float64 rule.
+    (mod 2^32) is within ``|i + 1| / 2 + 1/2`` units (2^-32) of the exact one (``|i + 1| + 1/2`` where
+    ``F`` is clamped, ``f`` within 2^-33 of 1) and the rule's float64 values within 3/4 of a unit of
+    theirs (``|i| < FIXED_MAX_FIRING``); the fixed test keeps ``Q`` in ``(0, 2 H)``, the kept interval
+    ``[0, F)`` to a unit at each end. So the two decide alike unless ``Q`` lies within ``|i| + 8`` units
+    of an end of it (the worst case needs about ``|i| + 5``; helper-57 measured at most ``|i| + 1``); each
+    row tracks the least such distance over its columns and, when one is that near, decides those
+    columns by the float64 rule.
     Columns without a thinned track hold ``F = H = 0``, ``P = 2^31``: never kept, never near."""
     f = fc[c0:c1]
     o = oc[c0:c1]
@@ -657,6 +660,8 @@ def direct_fill_jit(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, dir
     elif out.shape != (n_f, n_cols) or out.dtype != np.uint8 or not out.flags.c_contiguous or not out.flags.writeable:
         raise ValueError(f"out must be a writeable C-contiguous ({n_f}, {n_cols}) uint8 array, got {out.shape} {out.dtype}")
     args = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
+    if not np.isfinite(args[7]).all():  # a NaN share would make span events the kernel did not count room for
+        raise ValueError("frac must be finite")
     rest = _NO_EDGE
     if edge is not None and np.size(edge[1]):
         tracks, rest = _with_virtual(*args[4:], edge)

@@ -310,6 +310,8 @@ class DirectSliceJob:
                 raise ConfigError("union shares replace the direct slicer's own equalisation: options.equalise must be False")
             if len(self.shares) != len(tracks) or any(f.shape != (head.nozzles,) for f in self.shares):
                 raise ConfigError(f"shares must give one ({head.nozzles},) array per swathe ({len(tracks)})")
+            if not all(np.isfinite(f).all() and (f >= 0.0).all() for f in self.shares):
+                raise ConfigError("shares must be finite and >= 0 (a share of 1 or more keeps every drop)")
         self._frac = tuple((a / top) if equalise else np.ones_like(a) for a in apd)
         #: the edge restore of the thinned tracks (:class:`~rotoprint.rotary.edgecomp.EdgeRestore`), or None
         self.edge_restore = _edge_options(edge_restore)
