@@ -659,9 +659,9 @@ def direct_fill_jit(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs, *, dphi, dir
         out = np.empty((n_f, n_cols), np.uint8)  # _direct_fill writes every byte
     elif out.shape != (n_f, n_cols) or out.dtype != np.uint8 or not out.flags.c_contiguous or not out.flags.writeable:
         raise ValueError(f"out must be a writeable C-contiguous ({n_f}, {n_cols}) uint8 array, got {out.shape} {out.dtype}")
-    args = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
-    if not np.isfinite(args[7]).all():  # a NaN share would make span events the kernel did not count room for
+    if not np.isfinite(frac).all():  # a NaN share would make span events the kernel did not count room for
         raise ValueError("frac must be finite")
+    args = _prep(sx0, sy0, sx1, sy1, r2, psi0, cols, frac, offs)
     rest = _NO_EDGE
     if edge is not None and np.size(edge[1]):
         tracks, rest = _with_virtual(*args[4:], edge)

@@ -27,7 +27,7 @@ from .head import Mount, NozzleLayout, nozzle_layout
 from .options import RotarySetup, options_from
 from .placement import Placement
 from .printdata import RotaryPrint, SwatheImage, clock_dphi, design_levels
-from .swathes import SwathePlan, pass_enabled, plan_swathes, shared_plan
+from .swathes import SwathePlan, pass_enabled, shared_plan
 
 __all__ = ["SwatheMap", "TrackWindows", "ExactMaps", "ThinShares", "exact_maps", "transform_exact", "firing_range", "KERNEL_NAMES"]
 
@@ -328,7 +328,7 @@ def exact_maps(head: InkjetHead, placement: Placement, setup: RotarySetup | None
     ----------
     head : InkjetHead
     placement : Placement
-        Where the design lies; its radial range decides the swathes (:func:`plan_swathes`).
+        Where the design lies; its radial range decides the swathes (:func:`~rotoprint.rotary.swathes.plan_swathes`).
     setup : RotarySetup, optional
         Tilt, clock (``dpi_y``, ``ref_radius_mm``), mount angle, direction, swathe limit,
         kernel.
